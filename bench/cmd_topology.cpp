@@ -1,0 +1,13 @@
+// lockstep topology: not built yet (see the open issues).
+#include <CLI/CLI.hpp>
+
+#include "bench/command.hpp"
+
+namespace lockstep::cli {
+
+void add_topology(CLI::App& app, int& result) {
+  (void)app;
+  (void)result;
+}
+
+}  // namespace lockstep::cli

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Installs what lockstep needs from Debian's packages, and only what is missing.
+#
+#   scripts/setup.sh          what building and running lockstep needs
+#   scripts/setup.sh --test   that, and what the tests need too (rt-tests, chromium)
+#
+# Idempotent: when everything is present it checks and returns in well under a
+# second. Runs apt-get as root, or through sudo; says plainly what it installs.
+set -euo pipefail
+
+build_packages=(
+  g++ cmake ninja-build pkg-config git
+  libbenchmark-dev libgtest-dev libgmock-dev
+  libhwloc-dev hwloc
+  libboost-dev libck-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
+  python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2
+)
+test_packages=(rt-tests chromium)
+
+packages=("${build_packages[@]}")
+case "${1:-}" in
+  --test) packages+=("${test_packages[@]}") ;;
+  "") ;;
+  *) echo "setup.sh: unknown option '$1' (use --test or nothing)" >&2; exit 2 ;;
+esac
+
+missing=()
+for package in "${packages[@]}"; do
+  status=$(dpkg-query -W -f='${db:Status-Status}' "$package" 2>/dev/null || true)
+  [ "$status" = installed ] || missing+=("$package")
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "setup: every package lockstep needs is installed" >&2
+  exit 0
+fi
+
+if [ "$(id -u)" -eq 0 ]; then
+  as_root=()
+elif command -v sudo >/dev/null 2>&1 && sudo -n true 2>/dev/null; then
+  as_root=(sudo -n)
+else
+  echo "setup: missing Debian packages: ${missing[*]}" >&2
+  echo "setup: installing them needs root; run: sudo apt-get install --no-install-recommends ${missing[*]}" >&2
+  exit 1
+fi
+
+echo "setup: installing from Debian's packages: ${missing[*]}" >&2
+export DEBIAN_FRONTEND=noninteractive
+if ! "${as_root[@]}" apt-get update -qq; then
+  echo "setup: apt-get update failed: is Debian's package registry reachable?" >&2
+  exit 1
+fi
+if ! "${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null; then
+  echo "setup: apt-get install failed for: ${missing[*]}" >&2
+  exit 1
+fi
+echo "setup: installed ${#missing[@]} package(s)" >&2
