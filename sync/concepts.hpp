@@ -1,0 +1,77 @@
+#pragma once
+// The contracts every synchronisation primitive in sync/ satisfies, and the
+// per-participant counters they keep.
+//
+// Two shapes of primitive compose the RK4 step (DESIGN.md, The composed step):
+//
+//  * phase_barrier: every participant calls arrive_and_wait() once per phase;
+//    no participant returns from phase p before all participants have arrived
+//    at phase p. Memory ordering: everything a participant wrote before
+//    arriving happens-before everything any participant does after returning
+//    (the barrier is a release by each arriver and an acquire by each leaver).
+//
+//  * stage_channel (dataflow): producer `self` publishes its values for a
+//    stage; a consumer receives the values of one producer for one stage,
+//    waiting until that producer has published them. A consumer waits only for
+//    the producers it depends on. Memory ordering: the values received are
+//    exactly the values published for that stage (no torn or stale read).
+//    Every stage_channel is also usable as a phase_barrier through
+//    channel_barrier (channel_barrier.hpp), which is how the conformance suite
+//    checks it.
+//
+// Teams: a primitive runs its participants on a team. Most use plain threads
+// (std_thread_team); OpenMP's barrier only works inside an OpenMP parallel
+// region, so omp_barrier names its own team. team_of<S> picks the right one.
+#include <concepts>
+#include <cstdint>
+#include <span>
+#include <string_view>
+
+#include "platform/cache_line.hpp"
+
+namespace lockstep::sync {
+
+// What a primitive did, counted per participant by the participant's own
+// thread: a plain increment on a cache line that no other thread writes.
+struct sync_counters {
+  std::uint64_t futex_waits = 0;      // FUTEX_WAIT calls (or waits on an event) that slept
+  std::uint64_t futex_wakes = 0;      // FUTEX_WAKE calls issued
+  std::uint64_t yields = 0;           // sched_yield calls
+  std::uint64_t spins_exhausted = 0;  // spin budgets that ran out before the phase completed
+  std::uint64_t timeouts = 0;         // waits that ended by timeout (lost wake-ups)
+
+  sync_counters& operator+=(const sync_counters& other) noexcept {
+    futex_waits += other.futex_waits;
+    futex_wakes += other.futex_wakes;
+    yields += other.yields;
+    spins_exhausted += other.spins_exhausted;
+    timeouts += other.timeouts;
+    return *this;
+  }
+};
+
+// One participant: its index in [0, participants) and its counters. Owned and
+// written only by the participant's thread; aligned so that neighbours in an
+// array do not share a line.
+struct alignas(platform::kCacheLine) participant {
+  unsigned id = 0;
+  sync_counters counters{};
+};
+static_assert(sizeof(participant) % platform::kCacheLine == 0,
+              "participants in an array must not share a cache line");
+
+template <class B>
+concept phase_barrier = std::constructible_from<B, unsigned> && requires(B& barrier, participant& self) {
+  { B::kName } -> std::convertible_to<std::string_view>;
+  barrier.arrive_and_wait(self);
+};
+
+template <class C>
+concept stage_channel = requires(C& channel, participant& self, unsigned producer, std::uint64_t stage,
+                                 std::span<const double> values, std::span<double> received) {
+  { C::kName } -> std::convertible_to<std::string_view>;
+  channel.publish(self, stage, values);
+  channel.receive(self, producer, stage, received);
+};
+
+}  // namespace lockstep::sync
