@@ -8,7 +8,9 @@
 #include <fmt/core.h>
 
 #include <array>
+#include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -61,19 +63,48 @@ std::map<std::string, std::string> parse_entry_name(const std::string& name) {
   return fields;
 }
 
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run) {
+  benchmark::BenchmarkName name = run.run_name;
+  name.iterations.clear();
+  name.time_type.clear();
+  return name.str();
+}
+
+void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
+  std::vector<Run> renamed = runs;
+  for (Run& run : renamed) {
+    run.run_name.iterations.clear();
+    run.run_name.time_type.clear();
+    // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
+    // Google Benchmark would write it as NaN, which is not JSON. Omitted.
+    for (auto counter = run.counters.begin(); counter != run.counters.end();) {
+      if (std::isfinite(counter->second.value)) {
+        ++counter;
+      } else {
+        counter = run.counters.erase(counter);
+      }
+    }
+  }
+  JSONReporter::ReportRuns(renamed);
+}
+
 progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries)
     : book_(book), expected_(expected_entries), start_(std::chrono::steady_clock::now()) {}
 
 bool progress_reporter::ReportContext(const Context& /*context*/) { return true; }
 
 void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
-  if (runs.empty()) return;
+  // Google Benchmark reports an entry's repetitions, then (separately) its
+  // aggregates; the book recomputes aggregates, so only the first call counts.
+  const bool any_repetition = std::any_of(runs.begin(), runs.end(), [](const Run& run) {
+    return run.run_type == Run::RT_Iteration;
+  });
+  if (!any_repetition) return;
   captured_entry entry;
-  entry.name = runs.front().run_name.str();
   // Repetitions carry their own name; aggregates are recomputed from them.
   for (const Run& run : runs) {
     if (run.run_type != Run::RT_Iteration) continue;
-    entry.name = run.run_name.str();
+    entry.name = plain_name(run);
     if (run.error_occurred) {
       entry.error = run.error_message;
       continue;
@@ -88,7 +119,7 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
   std::string what;
   if (!entry.error.empty()) {
-    what = "skipped: " + entry.error;
+    what = entry.error;
   } else if (const auto median = entry.median(headline_counter(entry.field("kind")))) {
     what = format_ns(*median) + (entry.field("kind") == "barrier" ? "/episode" : entry.field("kind") == "c2c" ? " one-way" : "/step");
   }

@@ -32,6 +32,20 @@ class progress_reporter : public benchmark::BenchmarkReporter {
   std::chrono::steady_clock::time_point start_;
 };
 
+// Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
+// Google Benchmark appends "/manual_time", "/real_time" and "/iterations:N"
+// to a name when an entry uses them; lockstep's names carry only key:value
+// segments (the timing is stated once, in the context's lockstep_timing).
+// Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
+// Google Benchmark would write NaN, which no JSON parser accepts.
+class result_json_reporter : public benchmark::JSONReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override;
+};
+
+// The run's name without Google Benchmark's suffixes (see above).
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
+
 // Splits an entry name into its fields: "kind" (the first segment) and every
 // key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
 std::map<std::string, std::string> parse_entry_name(const std::string& name);

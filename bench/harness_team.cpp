@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace lockstep::bench {
 
@@ -43,6 +44,14 @@ double median_unit_ns(const batch_record& record) {
   return static_cast<double>(sorted[sorted.size() / 2]) / static_cast<double>(record.units_per_batch);
 }
 
+double ns_per_unit(const call_result& result) {
+  std::int64_t total = 0;
+  for (std::int64_t batch : result.batches.batch_ns) total += batch;
+  const double units =
+      static_cast<double>(result.batches.batch_ns.size()) * static_cast<double>(result.batches.units_per_batch);
+  return units > 0.0 ? static_cast<double>(total) / units : 0.0;
+}
+
 void set_accounting_counters(benchmark::State& state, const call_result& result, const std::string& unit) {
   if (!result.accounting || result.batches.units_run == 0) return;
   const platform::thread_counters& total = *result.accounting;
@@ -51,7 +60,9 @@ void set_accounting_counters(benchmark::State& state, const call_result& result,
   state.counters["csw_invol_per_k" + unit] = static_cast<double>(total.involuntary_switches) * per_k;
   if (total.migrations) {
     state.counters["migrations_per_k" + unit] = static_cast<double>(*total.migrations) * per_k;
-    if (const auto share = platform::cross_core_switch_percent(total)) state.counters["cross_core_csw_pct"] = *share;
+    // A percentage of no switches is no number: omitted, like unavailable ones.
+    if (const auto share = platform::cross_core_switch_percent(total); share && std::isfinite(*share))
+      state.counters["cross_core_csw_pct"] = *share;
   }
 }
 

@@ -8,7 +8,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
 #include <cstdint>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -119,6 +121,22 @@ class affinity_guard {
   bool saved_ok_ = false;
 };
 
+// The run-wide state every entry function shares: the machine, the settings,
+// the run book, and what earlier calls learned (batch sizes from each entry's
+// probe, primitives that already stalled).
+struct harness_state {
+  const platform::topology* machine = nullptr;
+  run_settings settings;
+  run_book* book = nullptr;
+  std::map<std::string, std::uint64_t> units_per_batch;  // entry name -> from its probe
+  std::map<std::string, std::string> stalled;            // entry name -> reason
+  std::map<std::string, unsigned> stalls_of_sync;        // "sync threads:T" -> stalled entries so far
+  // After this many stalled entries of one primitive at one thread count, its
+  // remaining entries at that count are skipped at once (each stall costs up
+  // to the stall bound or a 1000 ms timeout; the verdict is already known).
+  unsigned stalls_before_skipping_sync = 3;
+};
+
 // Why a call stopped early, in one line, from what the primitive is and what
 // it counted: "stalled: one step took 212 ms (bound 50 ms): pure-spin
 // primitive with 4 threads on 2 CPUs".
@@ -127,6 +145,69 @@ std::string stall_reason(const call_result& result, const char* unit, bool pure_
 
 // The time per unit of the median batch (probe calls).
 double median_unit_ns(const batch_record& record);
+
+// What a primitive is, for the stall reasons.
+struct primitive_traits {
+  std::string name;
+  bool pure_spin = false;
+  bool may_lose_wakeups = false;
+};
+
+// One call of an entry, the whole protocol: skip at once if this entry or too
+// many of its primitive's entries stalled before; probe the batch size on the
+// first call (8 batches of one unit); run the timed call; feed Google
+// Benchmark the batch times. Returns the call's result, or nothing when the
+// entry was skipped (SkipWithError, with the reason).
+template <class Team, class Work>
+std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
+                                         const primitive_traits& primitive, const platform::placement_plan& plan,
+                                         Team& team, std::vector<participant_slot>& slots, Work& work,
+                                         bool accounting, const char* unit) {
+  const run_settings& settings = harness.settings;
+  const auto skip = [&](const std::string& reason) {
+    state.SkipWithError(reason.c_str());
+    return std::optional<call_result>{};
+  };
+  if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) return skip(known->second);
+  const std::string stall_key = primitive.name + " threads:" + std::to_string(plan.threads);
+  if (!primitive.name.empty()) {
+    const unsigned stalls = harness.stalls_of_sync[stall_key];
+    if (stalls >= harness.stalls_before_skipping_sync)
+      return skip("skipped: " + stall_key + " already stalled in " + std::to_string(stalls) +
+                  " entries of this run");
+  }
+  const auto record_stall = [&](const call_result& result) {
+    std::string reason = stall_reason(result, unit, primitive.pure_spin, primitive.may_lose_wakeups, plan, settings);
+    harness.stalled[name] = reason;
+    if (!primitive.name.empty()) ++harness.stalls_of_sync[stall_key];
+    return skip(reason);
+  };
+
+  auto batch_size = harness.units_per_batch.find(name);
+  if (batch_size == harness.units_per_batch.end()) {
+    constexpr unsigned kProbeBatches = 8;
+    call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
+    if (!probe.failure.empty()) return skip("cannot place the team: " + probe.failure);
+    if (probe.batches.stalled || probe.batches.over_budget) return record_stall(probe);
+    batch_size = harness.units_per_batch.emplace(name, units_for_batch(median_unit_ns(probe.batches), settings)).first;
+  }
+
+  const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
+  call_result result = run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work);
+  if (!result.failure.empty()) return skip("cannot place the team: " + result.failure);
+  if (result.batches.stalled || result.batches.over_budget || result.batches.batch_ns.size() < wanted)
+    return record_stall(result);
+
+  std::size_t batch = 0;
+  for (auto _ : state) {
+    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) * 1e-9);
+    ++batch;
+  }
+  return result;
+}
+
+// Per-unit time of a call's timed batches, in ns.
+double ns_per_unit(const call_result& result);
 
 // Sets the accounting counters on an entry: <prefix>_per_k<unit> for
 // voluntary / involuntary switches and migrations, and cross_core_csw_pct.
