@@ -1,0 +1,188 @@
+#pragma once
+// Distributions of nanosecond samples: percentiles and a fixed-bucket
+// histogram, shared by `lockstep c2c`, `lockstep delay` and the matrix.
+//
+// Percentile rule: linear interpolation between closest ranks (Hyndman and
+// Fan's definition 7, the default of numpy.percentile and of R's quantile).
+// For n sorted samples x[0] <= ... <= x[n-1] and a fraction q in [0, 1]:
+//     h = (n - 1) q,   P(q) = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h])
+// so P(0) is the minimum, P(1) the maximum, P(0.5) the usual median (the mean
+// of the two middle samples when n is even), and every percentile lies
+// between two observed samples. The report tool (numpy) computes the same
+// values from the same samples.
+//
+// Histogram: bucket i counts samples in [first + i w, first + (i + 1) w);
+// samples below `first` and at or above `first + buckets w` are counted apart
+// (below(), above()), never dropped and never folded into an end bucket.
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace lockstep::platform {
+
+// The percentile of sorted samples (ascending), fraction in [0, 1], by the
+// rule above. Throws std::invalid_argument on no samples or a bad fraction.
+template <class Sample>
+double percentile_of_sorted(std::span<const Sample> sorted, double fraction) {
+  if (sorted.empty()) throw std::invalid_argument("percentile of no samples");
+  if (!(fraction >= 0.0 && fraction <= 1.0)) throw std::invalid_argument("percentile fraction outside [0, 1]");
+  const double rank = fraction * static_cast<double>(sorted.size() - 1);
+  const auto below = static_cast<std::size_t>(std::floor(rank));
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  const double weight = rank - static_cast<double>(below);
+  const auto low = static_cast<double>(sorted[below]);
+  const auto high = static_cast<double>(sorted[above]);
+  return low + weight * (high - low);
+}
+
+// What every distribution in lockstep reports (the keys of the result JSON:
+// min, p50, p99, p999, max, count; mean for convenience).
+struct distribution {
+  std::size_t count = 0;
+  double min = 0;
+  double p50 = 0;
+  double p99 = 0;
+  double p999 = 0;
+  double max = 0;
+  double mean = 0;
+};
+
+template <class Sample>
+distribution summarize_sorted(std::span<const Sample> sorted) {
+  if (sorted.empty()) throw std::invalid_argument("a distribution of no samples");
+  distribution result;
+  result.count = sorted.size();
+  result.min = static_cast<double>(sorted.front());
+  result.max = static_cast<double>(sorted.back());
+  result.p50 = percentile_of_sorted(sorted, 0.50);
+  result.p99 = percentile_of_sorted(sorted, 0.99);
+  result.p999 = percentile_of_sorted(sorted, 0.999);
+  long double sum = 0;
+  for (const Sample& sample : sorted) sum += static_cast<long double>(sample);
+  result.mean = static_cast<double>(sum / static_cast<long double>(sorted.size()));
+  return result;
+}
+
+// Sorts its own copy. Throws std::invalid_argument on no samples: there is no
+// honest number to give, so the caller must say "no samples" itself.
+template <class Sample>
+distribution summarize(std::vector<Sample> samples) {
+  std::sort(samples.begin(), samples.end());
+  return summarize_sorted(std::span<const Sample>(samples));
+}
+
+class histogram {
+ public:
+  // `buckets` buckets of `bucket_ns` each, the first starting at `first_ns`.
+  histogram(std::int64_t first_ns, std::int64_t bucket_ns, std::size_t buckets)
+      : first_ns_(first_ns), bucket_ns_(bucket_ns), counts_(buckets, 0) {
+    if (bucket_ns <= 0) throw std::invalid_argument("histogram bucket width must be positive");
+    if (buckets == 0) throw std::invalid_argument("histogram needs at least one bucket");
+  }
+
+  // Buckets of a round width (1, 2 or 5 times a power of ten ns) that cover
+  // [min, max] of these samples in at most `max_buckets` buckets; first_ns is
+  // min rounded down to the width. Samples are not added.
+  template <class Sample>
+  static histogram covering(std::span<const Sample> samples, std::size_t max_buckets = 50) {
+    if (samples.empty() || max_buckets == 0) return histogram(0, 1, 1);
+    const auto [low_it, high_it] = std::minmax_element(samples.begin(), samples.end());
+    const auto low = static_cast<std::int64_t>(std::floor(static_cast<double>(*low_it)));
+    const auto high = static_cast<std::int64_t>(std::floor(static_cast<double>(*high_it)));
+    std::int64_t width = 1;
+    for (std::int64_t decade = 1;; decade *= 10) {
+      bool found = false;
+      for (std::int64_t factor : {1, 2, 5}) {
+        width = decade * factor;
+        const std::int64_t first = floor_to(low, width);
+        if (static_cast<std::size_t>((high - first) / width + 1) <= max_buckets) {
+          found = true;
+          break;
+        }
+      }
+      if (found) break;
+    }
+    const std::int64_t first = floor_to(low, width);
+    return histogram(first, width, static_cast<std::size_t>((high - first) / width + 1));
+  }
+
+  void add(std::int64_t sample_ns) noexcept {
+    if (sample_ns < first_ns_) {
+      ++below_;
+      return;
+    }
+    const auto index = static_cast<std::uint64_t>((sample_ns - first_ns_) / bucket_ns_);
+    if (index >= counts_.size()) {
+      ++above_;
+      return;
+    }
+    ++counts_[index];
+  }
+  void add(double sample_ns) noexcept { add(static_cast<std::int64_t>(std::floor(sample_ns))); }
+
+  std::int64_t first_ns() const noexcept { return first_ns_; }
+  std::int64_t bucket_ns() const noexcept { return bucket_ns_; }
+  std::size_t bucket_count() const noexcept { return counts_.size(); }
+  const std::vector<std::uint64_t>& counts() const noexcept { return counts_; }
+  std::uint64_t below() const noexcept { return below_; }
+  std::uint64_t above() const noexcept { return above_; }
+  std::uint64_t total() const noexcept {
+    std::uint64_t sum = below_ + above_;
+    for (std::uint64_t count : counts_) sum += count;
+    return sum;
+  }
+  // Lower edge of bucket i in ns.
+  std::int64_t bucket_start(std::size_t index) const noexcept {
+    return first_ns_ + static_cast<std::int64_t>(index) * bucket_ns_;
+  }
+
+  // Text rendering: one line per non-empty bucket (plus the below/above lines
+  // when non-zero): "  [  1200,   1300) ns  ######## 123", bars scaled to
+  // `bar_width` characters for the largest count.
+  std::string render(std::size_t bar_width = 50) const {
+    std::uint64_t largest = std::max(below_, above_);
+    for (std::uint64_t count : counts_) largest = std::max(largest, count);
+    std::string text;
+    const auto bar = [&](std::uint64_t count) {
+      const std::size_t length =
+          largest == 0 ? 0 : static_cast<std::size_t>((count * bar_width + largest - 1) / largest);
+      return std::string(length, '#');
+    };
+    const auto line = [&](const std::string& label, std::uint64_t count) {
+      std::string row = "  " + label;
+      if (row.size() < 32) row.append(32 - row.size(), ' ');
+      row += bar(count);
+      row += ' ';
+      row += std::to_string(count);
+      row += '\n';
+      text += row;
+    };
+    if (below_ != 0) line("< " + std::to_string(first_ns_) + " ns", below_);
+    for (std::size_t index = 0; index < counts_.size(); ++index) {
+      if (counts_[index] == 0) continue;
+      line("[" + std::to_string(bucket_start(index)) + ", " + std::to_string(bucket_start(index + 1)) + ") ns",
+           counts_[index]);
+    }
+    if (above_ != 0) line(">= " + std::to_string(bucket_start(counts_.size())) + " ns", above_);
+    return text;
+  }
+
+ private:
+  static std::int64_t floor_to(std::int64_t value, std::int64_t width) noexcept {
+    const std::int64_t quotient = value / width;
+    return (value % width != 0 && value < 0 ? quotient - 1 : quotient) * width;
+  }
+
+  std::int64_t first_ns_;
+  std::int64_t bucket_ns_;
+  std::vector<std::uint64_t> counts_;
+  std::uint64_t below_ = 0;
+  std::uint64_t above_ = 0;
+};
+
+}  // namespace lockstep::platform
