@@ -14,7 +14,16 @@
 //    stage; a consumer receives the values of one producer for one stage,
 //    waiting until that producer has published them. A consumer waits only for
 //    the producers it depends on. Memory ordering: the values received are
-//    exactly the values published for that stage (no torn or stale read).
+//    exactly the values published for that stage (no torn or stale read), and
+//    everything the producer wrote before publish() happens-before everything
+//    the consumer does after receive() returns.
+//    Stage numbering: each producer publishes stages 0, 1, 2, ... in order
+//    (the RK4 step numbers them step * 4 + stage); each consumer receives each
+//    producer's stages in order too. A producer may run several stages ahead
+//    of a consumer it does not itself depend on (in the RK4 graph up to about
+//    3); every channel holds kDepth stages per producer and applies
+//    back-pressure (the producer waits) before it would overwrite a stage a
+//    consumer has not received, so an overrun cannot happen.
 //    Every stage_channel is also usable as a phase_barrier through
 //    channel_barrier (channel_barrier.hpp), which is how the conformance suite
 //    checks it.
@@ -25,7 +34,9 @@
 #include <concepts>
 #include <cstdint>
 #include <span>
+#include <stdexcept>
 #include <string_view>
+#include <vector>
 
 #include "platform/cache_line.hpp"
 
@@ -60,6 +71,44 @@ struct alignas(platform::kCacheLine) participant {
 static_assert(sizeof(participant) % platform::kCacheLine == 0,
               "participants in an array must not share a cache line");
 
+// What kind of primitive a type is (sync/registry.hpp lists every one).
+enum class primitive_kind { barrier, channel };
+
+// Who reads whom in a dataflow stage: producers_of[consumer] lists the
+// producers whose stage values `consumer` receives. A participant never
+// receives from itself (it holds its own values). Channels need the graph at
+// construction so that a producer knows which consumers it must not overrun.
+struct dependency_graph {
+  std::vector<std::vector<unsigned>> producers_of;
+
+  unsigned participants() const noexcept { return static_cast<unsigned>(producers_of.size()); }
+
+  bool depends(unsigned consumer, unsigned producer) const noexcept {
+    for (unsigned candidate : producers_of[consumer])
+      if (candidate == producer) return true;
+    return false;
+  }
+
+  // Every participant depends on every other one: the graph that turns a
+  // channel into a barrier (channel_barrier.hpp).
+  static dependency_graph all_to_all(unsigned participants) {
+    dependency_graph graph;
+    graph.producers_of.resize(participants);
+    for (unsigned consumer = 0; consumer < participants; ++consumer)
+      for (unsigned producer = 0; producer < participants; ++producer)
+        if (producer != consumer) graph.producers_of[consumer].push_back(producer);
+    return graph;
+  }
+
+  // Throws std::invalid_argument on an out-of-range producer or a self-edge.
+  void validate() const {
+    for (unsigned consumer = 0; consumer < participants(); ++consumer)
+      for (unsigned producer : producers_of[consumer])
+        if (producer >= participants() || producer == consumer)
+          throw std::invalid_argument("dependency_graph: a consumer names itself or a producer out of range");
+  }
+};
+
 template <class B>
 concept phase_barrier = std::constructible_from<B, unsigned> && requires(B& barrier, participant& self) {
   { B::kName } -> std::convertible_to<std::string_view>;
@@ -73,5 +122,10 @@ concept stage_channel = requires(C& channel, participant& self, unsigned produce
   channel.publish(self, stage, values);
   channel.receive(self, producer, stage, received);
 };
+
+// A channel built from a dependency graph and the number of doubles each
+// producer publishes per stage: what channel_barrier and the RK4 step construct.
+template <class C>
+concept graph_channel = stage_channel<C> && std::constructible_from<C, const dependency_graph&, std::size_t>;
 
 }  // namespace lockstep::sync

@@ -1,0 +1,181 @@
+#pragma once
+// futex_spin: the suite's own barrier. Sense-reversing, spins with the CPU's
+// pause for a bounded budget, then sleeps on a futex; the last arriver calls
+// FUTEX_WAKE only when someone sleeps; the spin budget adapts to
+// oversubscription. One primitive for both regimes: spin like the pure-spin
+// barriers when every participant has a CPU, block like the blocking ones when
+// they do not.
+//
+// Contract
+//  * Construct with the number of participants (>= 1). Each participant calls
+//    arrive_and_wait(self) once per phase with its own participant record
+//    (self.id in [0, participants), distinct per thread, the same every phase).
+//  * No participant returns from phase p before every participant has arrived
+//    at phase p. The barrier rearms itself: phase p + 1 may start at once.
+//  * Destroy it only after every participant has returned from its last call
+//    (the last arriver still touches the barrier after the others are free).
+//  * Not copyable or movable: participants hold its address.
+// Progress: blocking. A waiter spins for at most its budget, then sleeps until
+// the last arriver wakes it, so it never takes a CPU from the thread it waits
+// for for longer than the budget: with 4 participants on 2 CPUs (or on 1) it
+// still makes progress.
+// Memory ordering: everything a participant wrote before arrive_and_wait
+// happens-before everything any participant does after its arrive_and_wait of
+// the same phase returns (edges (1), (3), (4)/(6) below).
+// Counters (self.counters): spins_exhausted when the budget ran out, futex_waits
+// per FUTEX_WAIT that slept or found the phase already over, futex_wakes per
+// FUTEX_WAKE issued. yields and timeouts stay 0 (it neither yields nor times out).
+//
+// Spin budget: a waiter spins `budget` pause iterations. The cap is
+// kDedicatedSpin when the participants fit in the union of their affinity sets
+// (learned during phase 0; see cpu_union) and kOversubscribedSpin when they do
+// not. Within the cap each participant adapts: the budget halves when it runs
+// out (the phase was long, or the thread we wait for is not running) and
+// doubles when the phase completed during the spin.
+#include <algorithm>
+#include <atomic>
+#include <cassert>
+#include <climits>
+#include <cstdint>
+#include <memory>
+#include <string_view>
+
+#include "platform/cache_line.hpp"
+#include "platform/cpu_relax.hpp"
+#include "sync/affinity.hpp"
+#include "sync/concepts.hpp"
+#include "sync/futex.hpp"
+
+namespace lockstep::sync {
+
+class futex_spin {
+ public:
+  static constexpr std::string_view kName = "futex_spin";
+  static constexpr std::string_view kDescription =
+      "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
+      "spin budget adapts to oversubscription";
+  static constexpr primitive_kind kKind = primitive_kind::barrier;
+  static constexpr bool kPureSpin = false;
+  static constexpr bool kMayLoseWakeups = false;
+
+  // Pause iterations before sleeping when every participant has a CPU. A pause
+  // costs about 10-45 ns (Zen 2 .. Skylake), so this is roughly 10-45 us: about
+  // the price of a futex sleep plus wake-up in a VM (a syscall on each side and
+  // an IPI), which is where spinning longer stops paying (competitive spinning).
+  // To be refined with a measurement on a quiet machine.
+  static constexpr std::uint32_t kDedicatedSpin = 1024;
+  // With more participants than CPUs, the thread we wait for is likely queued
+  // behind us on our own CPU: spin only long enough to catch a phase that is
+  // completing on the other CPU right now, then get out of its way.
+  static constexpr std::uint32_t kOversubscribedSpin = 32;
+  // The adaptive budget never drops below this (a handful of pauses is cheaper
+  // than any syscall, and catches a releaser that is one store away).
+  static constexpr std::uint32_t kMinimumSpin = 8;
+
+  explicit futex_spin(unsigned participants)
+      : participants_(participants), slots_(std::make_unique<slot[]>(participants)) {
+    assert(participants >= 1);
+    remaining_.value.store(participants, std::memory_order_relaxed);  // published by the thread start
+  }
+  futex_spin(const futex_spin&) = delete;  // participants hold its address
+  futex_spin& operator=(const futex_spin&) = delete;
+
+  unsigned participants() const noexcept { return participants_; }
+
+  void arrive_and_wait(participant& self) noexcept {
+    assert(self.id < participants_);
+    slot& mine = slots_[self.id];
+    if (mine.arrivals == 0) {
+      // Phase 0: add our CPUs to the union; (1) publishes it with our arrival.
+      cpus_.add_calling_thread();
+    } else if (mine.arrivals == 1) {
+      // Phase 0 is over, so every participant's add is visible ((1) then (3)/(4)).
+      const unsigned cpus = cpus_.count();
+      mine.cap = (cpus != 0 && participants_ > cpus) ? kOversubscribedSpin : kDedicatedSpin;
+      mine.budget = mine.cap;
+    }
+    ++mine.arrivals;
+    const std::uint32_t sense = mine.sense ^ 1u;  // the value the sense word takes when this phase ends
+    mine.sense = sense;
+
+    // (1) acq_rel: release publishes this participant's writes to the last
+    // arriver; acquire (in the last arriver) takes every earlier arriver's
+    // release, since all the decrements form one release sequence on remaining_.
+    if (remaining_.value.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+      // (2) relaxed: rearm for the next phase. Ordered before (3), and nobody
+      // decrements again before acquiring (3), so they all see the reset.
+      remaining_.value.store(participants_, std::memory_order_relaxed);
+      // (3) seq_cst: the release half pairs with the acquire loads (4) and (6)
+      // of the waiters (this publishes (1)'s gathered writes and (2)); the
+      // seq_cst half pairs with (5) in a store-buffering pair: either we see a
+      // sleeper at (7) or the sleeper sees this store at (6).
+      phase_.sense.store(sense, std::memory_order_seq_cst);
+      // (7) seq_cst: see (3) and (5).
+      if (phase_.sleepers.load(std::memory_order_seq_cst) != 0) {
+        futex_wake(phase_.sense);
+        ++self.counters.futex_wakes;
+      }
+      return;
+    }
+
+    // Spin. (4) acquire: pairs with the release half of (3).
+    for (std::uint32_t spin = 0; spin < mine.budget; ++spin) {
+      if (phase_.sense.load(std::memory_order_acquire) == sense) {
+        mine.budget = std::min(mine.cap, mine.budget * 2);
+        return;
+      }
+      platform::cpu_relax();
+    }
+    ++self.counters.spins_exhausted;
+    mine.budget = std::max(kMinimumSpin, mine.budget / 2);
+
+    // Sleep. (5) seq_cst: announce the sleeper before the check (6); pairs
+    // with (3)/(7) as explained there.
+    phase_.sleepers.fetch_add(1, std::memory_order_seq_cst);
+    // (6) seq_cst (so also acquire, pairing with (3)): the check that the
+    // kernel repeats atomically inside FUTEX_WAIT. A spurious or early return
+    // (EINTR, EAGAIN, a wake-up for another word value) just loops here.
+    while (phase_.sense.load(std::memory_order_seq_cst) != sense) {
+      futex_wait(phase_.sense, sense ^ 1u);
+      ++self.counters.futex_waits;
+    }
+    // (8) relaxed: the count only steers (7); a late decrement costs at most
+    // one FUTEX_WAKE nobody needed. Each decrement follows its own increment in
+    // the modification order of sleepers, so (7) never misses a real sleeper.
+    phase_.sleepers.fetch_sub(1, std::memory_order_relaxed);
+  }
+
+ private:
+  // Written by every arriver: its own line, so that the spinners' line (the
+  // sense word) is not invalidated by each arrival, only by the release.
+  struct alignas(platform::kCacheLine) arrival_counter {
+    std::atomic<std::uint32_t> value{0};
+  };
+  // Read by every spinner, written once per phase by the last arriver. The
+  // sleepers count shares the line on purpose: the releaser reads it right
+  // after writing the sense, so the read hits the line it already owns.
+  struct alignas(platform::kCacheLine) phase_word {
+    std::atomic<std::uint32_t> sense{0};  // the futex word: 0/1, flips every phase
+    std::atomic<std::uint32_t> sleepers{0};
+  };
+  // Per participant, touched only by its own thread.
+  struct alignas(platform::kCacheLine) slot {
+    std::uint32_t sense = 0;
+    std::uint32_t budget = kDedicatedSpin;
+    std::uint32_t cap = kDedicatedSpin;
+    std::uint64_t arrivals = 0;
+  };
+  static_assert(sizeof(arrival_counter) == platform::kCacheLine, "the arrival counter must have a line of its own");
+  static_assert(sizeof(phase_word) == platform::kCacheLine, "the sense word must have a line of its own");
+  static_assert(sizeof(slot) % platform::kCacheLine == 0, "participant slots must not share a line");
+
+  const unsigned participants_;
+  arrival_counter remaining_;
+  phase_word phase_;
+  std::unique_ptr<slot[]> slots_;
+  cpu_union cpus_;
+};
+
+static_assert(phase_barrier<futex_spin>);
+
+}  // namespace lockstep::sync

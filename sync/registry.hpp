@@ -1,0 +1,130 @@
+#pragma once
+// Every synchronisation primitive of lockstep, as one compile-time type list,
+// so that `lockstep list`, the bare `barrier/...` benchmarks, the `rk4/...`
+// matrix and the conformance tests all iterate the same list: a new primitive
+// joins everything by joining all_primitives.
+//
+// For each primitive P:
+//   info_of<P>()       name (DESIGN.md's), one-line description, kind
+//                      (barrier or dataflow channel), pure_spin (may stall
+//                      for a timeslice per phase when participants outnumber
+//                      CPUs: bound it in time), may_lose_wakeups (a lost
+//                      wake-up ends in a timeout, counted in
+//                      participant::counters.timeouts: bound it in time);
+//   as_barrier_t<P>    P itself for barriers, channel_barrier<P> for channels
+//                      (every participant depending on all): what a bare
+//                      barrier benchmark or the conformance suite runs;
+//   team_of_t<as_barrier_t<P>>  the team its participants run on (team.hpp).
+// Bounding a stalled run: phase_run.hpp (phase_stop: the same stop phase for
+// every participant; run_phases: max phases + a time budget).
+//
+// Usage:
+//   for_each_primitive<all_primitives>([]<class P>() { ... info_of<P>() ... });
+//   for (const primitive_info& info : all_primitive_info) ...
+#include <array>
+#include <cstddef>
+#include <string_view>
+
+#include "sync/channel_barrier.hpp"
+#include "sync/ck_centralized.hpp"
+#include "sync/ck_combining.hpp"
+#include "sync/ck_dissemination.hpp"
+#include "sync/ck_mcs.hpp"
+#include "sync/ck_tournament.hpp"
+#include "sync/concepts.hpp"
+#include "sync/futex_spin.hpp"
+#include "sync/omp_barrier.hpp"
+#include "sync/pthread_barrier.hpp"
+#include "sync/seqlock.hpp"
+#include "sync/spsc_queue.hpp"
+#include "sync/std_barrier.hpp"
+#include "sync/team.hpp"
+#include "sync/win_event.hpp"
+#include "sync/win_event_faithful.hpp"
+
+namespace lockstep::sync {
+
+template <class... Primitives>
+struct type_list {
+  static constexpr std::size_t size = sizeof...(Primitives);
+};
+
+// DESIGN.md's table order.
+using all_primitives = type_list<std_barrier, win_event_faithful, win_event, futex_spin, seqlock, spsc_queue,
+                                 pthread_barrier, omp_barrier, ck_centralized, ck_dissemination, ck_tournament,
+                                 ck_mcs, ck_combining>;
+
+struct primitive_info {
+  std::string_view name;
+  std::string_view description;
+  primitive_kind kind;
+  bool pure_spin;         // may stall (a timeslice per phase) when participants outnumber CPUs
+  bool may_lose_wakeups;  // a lost wake-up costs a timeout (counters.timeouts)
+};
+
+template <class Primitive>
+constexpr primitive_info info_of() noexcept {
+  return {Primitive::kName, Primitive::kDescription, Primitive::kKind, Primitive::kPureSpin,
+          Primitive::kMayLoseWakeups};
+}
+
+template <class Primitive, primitive_kind Kind = Primitive::kKind>
+struct as_barrier {
+  using type = Primitive;
+};
+template <class Primitive>
+struct as_barrier<Primitive, primitive_kind::channel> {
+  using type = channel_barrier<Primitive>;
+};
+template <class Primitive>
+using as_barrier_t = typename as_barrier<Primitive>::type;
+
+// Calls visit.template operator()<P>() for every P in the list, in order.
+template <class List>
+struct for_each_primitive_in;
+template <class... Primitives>
+struct for_each_primitive_in<type_list<Primitives...>> {
+  template <class Visitor>
+  static constexpr void apply(Visitor&& visit) {
+    (visit.template operator()<Primitives>(), ...);
+  }
+};
+template <class List = all_primitives, class Visitor>
+constexpr void for_each_primitive(Visitor&& visit) {
+  for_each_primitive_in<List>::apply(visit);
+}
+
+template <class List>
+struct primitive_info_table;
+template <class... Primitives>
+struct primitive_info_table<type_list<Primitives...>> {
+  static constexpr std::array<primitive_info, sizeof...(Primitives)> value{info_of<Primitives>()...};
+};
+inline constexpr auto all_primitive_info = primitive_info_table<all_primitives>::value;
+
+// nullptr when no primitive has that name (for --sync filters and `list`).
+constexpr const primitive_info* find_primitive(std::string_view name) noexcept {
+  for (const auto& info : all_primitive_info)
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+namespace detail {
+template <class... Primitives>
+constexpr bool names_unique(type_list<Primitives...>) {
+  constexpr std::array<std::string_view, sizeof...(Primitives)> names{Primitives::kName...};
+  for (std::size_t first = 0; first < names.size(); ++first)
+    for (std::size_t second = first + 1; second < names.size(); ++second)
+      if (names[first] == names[second]) return false;
+  return true;
+}
+template <class... Primitives>
+constexpr bool all_runnable_as_barriers(type_list<Primitives...>) {
+  return (phase_barrier<as_barrier_t<Primitives>> && ...);
+}
+}  // namespace detail
+static_assert(detail::names_unique(all_primitives{}), "every primitive needs its own name (the benchmark names use it)");
+static_assert(detail::all_runnable_as_barriers(all_primitives{}),
+              "every primitive must run as a phase_barrier (channels through channel_barrier)");
+
+}  // namespace lockstep::sync

@@ -1,0 +1,60 @@
+// `lockstep compare` and `lockstep report` run through the lockstep binary as a
+// user would: arguments pass through to the Python tools, and their exit
+// statuses (0, 1 for a regression beyond --fail-above, 2 for bad input) come back.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "tests/support/run_command.hpp"
+
+namespace {
+
+using lockstep::testing::count_lines;
+using lockstep::testing::run_command;
+
+std::string fixture(const std::string& name) {
+  return std::string(LOCKSTEP_SOURCE_DIR) + "/reports/tests/fixtures/" + name;
+}
+
+TEST(ReportsCli, CompareShowsTheForcedRegressionAndPassesFailAboveThrough) {
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", fixture("machine_a.json"),
+                                   fixture("machine_a_rerun.json"), "--fail-above", "10"});
+  EXPECT_EQ(result.exit_status, 1) << result.err;
+  EXPECT_NE(result.out.find("geometric mean of B/A over the 38 matched pairs"), std::string::npos);
+  EXPECT_NE(result.err.find("rk4/sync:futex_spin/layout:packed/pin:compact/threads:4"), std::string::npos);
+}
+
+TEST(ReportsCli, OptionsBeforeTheFilesPassThroughToo) {
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", "--fail-above", "50", "--alpha", "0.01",
+                                   fixture("machine_a.json"), fixture("machine_a_rerun.json")});
+  EXPECT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("alpha 0.01"), std::string::npos);
+}
+
+TEST(ReportsCli, TruncatedFileIsOneLineAndExit2) {
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", fixture("machine_a.json"), fixture("truncated.json")});
+  EXPECT_EQ(result.exit_status, 2);
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+  EXPECT_NE(result.err.find("truncated.json"), std::string::npos);
+  EXPECT_NE(result.err.find("truncated"), std::string::npos);
+}
+
+TEST(ReportsCli, HelpIsThePythonToolsHelp) {
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", "--help"});
+  EXPECT_EQ(result.exit_status, 0);
+  EXPECT_NE(result.out.find("--fail-above"), std::string::npos);
+}
+
+TEST(ReportsCli, MissingReportsDirectoryIsOneLineAndExit2) {
+  ::setenv("LOCKSTEP_REPORTS_DIR", "/nonexistent/lockstep-reports", 1);
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", fixture("machine_a.json"), fixture("machine_b.json")});
+  ::unsetenv("LOCKSTEP_REPORTS_DIR");
+  EXPECT_EQ(result.exit_status, 2);
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+  EXPECT_NE(result.err.find("LOCKSTEP_REPORTS_DIR"), std::string::npos);
+}
+
+}  // namespace
