@@ -26,7 +26,7 @@ void register_two_mass() {
     register_scenario("NotApplicable", std::string(Sync::kName) + "/" + std::string(Layout::kName), [] {
       constexpr kernels::applicability verdict = kernels::applicable<Sync, Layout>();
       EXPECT_FALSE(verdict.reason.empty()) << "a combination that is not applicable must say why";
-      EXPECT_EQ(kernels::not_applicable_reason<Sync, Layout>(4, 4), std::string(verdict.reason));
+      EXPECT_EQ((kernels::not_applicable_reason<Sync, Layout>(4, 4)), std::string(verdict.reason));
     });
   }
 }

@@ -89,17 +89,25 @@ inline std::string first_difference(const std::vector<double>& parallel, std::sp
 }
 
 // Steps for a combination: a few hundred, fewer where a primitive is slow by
-// design in this regime (pure spin with more threads than CPUs: a phase can
-// last a timeslice; lost wake-ups cost a timeout each), fewer still under a
-// sanitizer.
+// design in this regime, fewer still under a sanitizer:
+//  * spinners: the pure-spin ck barriers, and omp_barrier, whose libgomp
+//    waiters spin up to GOMP_SPINCOUNT (300000 by default) before sleeping.
+//    On a loaded 2-core machine a phase can last a timeslice whenever the
+//    thread they wait for is not running, which is always the case with more
+//    threads than CPUs: 30 steps, 12 when oversubscribed;
+//  * lost wake-ups (win_event_faithful) cost a timeout each: a fifth.
+template <class Sync>
+constexpr bool spins_long() {
+  return sync::info_of<Sync>().pure_spin || Sync::kName == std::string_view("omp_barrier");
+}
+
 template <class Sync>
 std::uint64_t steps_for(unsigned threads, std::uint64_t base) {
-  constexpr auto info = sync::info_of<Sync>();
   std::uint64_t steps = base;
-  if (info.pure_spin && threads > cpu_count()) steps = base / 10;
-  if (info.may_lose_wakeups && threads > 1) steps = base / 5;
-  if (kSlowdown > 1) steps = steps / 4;
-  return steps < 8 ? 8 : steps;
+  if (spins_long<Sync>() && threads > 1) steps = threads > cpu_count() ? 12 : 30;
+  if (sync::info_of<Sync>().may_lose_wakeups && threads > 1) steps = base / 5;
+  if (kSlowdown > 1) steps = steps / 3;
+  return steps < 6 ? 6 : steps;
 }
 
 // The scenario: segments of 1, a third, and the rest of `steps` steps, each
