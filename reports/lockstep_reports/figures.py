@@ -215,9 +215,14 @@ def topology_order(pairs) -> list[int]:
     return sorted(cpus, key=lambda cpu: (keys[cpu], cpu))
 
 
-def c2c_heatmap(document, label: str) -> str:
-    pairs = document["pairs"]
-    order = topology_order(pairs)
+def c2c_methods(document) -> list[str]:
+    """The measuring methods present (`lockstep c2c --method both` writes cas and store_load pairs)."""
+    return sorted({str(pair.get("method", "unknown")) for pair in document["pairs"]})
+
+
+def c2c_heatmap(document, label: str, method: str | None = None) -> str:
+    order = topology_order(document["pairs"])
+    pairs = [pair for pair in document["pairs"] if method is None or str(pair.get("method", "unknown")) == method]
     index = {cpu: i for i, cpu in enumerate(order)}
     grid = np.full((len(order), len(order)), np.nan)
     relation = {}
@@ -240,7 +245,7 @@ def c2c_heatmap(document, label: str) -> str:
                               color="white" if grid[i, j] > np.nanmean(grid) else "black")
     axes.set_xlabel("CPU (ordered by topology)")
     axes.set_ylabel("CPU")
-    axes.set_title(f"core-to-core one-way latency, p50 ({label})")
+    axes.set_title(f"core-to-core one-way latency, p50 ({label}{', ' + method if method else ''})")
     figure.colorbar(image, ax=axes, label="ns")
     return to_svg(figure)
 

@@ -19,7 +19,7 @@ import tempfile
 from dataclasses import dataclass, field
 
 from . import figures, paper
-from .compare import fingerprint, FINGERPRINT_KEYS, rank_tables
+from .compare import calibration, fingerprint, FINGERPRINT_KEYS, layout_effects, rank_tables
 from .inputs import C2cFile, DelayFile, InputError, RunFile, VerifyFile, load_any, unique_labels
 
 
@@ -78,8 +78,15 @@ def machines_section(run_files: list[RunFile]) -> Section | None:
         return None
     prints = [fingerprint(f) for f in run_files]
     rows = [[key] + [p[key] or "unavailable" for p in prints] for key in FINGERPRINT_KEYS]
-    return Section("Machines", paragraphs=["Each result file's context: what a comparison across machines needs."],
-                   tables=[Table(["context"] + [f.label for f in run_files], rows)])
+    tables = [Table(["context"] + [f.label for f in run_files], rows)]
+    if len(run_files) > 1:
+        effects = [[sync, pin, str(threads), layout] + [f"{s:.2f}x" if s else "unavailable" for s in speedups]
+                   for sync, pin, threads, layout, speedups in layout_effects(run_files)]
+        tables.append(Table(["sync", "pin", "threads", "layout"] + [f"{f.label}: vs packed" for f in run_files],
+                            effects, caption="Each layout's speed-up over packed (packed time / layout time), "
+                                             "on each machine: the false-sharing effect read side by side."))
+    return Section("Machines", paragraphs=["Each result file's context: what a comparison across machines needs. "
+                                           "`lockstep compare` tests the differences."], tables=tables)
 
 
 def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
@@ -127,21 +134,30 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
 
 def c2c_section(item: C2cFile, counter: list[int]) -> Section:
     pairs = item.document["pairs"]
-    by_relation: dict[str, list[float]] = {}
-    for pair in pairs:
-        value = pair["one_way_ns"].get("p50")
-        if isinstance(value, (int, float)) and math.isfinite(value):
-            by_relation.setdefault(pair.get("relation", "unknown"), []).append(float(value))
-    rows = [[relation, str(len(values)), _fmt(min(values)), _fmt(sorted(values)[len(values) // 2]), _fmt(max(values))]
-            for relation, values in sorted(by_relation.items(), key=lambda kv: figures.RELATION_RANK.get(kv[0], 6))]
+    rows = []
+    section_figures = []
+    for method in figures.c2c_methods(item.document):
+        by_relation: dict[str, list[float]] = {}
+        for pair in pairs:
+            value = pair["one_way_ns"].get("p50")
+            if str(pair.get("method", "unknown")) == method and isinstance(value, (int, float)) \
+                    and math.isfinite(value):
+                by_relation.setdefault(pair.get("relation", "unknown"), []).append(float(value))
+        for relation, values in sorted(by_relation.items(), key=lambda kv: (figures.RELATION_RANK.get(kv[0], 6), kv[0])):
+            values = sorted(values)
+            rows.append([method, relation, str(len(values)), _fmt(values[0]), _fmt(values[len(values) // 2]),
+                         _fmt(values[-1])])
+        section_figures.append(Figure(f"c2c-{counter[0]}-{_slug(method)}", f"{item.label}, method {method}",
+                                      figures.c2c_heatmap(item.document, item.label, method)))
     paragraphs = ["One-way latency of a cache line passed between two CPUs (median of its samples, ns), CPUs "
-                  "ordered so that those sharing a core or a cache sit next to each other."]
+                  "ordered so that those sharing a core or a cache sit next to each other; one map per "
+                  "measuring method."]
     if item.document.get("sampled"):
-        paragraphs.append("Sampled: not every pair was measured (grey cells).")
-    figure = Figure(f"c2c-{counter[0]}", item.label, figures.c2c_heatmap(item.document, item.label))
+        paragraphs.append("Sampled: not every pair was measured (blank cells).")
     counter[0] += 1
-    return Section(f"Core-to-core latency: {item.label}", paragraphs=paragraphs, figures=[figure],
-                   tables=[Table(["relation", "pairs", "min p50 (ns)", "median p50 (ns)", "max p50 (ns)"], rows)])
+    return Section(f"Core-to-core latency: {item.label}", paragraphs=paragraphs, figures=section_figures,
+                   tables=[Table(["method", "relation", "pairs", "min p50 (ns)", "median p50 (ns)", "max p50 (ns)"],
+                                 rows)])
 
 
 def figure5_table(rows_measured, title: str) -> Table:
@@ -213,7 +229,7 @@ def paper_section(run_files: list[RunFile]) -> Section:
     for equation, seconds in paper.PAPER_EQUATION_TIMES_S.items():
         cells = [equation, f"{seconds:.2e} s"]
         for run_file in run_files:
-            serial = run_file.context_number("serial_step_ns")
+            serial = calibration(run_file, "serial_step_ns")
             # A serial RK4 step evaluates D1..D4 once per stage: 16 evaluations.
             cells.append(f"{serial / 16 * 1e-9:.2e} s" if serial else "unavailable")
         equation_rows.append(cells)

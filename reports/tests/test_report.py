@@ -66,6 +66,14 @@ class Report(unittest.TestCase):
         for name in figure_files:
             self.assertIn(f"](figures/{name})", self.markdown)
 
+    def test_one_c2c_map_per_measuring_method(self):
+        self.assertIn('<figure id="c2c-2-cas"', self.html)
+        self.assertIn('<figure id="c2c-2-store-load"', self.html)
+        self.assertIn("| store_load | shared L3 |", self.markdown)
+
+    def test_layout_effects_side_by_side_for_two_machines(self):
+        self.assertIn("machine_b.json: vs packed", self.markdown)
+
     def test_paper_values_beside_this_machines(self):
         for text in ("±51.47j", "±19.66j", "±51.49j", "±19.67j", "4.12e-07 s", "5.24e-07 s",
                      "48.94 %", "30691", "29225", "27146", "26903"):
