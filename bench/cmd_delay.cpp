@@ -9,7 +9,12 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <mutex>
+#include <stop_token>
+#include <thread>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -24,6 +29,7 @@
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
 #include "layouts/layouts.hpp"
+#include "platform/clock.hpp"
 #include "platform/placement.hpp"
 #include "platform/scheduling.hpp"
 #include "platform/stats.hpp"
@@ -240,6 +246,20 @@ void run_delay(const delay_options& options, int& result) {
 
   const auto run_with = [&](const platform::placement_plan& plan) {
     delay::paced_result run;
+    // Long runs say how far they are, every 5 s, from a thread that sleeps
+    // otherwise (it is not a participant and does not pace anything).
+    std::jthread progress;
+    if (periods * period_ns >= 10'000'000'000) {
+      progress = std::jthread([total_s = static_cast<double>(periods * period_ns) / 1e9](std::stop_token stop) {
+        std::mutex mutex;
+        std::condition_variable_any tick;
+        std::unique_lock lock(mutex);
+        const std::int64_t began = platform::now_ns();
+        while (!tick.wait_for(lock, stop, std::chrono::seconds(5), [] { return false; }) && !stop.stop_requested())
+          fmt::print(stderr, "delay: {:.0f} s of {:.0f} s\n", static_cast<double>(platform::now_ns() - began) / 1e9,
+                     total_s);
+      });
+    }
     with_combination(options.sync, options.layout, options.threads,
                      [&]<class Sync, class Layout>() { run = run_combination<Sync, Layout>(options.threads, plan, settings); });
     return run;
