@@ -16,7 +16,9 @@
 #include "bench/command.hpp"
 #include "bench/core_to_core.hpp"
 #include "bench/delay_common.hpp"
-#include "bench/delay_topology.hpp"
+#include "bench/delay_c2c_plan.hpp"
+#include "platform/stats.hpp"
+#include "platform/topology.hpp"
 
 namespace lockstep::cli {
 namespace {
@@ -41,7 +43,8 @@ struct pair_measurement {
   int b = 0;
   std::string relation;
   method how = method::cas;
-  delay::summary one_way;
+  std::vector<double> one_way_ns;
+  platform::distribution one_way() const { return platform::summarize(one_way_ns); }
 };
 
 std::vector<method> parse_methods(const std::string& text) {
@@ -51,28 +54,18 @@ std::vector<method> parse_methods(const std::string& text) {
   throw usage_error("--method: '" + text + "' is not one of cas, store_load, both");
 }
 
-// Every unordered pair, or a fixed-seed random sample of max_pairs of them
-// when there are more (hundreds of CPUs: tens of thousands of pairs).
-std::vector<std::pair<int, int>> choose_pairs(const std::vector<int>& cpus, int max_pairs, unsigned seed,
-                                              bool& sampled, std::size_t& all_pairs) {
-  std::vector<std::pair<int, int>> pairs;
-  for (std::size_t i = 0; i < cpus.size(); ++i)
-    for (std::size_t j = i + 1; j < cpus.size(); ++j) pairs.emplace_back(cpus[i], cpus[j]);
-  all_pairs = pairs.size();
-  sampled = pairs.size() > static_cast<std::size_t>(max_pairs);
-  if (sampled) {
-    std::mt19937 random(seed);
-    std::shuffle(pairs.begin(), pairs.end(), random);
-    pairs.resize(static_cast<std::size_t>(max_pairs));
-    std::sort(pairs.begin(), pairs.end());
+platform::topology load_machine(const std::string& synthetic) {
+  try {
+    return synthetic.empty() ? platform::topology::this_machine() : platform::topology::from_synthetic(synthetic);
+  } catch (const platform::topology_error& e) {
+    throw usage_error(std::string(synthetic.empty() ? "" : "--synthetic: ") + e.what());
   }
-  return pairs;
 }
 
 void print_matrix(const std::vector<int>& cpus, const std::vector<pair_measurement>& results, method how) {
   std::map<std::pair<int, int>, double> median;
   for (const auto& r : results)
-    if (r.how == how) median[{r.a, r.b}] = median[{r.b, r.a}] = r.one_way.p50;
+    if (r.how == how) median[{r.a, r.b}] = median[{r.b, r.a}] = r.one_way().p50;
   fmt::print("\nmedian one-way latency, ns ({}):\n{:>6}", bench::c2c::to_string(how), "");
   for (int cpu : cpus) fmt::print(" {:>7}", cpu);
   fmt::print("\n");
@@ -97,41 +90,31 @@ void run_c2c(const c2c_options& options, int& result) {
   if (options.rounds < 1 || options.rounds > 1'000'000) throw usage_error("--rounds must be in 1..1000000");
   if (options.max_pairs < 1) throw usage_error("--max-pairs must be at least 1");
 
-  std::unique_ptr<delay::topology_view> topology;
-  try {
-    topology = std::make_unique<delay::topology_view>(options.synthetic.empty()
-                                                          ? delay::topology_view::from_system()
-                                                          : delay::topology_view::from_synthetic(options.synthetic));
-  } catch (const std::invalid_argument& e) {
-    throw usage_error(std::string("--synthetic: ") + e.what());
-  }
-  std::vector<int> cpus = topology->cpus(options.smt);
+  const platform::topology machine = load_machine(options.synthetic);
+  std::vector<int> cpus = delay::usable_cpus(machine, options.smt);
   if (!options.cores.empty()) cpus = delay::restrict_to(cpus, delay::parse_cpu_list(options.cores, "--cores"), "--cores");
   if (cpus.size() < 2)
     throw usage_error("c2c needs at least two usable CPUs (found " + std::to_string(cpus.size()) +
                       "); name them with --cores, or add --smt to count SMT siblings");
   delay::check_writable(options.json);
 
-  bool sampled = false;
-  std::size_t all_pairs = 0;
-  const auto pairs = choose_pairs(cpus, options.max_pairs, options.seed, sampled, all_pairs);
-
-  if (sampled)
-    fmt::print("sampled {} of {} pairs (fixed seed {}; raise --max-pairs to measure more)\n", pairs.size(), all_pairs,
-               options.seed);
+  const delay::c2c_plan plan =
+      delay::plan_c2c_pairs(machine, cpus, static_cast<std::size_t>(options.max_pairs), options.seed);
+  if (plan.sampled)
+    fmt::print("sampled {} of {} pairs (fixed seed {}; raise --max-pairs to measure more)\n", plan.pairs.size(),
+               plan.all_pairs, options.seed);
 
   // --synthetic: the labels only (a synthetic machine cannot be measured).
   if (!options.synthetic.empty()) {
-    for (const auto& [a, b] : pairs) fmt::print("{} {} {}\n", a, b, topology->relation(a, b));
+    for (const auto& pair : plan.pairs) fmt::print("{} {} {}\n", pair.a, pair.b, pair.relation);
     result = kExitOk;
     return;
   }
 
   std::vector<pair_measurement> results;
-  const std::size_t total = pairs.size() * methods.size();
+  const std::size_t total = plan.pairs.size() * methods.size();
   std::size_t done = 0;
-  for (const auto& [a, b] : pairs) {
-    const std::string relation = topology->relation(a, b);
+  for (const auto& [a, b, relation] : plan.pairs) {
     for (method how : methods) {
       fmt::print(stderr, "c2c: pair {}/{}: CPU {} <-> CPU {} ({}, {})\n", ++done, total, a, b, relation,
                  bench::c2c::to_string(how));
@@ -145,10 +128,10 @@ void run_c2c(const c2c_options& options, int& result) {
       std::vector<double> samples;
       try {
         samples = bench::c2c::measure_pair(request);
-      } catch (const std::system_error& e) {
+      } catch (const std::runtime_error& e) {
         throw usage_error(std::string(e.what()) + "; choose usable CPUs with --cores");
       }
-      results.push_back({a, b, relation, how, delay::summarize(std::move(samples))});
+      results.push_back({a, b, relation, how, std::move(samples)});
     }
   }
 
@@ -158,15 +141,15 @@ void run_c2c(const c2c_options& options, int& result) {
              "p99 ns");
   for (const auto& r : results)
     fmt::print("{:>5} {:>5}  {:<18} {:<10} {:>9.1f} {:>9.1f} {:>9.1f}\n", r.a, r.b, r.relation,
-               bench::c2c::to_string(r.how), r.one_way.min, r.one_way.p50, r.one_way.p99);
+               bench::c2c::to_string(r.how), r.one_way().min, r.one_way().p50, r.one_way().p99);
   for (method how : methods) print_matrix(cpus, results, how);
 
   if (!options.json.empty()) {
     nlohmann::json document = {{"kind", "c2c"},
                                {"lockstep_schema", build_info::kResultSchema},
-                               {"context", delay::result_context(*topology)},
-                               {"sampled", sampled},
-                               {"pairs_total", all_pairs},
+                               {"context", delay::result_context(machine)},
+                               {"sampled", plan.sampled},
+                               {"pairs_total", plan.all_pairs},
                                {"samples_per_pair", options.samples},
                                {"rounds_per_sample", options.rounds},
                                {"pairs", nlohmann::json::array()}};
@@ -175,11 +158,8 @@ void run_c2c(const c2c_options& options, int& result) {
                                    {"b", r.b},
                                    {"relation", r.relation},
                                    {"method", bench::c2c::to_string(r.how)},
-                                   {"one_way_ns",
-                                    {{"min", delay::number_or_null(r.one_way.min)},
-                                     {"p50", delay::number_or_null(r.one_way.p50)},
-                                     {"p99", delay::number_or_null(r.one_way.p99)}}},
-                                   {"samples", r.one_way.count}});
+                                   {"one_way_ns", delay::distribution_json(r.one_way_ns)},
+                                   {"samples", r.one_way_ns.size()}});
     delay::write_file_atomically(options.json, document.dump(2) + "\n");
     fmt::print(stderr, "c2c: wrote {}\n", options.json);
   }

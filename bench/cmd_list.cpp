@@ -1,13 +1,52 @@
-// lockstep list: not built yet (see the open issues).
+// lockstep list: every synchronisation primitive, layout and placement, one
+// line each, from the registries the benchmark matrix iterates (so the list
+// cannot drift from what `lockstep run` accepts).
 #include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <memory>
+#include <string>
 
 #include "bench/command.hpp"
+#include "platform/placement.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
+namespace {
+
+std::string primitive_tags(const sync::primitive_info& info) {
+  std::string tags = info.kind == sync::primitive_kind::barrier ? "barrier" : "dataflow";
+  if (info.pure_spin) tags += ", pure-spin";
+  if (info.may_lose_wakeups) tags += ", loses wake-ups";
+  return tags;
+}
+
+void print_list(const std::string& what) {
+  if (what.empty() || what == "sync") {
+    fmt::print("Synchronisation primitives (--sync):\n");
+    for (const auto& info : sync::all_primitive_info)
+      fmt::print("  {:<20} [{}] {}\n", info.name, primitive_tags(info), info.description);
+  }
+  if (what.empty() || what == "placement") {
+    if (what.empty()) fmt::print("\n");
+    fmt::print("Placements (--pin):\n");
+    for (const auto& placement : platform::placements())
+      fmt::print("  {:<20} {}\n", placement.name, placement.description);
+  }
+}
+
+}  // namespace
+
 void add_list(CLI::App& app, int& result) {
-  (void)app;
-  (void)result;
+  auto what = std::make_shared<std::string>();
+  CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout and placement");
+  list->add_option("what", *what, "Only one group: sync, placement")
+      ->check(CLI::IsMember({"sync", "placement"}));
+  list->callback([what, &result] {
+    print_list(*what);
+    result = kExitOk;
+  });
 }
 
 }  // namespace lockstep::cli

@@ -1,13 +1,271 @@
-// lockstep run: not built yet (see the open issues).
+// lockstep run: the benchmark matrix (DESIGN.md, Commands; issue 4).
+//
+// Registers the entries the filters select (harness.hpp explains the timing),
+// runs them with Google Benchmark, writes its JSON atomically, and prints the
+// summary on stdout. Progress goes to stderr.
+#include <benchmark/benchmark.h>
 #include <CLI/CLI.hpp>
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <regex>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "bench/barrier_benchmarks.hpp"
 #include "bench/command.hpp"
+#include "bench/context.hpp"
+#include "bench/harness.hpp"
+#include "bench/harness_output.hpp"
+#include "bench/harness_summary.hpp"
+#include "bench/harness_team.hpp"
+#include "bench/rk4_benchmarks.hpp"
+#include "platform/placement.hpp"
+#include "platform/topology.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
+namespace {
+
+struct run_options {
+  std::string syncs;
+  std::string layouts;
+  std::string pins;
+  std::string threads;
+  int repetitions = 0;  // 0: the mode's default
+  double min_time = 0;  // 0: the mode's default
+  std::string out;
+  bool quick = false;
+  bool no_accounting = false;
+  std::vector<std::string> benchmark_flags;
+};
+
+// Every name in `wanted` must be in `valid`; the default is all of `valid`.
+std::vector<std::string> select_names(const std::string& wanted, const std::vector<std::string>& valid,
+                                      const char* option) {
+  if (wanted.empty()) return valid;
+  std::vector<std::string> chosen;
+  for (const std::string& name : bench::split_list(wanted)) {
+    if (std::find(valid.begin(), valid.end(), name) == valid.end()) {
+      std::string list;
+      for (const auto& item : valid) list += (list.empty() ? "" : ", ") + item;
+      throw usage_error(fmt::format("unknown {} value '{}' (valid: {})", option, name, list));
+    }
+    if (std::find(chosen.begin(), chosen.end(), name) == chosen.end()) chosen.push_back(name);
+  }
+  if (chosen.empty()) throw usage_error(fmt::format("{} needs at least one value", option));
+  return chosen;
+}
+
+std::vector<unsigned> select_threads(const std::string& wanted, const platform::topology& machine) {
+  constexpr unsigned kMaxThreads = 256;
+  if (wanted.empty()) {
+    // The paper's four threads, and one per core of this machine when that differs.
+    std::vector<unsigned> threads{4};
+    const unsigned cores = std::max(1u, machine.core_count());
+    if (cores != 4) threads.push_back(cores);
+    std::sort(threads.begin(), threads.end());
+    return threads;
+  }
+  std::vector<unsigned> threads;
+  for (const std::string& item : bench::split_list(wanted)) {
+    std::size_t used = 0;
+    unsigned long value = 0;
+    try {
+      value = std::stoul(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used != item.size() || value < 1 || value > kMaxThreads)
+      throw usage_error(fmt::format("unknown --threads value '{}' (valid: whole numbers 1 to {})", item, kMaxThreads));
+    if (std::find(threads.begin(), threads.end(), value) == threads.end())
+      threads.push_back(static_cast<unsigned>(value));
+  }
+  if (threads.empty()) throw usage_error("--threads needs at least one value");
+  std::sort(threads.begin(), threads.end());
+  return threads;
+}
+
+std::vector<std::string> sync_names() {
+  std::vector<std::string> names;
+  for (const auto& info : sync::all_primitive_info) names.emplace_back(info.name);
+  return names;
+}
+
+std::vector<std::string> placement_names() {
+  std::vector<std::string> names;
+  for (const auto& description : platform::placements()) names.emplace_back(description.name);
+  return names;
+}
+
+// How many registered entries Google Benchmark's own --benchmark_filter keeps
+// (for the progress estimate only).
+std::size_t count_selected(const std::vector<std::string>& names) {
+  std::string filter = benchmark::GetBenchmarkFilter();
+  if (filter.empty() || filter == "." || filter == "all") return names.size();
+  bool negative = false;
+  if (filter.front() == '-') {
+    negative = true;
+    filter.erase(0, 1);
+  }
+  try {
+    const std::regex pattern(filter);
+    return static_cast<std::size_t>(std::count_if(names.begin(), names.end(), [&](const std::string& name) {
+      return std::regex_search(name, pattern) != negative;
+    }));
+  } catch (const std::regex_error&) {
+    return names.size();
+  }
+}
+
+int execute(const run_options& options) {
+  // The topology first: it reads the affinity set before anything pins.
+  const platform::topology machine = platform::topology::this_machine();
+
+  bench::run_selection selection;
+  selection.syncs = select_names(options.syncs, sync_names(), "--sync");
+  std::vector<std::string> default_pins{"none", "compact"};
+  const std::vector<std::string> pins =
+      options.pins.empty() ? default_pins : select_names(options.pins, placement_names(), "--pin");
+  for (const auto& pin : pins) selection.pins.push_back(platform::parse_placement(pin));
+  selection.threads = select_threads(options.threads, machine);
+  if (!options.layouts.empty()) throw usage_error("--layout: the RK4 matrix is not built into this binary yet");
+
+  if (options.repetitions < 0 || options.repetitions > 1000)
+    throw usage_error(fmt::format("--repetitions {} is out of range (1 to 1000)", options.repetitions));
+  if (options.min_time < 0 || options.min_time > 60)
+    throw usage_error(fmt::format("--min-time {} is out of range (0 to 60 seconds)", options.min_time));
+  for (const auto& flag : options.benchmark_flags) {
+    if (flag.rfind("--benchmark_out", 0) == 0)
+      throw usage_error("the result file is lockstep's: use --out FILE instead of " + flag);
+    if (flag.rfind("--benchmark_", 0) != 0 && flag.rfind("--v=", 0) != 0)
+      throw usage_error("unknown argument '" + flag +
+                        "': Google Benchmark's flags (--benchmark_...) go after --, lockstep's before it");
+  }
+
+  // The mode: how long each entry runs (harness.hpp, run_settings).
+  bench::harness_state harness;
+  bench::run_book book;
+  harness.machine = &machine;
+  harness.book = &book;
+  harness.settings.accounting = !options.no_accounting;
+  int repetitions = 5;
+  double min_time = 0.04;
+  if (options.quick) {
+    repetitions = 3;
+    min_time = 0.005;
+    harness.settings.target_batch_ns = 500'000;
+    harness.settings.stall_unit_ns = 20'000'000;
+    harness.settings.call_budget_ns = 500'000'000;
+    harness.stalls_before_skipping_sync = 1;
+  }
+  if (options.repetitions > 0) repetitions = options.repetitions;
+  if (options.min_time > 0) min_time = options.min_time;
+
+  bench::atomic_result_file result_file(options.out.empty() ? bench::default_result_path() : options.out);
+
+  // Google Benchmark's flags: ours first, the user's after (the last wins).
+  std::vector<std::string> arguments{"lockstep run",
+                                     "--benchmark_out=" + result_file.temporary_path(),
+                                     "--benchmark_out_format=json",
+                                     fmt::format("--benchmark_repetitions={}", repetitions),
+                                     fmt::format("--benchmark_min_time={}", min_time)};
+  arguments.insert(arguments.end(), options.benchmark_flags.begin(), options.benchmark_flags.end());
+  std::vector<char*> argv;
+  for (auto& argument : arguments) argv.push_back(argument.data());
+  argv.push_back(nullptr);
+  int argc = static_cast<int>(arguments.size());
+  benchmark::Initialize(&argc, argv.data());
+  if (argc > 1) throw usage_error(fmt::format("Google Benchmark does not know the flag '{}'", argv[1]));
+
+  const bench::context_map context = bench::machine_context(machine);
+  bench::add_to_benchmark_context(context);
+  benchmark::AddCustomContext("lockstep_mode", options.quick ? "quick" : "default");
+  benchmark::AddCustomContext("lockstep_accounting", harness.settings.accounting ? "on" : "off");
+  benchmark::AddCustomContext(
+      "lockstep_timing",
+      "manual time per batch of steps (episodes) on a persistent pinned team; team start-up outside the timed "
+      "region; medians over repetitions");
+
+  std::vector<std::string> names = bench::register_calibration_benchmarks(harness);
+  for (auto& name : bench::register_barrier_benchmarks(selection, harness)) names.push_back(std::move(name));
+
+  bench::progress_reporter progress(book, count_selected(names));
+  bench::result_json_reporter json;
+  fmt::print(stderr, "lockstep run: {} entries, {} repetitions each; JSON to {}\n", count_selected(names),
+             repetitions, result_file.destination());
+  std::fflush(stderr);
+  benchmark::RunSpecifiedBenchmarks(&progress, &json);
+  benchmark::Shutdown();
+
+  // The in-run context keys, then the rename.
+  nlohmann::json document;
+  {
+    std::ifstream written(result_file.temporary_path());
+    try {
+      document = nlohmann::json::parse(written);
+    } catch (const nlohmann::json::exception& error) {
+      throw std::runtime_error(std::string("Google Benchmark's result JSON does not parse: ") + error.what());
+    }
+  }
+  if (!document.contains("benchmarks"))
+    throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
+  bench::context_map in_run;
+  in_run["c2c_one_way_ns"] = book.c2c_one_way_ns() ? fmt::format("{:.1f}", *book.c2c_one_way_ns()) : "unavailable";
+  in_run["serial_step_ns"] = book.serial_step_ns() ? fmt::format("{:.2f}", *book.serial_step_ns()) : "unavailable";
+  in_run["oversubscribed_note"] =
+      bench::oversubscribed_note(book, static_cast<unsigned>(machine.affinity().size()));
+  std::string not_applicable;
+  for (const auto& skipped : book.not_applicable)
+    not_applicable += (not_applicable.empty() ? "" : "; ") + skipped.name + ": " + skipped.reason;
+  in_run["not_applicable"] = not_applicable.empty() ? "none" : not_applicable;
+  std::string stalled;
+  for (const auto& entry : book.entries())
+    if (!entry.error.empty()) stalled += (stalled.empty() ? "" : "; ") + entry.name + ": " + entry.error;
+  in_run["stalled"] = stalled.empty() ? "none" : stalled;
+  bench::merge_into_result(document, in_run);
+  {
+    std::ofstream rewritten(result_file.temporary_path(), std::ios::trunc);
+    rewritten << document.dump(2) << '\n';
+    if (!rewritten) throw std::runtime_error("cannot write " + result_file.temporary_path());
+  }
+  result_file.commit();
+
+  fmt::print("{}", bench::render_summary(book, result_file.destination()));
+  std::fflush(stdout);
+  fmt::print(stderr, "lockstep run: results written to {}\n", result_file.destination());
+  return kExitOk;
+}
+
+}  // namespace
+
 void add_run(CLI::App& app, int& result) {
-  (void)app;
-  (void)result;
+  auto options = std::make_shared<run_options>();
+  CLI::App* run = app.add_subcommand(
+      "run",
+      "Run the benchmark matrix (sync x layout x placement x threads) and write Google Benchmark JSON.\n"
+      "Google Benchmark's own flags go after --, e.g. lockstep run --quick -- --benchmark_filter=barrier");
+  run->add_option("--sync", options->syncs, "Primitives, a comma list (default: all; `lockstep list` names them)");
+  run->add_option("--layout", options->layouts, "Layouts, a comma list (default: all)");
+  run->add_option("--pin", options->pins, "Placements, a comma list (default: none,compact)");
+  run->add_option("--threads", options->threads,
+                  "Thread counts, a comma list (default: 4 and this machine's core count)");
+  run->add_option("--repetitions", options->repetitions, "Repetitions per entry (default 5; --quick 3)");
+  run->add_option("--min-time", options->min_time,
+                  "Minimum measured seconds per repetition (default 0.04; --quick 0.005)");
+  run->add_option("--out", options->out, "Result file (default results/<host>-<timestamp>.json)");
+  run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
+  run->add_flag("--no-accounting", options->no_accounting,
+                "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");
+  run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");
+  run->callback([options, &result] { result = execute(*options); });
 }
 
 }  // namespace lockstep::cli

@@ -27,9 +27,11 @@
 //   (warmup_rounds + samples * rounds_per_sample) * 2 * one-way latency
 // (a few milliseconds with the defaults), starts and joins two threads, and
 // leaves the caller's own affinity untouched. It throws std::invalid_argument
-// for a bad request (cpu_a == cpu_b, negative cpu, zero counts) and
-// std::system_error when a thread cannot be pinned (the CPU is offline or not
-// in the process's allowed set) or the page cannot be mapped.
+// for a bad request (cpu_a == cpu_b, negative cpu, zero counts),
+// platform::placement_error when a thread cannot be pinned (the CPU is offline
+// or not in the process's allowed set) and std::system_error when the page
+// cannot be mapped; both derive from std::runtime_error. Link
+// lockstep::platform.
 //
 // Memory ordering: the bounced word is the only shared datum and carries no
 // payload, so each thread needs only to observe the other's write; the
@@ -53,6 +55,7 @@
 #include <vector>
 
 #include "platform/cpu_relax.hpp"
+#include "platform/placement.hpp"
 
 namespace lockstep::bench::c2c {
 
@@ -73,17 +76,7 @@ struct pair_request {
 
 namespace detail {
 
-// Pins the calling thread to one CPU. Local so that this header needs nothing
-// but the standard library and pthreads (the harness includes it in-run).
-inline void pin_this_thread(int cpu) {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  CPU_SET(static_cast<std::size_t>(cpu), &set);
-  const int error = ::pthread_setaffinity_np(::pthread_self(), sizeof set, &set);
-  if (error != 0)
-    throw std::system_error(error, std::generic_category(),
-                            "cannot pin a thread to CPU " + std::to_string(cpu));
-}
+inline void pin_this_thread(int cpu) { platform::pin_current_thread_to_pu(static_cast<unsigned>(cpu)); }
 
 // A spin that cannot starve its partner: after many polite spins it yields,
 // which only matters when both threads share one CPU (a cpuset that the pin

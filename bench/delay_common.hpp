@@ -1,11 +1,7 @@
 #pragma once
-// Shared by the delay commands (c2c, delay, falseshare, migrate): summaries of
-// samples, the latency histogram, the result-file context, atomic JSON
-// writes, CPU-list parsing.
-//
-// Percentiles here are nearest-rank: the p-quantile of n sorted samples is the
-// sample at rank ceil(p * n) (1-based), so every reported value is a value
-// that was measured, never an interpolation between two.
+// Shared by the delay commands (c2c, delay, falseshare, migrate): samples and
+// histograms as the agreed JSON (the arithmetic is platform/stats.hpp), the
+// result-file context, atomic JSON writes, CPU-list parsing and choice.
 #include <sys/utsname.h>
 #include <unistd.h>
 
@@ -16,6 +12,7 @@
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <span>
 #include <sstream>
 #include <string>
 #include <system_error>
@@ -25,7 +22,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/command.hpp"
-#include "bench/delay_topology.hpp"
+#include "platform/stats.hpp"
+#include "platform/topology.hpp"
 #include "bench/version.hpp"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -34,111 +32,30 @@
 
 namespace lockstep::bench::delay {
 
-// Nearest-rank percentile of sorted samples; p in [0, 1]. Empty input: NaN.
-inline double percentile_sorted(const std::vector<double>& sorted, double p) {
-  if (sorted.empty()) return std::nan("");
-  const double rank = std::ceil(p * static_cast<double>(sorted.size()));
-  const std::size_t index = rank < 1.0 ? 0 : static_cast<std::size_t>(rank) - 1;
-  return sorted[std::min(index, sorted.size() - 1)];
+// A distribution as the agreed JSON object {min, p50, p99, p999, max, count};
+// no samples -> every statistic null and count 0 (a missing number is said,
+// never faked).
+inline nlohmann::json distribution_json(const std::vector<double>& samples) {
+  if (samples.empty())
+    return {{"min", nullptr}, {"p50", nullptr}, {"p99", nullptr}, {"p999", nullptr}, {"max", nullptr}, {"count", 0}};
+  const platform::distribution d = platform::summarize(samples);
+  return {{"min", d.min}, {"p50", d.p50}, {"p99", d.p99}, {"p999", d.p999}, {"max", d.max}, {"count", d.count}};
 }
 
-struct summary {
-  double min = 0;
-  double p50 = 0;
-  double p99 = 0;
-  double p999 = 0;
-  double max = 0;
-  std::size_t count = 0;
-};
-
-inline summary summarize(std::vector<double> samples) {
-  summary s;
-  s.count = samples.size();
-  if (samples.empty()) {
-    s.min = s.p50 = s.p99 = s.p999 = s.max = std::nan("");
-    return s;
-  }
-  std::sort(samples.begin(), samples.end());
-  s.min = samples.front();
-  s.max = samples.back();
-  s.p50 = percentile_sorted(samples, 0.50);
-  s.p99 = percentile_sorted(samples, 0.99);
-  s.p999 = percentile_sorted(samples, 0.999);
-  return s;
+// The histogram of these samples (round bucket widths covering min..max, see
+// platform/stats.hpp), every sample added.
+inline platform::histogram histogram_of(const std::vector<double>& samples, std::size_t max_buckets = 50) {
+  platform::histogram h = platform::histogram::covering(std::span<const double>(samples), max_buckets);
+  for (double sample : samples) h.add(sample);
+  return h;
 }
 
-// NaN (no samples) becomes JSON null: a missing number is said, never faked.
-inline nlohmann::json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
+// The agreed JSON form {bucket_ns, first_ns, counts}; samples outside the
+// buckets (none, for histogram_of) would be in below/above.
+inline nlohmann::json histogram_json(const platform::histogram& h) {
+  return {{"bucket_ns", h.bucket_ns()}, {"first_ns", h.first_ns()}, {"counts", h.counts()},
+          {"below", h.below()},         {"above", h.above()}};
 }
-
-inline nlohmann::json to_json(const summary& s) {
-  return {{"min", number_or_null(s.min)},   {"p50", number_or_null(s.p50)}, {"p99", number_or_null(s.p99)},
-          {"p999", number_or_null(s.p999)}, {"max", number_or_null(s.max)}, {"count", s.count}};
-}
-
-// A histogram of non-negative nanosecond values with equal buckets
-// [first + i * width, first + (i + 1) * width) that cover every sample: the
-// width is the smallest 1-2-5 step (at least 1 ns) that fits min..max into
-// at most max_buckets buckets.
-struct histogram {
-  std::int64_t bucket_ns = 1;
-  std::int64_t first_ns = 0;
-  std::vector<std::uint64_t> counts;
-
-  static histogram of(const std::vector<double>& samples, std::size_t max_buckets = 60) {
-    histogram h;
-    if (samples.empty()) return h;
-    const auto [lowest, highest] = std::minmax_element(samples.begin(), samples.end());
-    const auto low = static_cast<std::int64_t>(std::floor(*lowest));
-    const auto high = static_cast<std::int64_t>(std::floor(*highest));
-    std::int64_t width = 1;
-    for (std::int64_t decade = 1;; decade *= 10) {
-      bool found = false;
-      for (std::int64_t step : {1, 2, 5}) {
-        width = step * decade;
-        const std::int64_t first = low / width * width;
-        if (static_cast<std::size_t>((high - first) / width + 1) <= max_buckets) {
-          found = true;
-          break;
-        }
-      }
-      if (found) break;
-    }
-    h.bucket_ns = width;
-    h.first_ns = low / width * width;
-    h.counts.assign(static_cast<std::size_t>((high - h.first_ns) / width + 1), 0);
-    for (double value : samples) {
-      const auto v = static_cast<std::int64_t>(std::floor(value));
-      ++h.counts[static_cast<std::size_t>((v - h.first_ns) / width)];
-    }
-    return h;
-  }
-
-  std::uint64_t total() const {
-    std::uint64_t sum = 0;
-    for (auto c : counts) sum += c;
-    return sum;
-  }
-
-  nlohmann::json to_json() const { return {{"bucket_ns", bucket_ns}, {"first_ns", first_ns}, {"counts", counts}}; }
-
-  // One line per bucket from the first to the last non-empty one, with a bar
-  // scaled to the fullest bucket (a log scale would hide nothing but mislead).
-  std::string text(int bar_width = 50) const {
-    std::string out;
-    std::uint64_t fullest = 0;
-    for (auto c : counts) fullest = std::max(fullest, c);
-    for (std::size_t i = 0; i < counts.size(); ++i) {
-      const std::int64_t from = first_ns + static_cast<std::int64_t>(i) * bucket_ns;
-      const int bar = fullest == 0 ? 0
-                                   : static_cast<int>(std::ceil(static_cast<double>(counts[i]) * bar_width /
-                                                                static_cast<double>(fullest)));
-      out += fmt::format("  {:>10} .. {:<10} {:>9}  {}\n", from, from + bucket_ns, counts[i], std::string(static_cast<std::size_t>(bar), '#'));
-    }
-    return out;
-  }
-};
 
 // Writes text to `path` atomically: a temporary file in the same directory,
 // flushed and closed, then renamed over the target. A reader sees the old
@@ -213,12 +130,12 @@ inline std::string hypervisor_name() {
 }
 
 // The agreed context keys this command can know (all values strings).
-inline nlohmann::json result_context(const topology_view& topology) {
+inline nlohmann::json result_context(const platform::topology& machine) {
   utsname names{};
   const std::string kernel = ::uname(&names) == 0 ? std::string(names.sysname) + " " + names.release : "unknown";
   std::string cpu_model = read_first_line_with("/proc/cpuinfo", "model name");
   if (cpu_model.empty()) cpu_model = "unknown";
-  const topology_summary shape = topology.summary();
+
   return {{"lockstep_version", build_info::kVersion},
           {"lockstep_schema", std::to_string(build_info::kResultSchema)},
           {"git_revision", build_info::kGitRevision},
@@ -228,12 +145,12 @@ inline nlohmann::json result_context(const topology_view& topology) {
           {"cpu_model", cpu_model},
           {"hypervisor", hypervisor_name()},
           {"kernel", kernel},
-          {"topology", shape.text()},
-          {"topology_packages", std::to_string(shape.packages)},
-          {"topology_l3", std::to_string(shape.l3)},
-          {"topology_cores", std::to_string(shape.cores)},
-          {"topology_pus", std::to_string(shape.pus)},
-          {"hwloc_version", hwloc_version_string()}};
+          {"topology", machine.summary()},
+          {"topology_packages", std::to_string(machine.packages())},
+          {"topology_l3", std::to_string(machine.l3_domains())},
+          {"topology_cores", std::to_string(machine.core_count())},
+          {"topology_pus", std::to_string(machine.pu_count())},
+          {"hwloc_version", machine.hwloc_version()}};
 }
 
 // Parses "0,2,4-7" into CPU numbers (ascending, no duplicates); throws
@@ -261,6 +178,20 @@ inline std::vector<int> parse_cpu_list(const std::string& text, const std::strin
   if (cpus.empty()) throw cli::usage_error(option + ": empty CPU list (example: 0,2,4-7)");
   std::sort(cpus.begin(), cpus.end());
   cpus.erase(std::unique(cpus.begin(), cpus.end()), cpus.end());
+  return cpus;
+}
+
+// The CPUs (OS indices, ascending) of the affinity set, one PU per core
+// unless include_smt_siblings.
+inline std::vector<int> usable_cpus(const platform::topology& machine, bool include_smt_siblings) {
+  std::vector<int> cpus;
+  std::vector<unsigned> cores_seen;
+  for (unsigned cpu : machine.affinity()) {
+    const unsigned core = machine.pu(cpu).core;
+    if (!include_smt_siblings && std::find(cores_seen.begin(), cores_seen.end(), core) != cores_seen.end()) continue;
+    cores_seen.push_back(core);
+    cpus.push_back(static_cast<int>(cpu));
+  }
   return cpus;
 }
 

@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
 # The main job: install what is missing, build the release preset, and run
-# lockstep's default job. Arguments go to that job.
+# the benchmark matrix (`lockstep run`, the default matrix for this machine).
+# Arguments go to `lockstep run` (e.g. --quick, --sync futex_spin, --out FILE).
+# The result JSON goes to results/<host>-<timestamp>.json unless --out says
+# otherwise; the run's last line on stderr, and its summary, say where.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 scripts/setup.sh
 cmake --preset release >/dev/null
 cmake --build --preset release -j "$(nproc)"
-exec build/release/bench/lockstep verify "$@"
+exec build/release/bench/lockstep run "$@"

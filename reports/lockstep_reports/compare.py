@@ -173,6 +173,22 @@ def run_median(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     return statistics.median(times) if times else None
 
 
+# The in-run calibration entries, used when the context lacks the value.
+SERIAL_ENTRY = "rk4/serial"
+C2C_ENTRY = "c2c/pin:compact/threads:2"
+
+
+def calibration(run_file: RunFile, context_key: str) -> float | None:
+    """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry."""
+    value = run_file.context_number(context_key)
+    if value is not None:
+        return value
+    from .names import parse_name
+
+    entry = SERIAL_ENTRY if context_key == "serial_step_ns" else C2C_ENTRY
+    return run_median(run_file, parse_name(entry))
+
+
 def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") -> tuple[float | None, float | None]:
     """(step time / serial step time, stage sync time / one-way c2c latency) on that file's own machine.
 
@@ -182,8 +198,8 @@ def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     if run is None or run.errored:
         return None, None
     step = run_median(run_file, key, time_kind)
-    serial = run_file.context_number("serial_step_ns")
-    c2c = run_file.context_number("c2c_one_way_ns")
+    serial = calibration(run_file, "serial_step_ns")
+    c2c = calibration(run_file, "c2c_one_way_ns")
     vs_serial = step / serial if (step is not None and serial) else None
     if vs_serial is None and run.counter_values("vs_serial"):
         vs_serial = statistics.median(run.counter_values("vs_serial"))
@@ -235,7 +251,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
                 step = run_median(run_file, key, time_kind)
                 if step is None:
                     continue
-                serial = run_file.context_number("serial_step_ns")
+                serial = calibration(run_file, "serial_step_ns")
                 entries.append((f"{key.get('sync')}/{key.get('layout')}", step, step / serial if serial else None))
             entries.sort(key=lambda entry: (entry[1], entry[0]))
             per_file.append(entries[:top])

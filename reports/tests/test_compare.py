@@ -145,6 +145,16 @@ class AcrossMachines(unittest.TestCase):
         median_b = statistics.median(b.runs[key].times_ns())
         self.assertAlmostEqual(vs_serial_b, median_b / 121.0)
 
+    def test_in_run_entries_stand_in_for_missing_context_calibrations(self):
+        from lockstep_reports.compare import calibration
+        run_file = load("machine_a.json")
+        del run_file.context["serial_step_ns"]
+        run_file.context["c2c_one_way_ns"] = "unavailable"
+        serial = statistics.median(run_file.runs[parse_name("rk4/serial")].times_ns())
+        c2c = statistics.median(run_file.runs[parse_name("c2c/pin:compact/threads:2")].times_ns())
+        self.assertEqual(calibration(run_file, "serial_step_ns"), serial)
+        self.assertEqual(calibration(run_file, "c2c_one_way_ns"), c2c)
+
     def test_layout_effect_read_side_by_side(self):
         rows = layout_effects([load("machine_a.json"), load("machine_b.json")])
         row = next(r for r in rows if r[:4] == ("futex_spin", "compact", "4", "padded128"))

@@ -88,4 +88,61 @@ TEST(C2cCommand, SamplesPairsAndSaysSo) {
   EXPECT_EQ(count_lines(result.out), 11);  // the note and ten labelled pairs
 }
 
+TEST(FalseshareCommand, BadInputExitsTwoWithOneLine) {
+  expect_usage_error({"falseshare", "--threads", "1"});
+  expect_usage_error({"falseshare", "--threads", "4096"});
+  expect_usage_error({"falseshare", "--strides", "12"});
+  expect_usage_error({"falseshare", "--strides", "8,x"});
+  expect_usage_error({"falseshare", "--ms", "0"});
+  expect_usage_error({"falseshare", "--repeats", "0"});
+  expect_usage_error({"falseshare", "--cores", "0,4095"});
+  expect_usage_error({"falseshare", "--json", "/nonexistent-dir/f.json"});
+  expect_usage_error({"falseshare", "--bogus"});
+}
+
+TEST(FalseshareCommand, WritesParseableJson) {
+  if (!two_cpus()) GTEST_SKIP() << "needs two CPUs";
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep falseshare");
+  const auto path = temp_json("falseshare");
+  const auto result = run_command(
+      {LOCKSTEP_BINARY, "falseshare", "--ms", "2", "--repeats", "1", "--strides", "8,64,128", "--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("time per write"), std::string::npos);
+  const auto document = read_json(path);
+  EXPECT_EQ(document["kind"], "falseshare");
+  ASSERT_EQ(document["strides"].size(), 3u);
+  EXPECT_EQ(document["strides"][0]["stride_bytes"], 8);
+  EXPECT_EQ(document["strides"][0]["share_line"], true);
+  EXPECT_EQ(document["strides"][1]["share_line"], false);
+  EXPECT_EQ(document["strides"][1]["share_line_pair"], true);
+  EXPECT_EQ(document["strides"][2]["share_line_pair"], false);
+  for (const auto& stride : document["strides"]) EXPECT_TRUE(stride["ns_per_write"].contains("p50"));
+}
+
+TEST(MigrateCommand, BadInputExitsTwoWithOneLine) {
+  expect_usage_error({"migrate", "--bytes", "8"});
+  expect_usage_error({"migrate", "--repeats", "0"});
+  expect_usage_error({"migrate", "--cores", "0"});
+  expect_usage_error({"migrate", "--cores", "0,1,2"});
+  expect_usage_error({"migrate", "--cores", "0,4095"});
+  expect_usage_error({"migrate", "--json", "/nonexistent-dir/m.json"});
+}
+
+TEST(MigrateCommand, WritesParseableJson) {
+  if (!two_cpus()) GTEST_SKIP() << "needs two CPUs";
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep migrate");
+  const auto path = temp_json("migrate");
+  const auto result =
+      run_command({LOCKSTEP_BINARY, "migrate", "--repeats", "5", "--bytes", "65536", "--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("refill"), std::string::npos);
+  const auto document = read_json(path);
+  EXPECT_EQ(document["kind"], "migrate");
+  EXPECT_EQ(document["settings"]["bytes"], 65536);
+  for (const char* key : {"move_ns", "refill_ns", "setaffinity_no_move_ns", "first_pass_ns", "next_pass_ns"}) {
+    EXPECT_EQ(document[key]["count"], 5) << key;
+    EXPECT_TRUE(document[key]["p50"].is_number()) << key;
+  }
+}
+
 }  // namespace

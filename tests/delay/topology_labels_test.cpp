@@ -1,29 +1,33 @@
-// c2c pair labels against synthetic hwloc topologies: every relation appears
-// exactly as often as the machine's shape says.
+// c2c pair choice and labels against synthetic hwloc topologies: every
+// relation appears exactly as often as the machine's shape says, SMT siblings
+// are skipped unless asked, and sampling is bounded and deterministic.
 #include <gtest/gtest.h>
 
 #include <map>
-#include <stdexcept>
 #include <string>
 
-#include "bench/delay_topology.hpp"
+#include "bench/delay_c2c_plan.hpp"
+#include "bench/delay_common.hpp"
+#include "platform/topology.hpp"
 
 namespace {
 
-using lockstep::bench::delay::topology_view;
+namespace delay = lockstep::bench::delay;
+using lockstep::platform::topology;
 
-std::map<std::string, int> count_relations(const topology_view& topology) {
+std::map<std::string, int> count_relations(const delay::c2c_plan& plan) {
   std::map<std::string, int> counts;
-  const auto cpus = topology.cpus(true);
-  for (std::size_t i = 0; i < cpus.size(); ++i)
-    for (std::size_t j = i + 1; j < cpus.size(); ++j) ++counts[topology.relation(cpus[i], cpus[j])];
+  for (const auto& pair : plan.pairs) ++counts[pair.relation];
   return counts;
 }
 
-TEST(PairLabels, TwoSocketsWithEveryLevel) {
-  // 2 packages x 2 L3 x 2 L2 x 2 cores x 2 PUs = 32 PUs.
-  const auto topology = topology_view::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
-  const auto counts = count_relations(topology);
+TEST(C2cPairLabels, TwoSocketsWithEveryLevel) {
+  // 2 packages x 2 L3 x 2 L2 x 2 cores x 2 PUs = 32 PUs, 496 pairs.
+  const auto machine = topology::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
+  const auto plan = delay::plan_c2c_pairs(machine, delay::usable_cpus(machine, true), 1000, 1);
+  EXPECT_FALSE(plan.sampled);
+  EXPECT_EQ(plan.all_pairs, 496u);
+  const auto counts = count_relations(plan);
   EXPECT_EQ(counts.at("SMT siblings"), 16);        // one pair per core
   EXPECT_EQ(counts.at("shared L2"), 32);           // 8 L2s x (2 x 2) cross-core pairs
   EXPECT_EQ(counts.at("shared L3"), 64);           // 4 L3s x (4 x 4 across its two L2s)
@@ -32,40 +36,46 @@ TEST(PairLabels, TwoSocketsWithEveryLevel) {
   EXPECT_EQ(counts.size(), 5u);
 }
 
-TEST(PairLabels, NeighboursInLogicalOrder) {
-  const auto topology = topology_view::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
-  EXPECT_EQ(topology.relation(0, 1), "SMT siblings");
-  EXPECT_EQ(topology.relation(0, 2), "shared L2");
-  EXPECT_EQ(topology.relation(0, 4), "shared L3");
-  EXPECT_EQ(topology.relation(0, 8), "different L3");
-  EXPECT_EQ(topology.relation(0, 16), "different package");
-  EXPECT_EQ(topology.relation(31, 0), "different package");
+TEST(C2cPairLabels, WithoutSmtOnePuPerCore) {
+  const auto machine = topology::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
+  const auto cpus = delay::usable_cpus(machine, false);
+  ASSERT_EQ(cpus.size(), 16u);
+  const auto plan = delay::plan_c2c_pairs(machine, cpus, 1000, 1);
+  const auto counts = count_relations(plan);
+  EXPECT_EQ(counts.count("SMT siblings"), 0u);
+  EXPECT_EQ(counts.at("shared L2"), 8);
+  EXPECT_EQ(counts.at("different package"), 64);
 }
 
-TEST(PairLabels, SharedL3WithoutL2Level) {
-  // One package, one L3, private L2 per core (the common desktop shape).
-  const auto topology = topology_view::from_synthetic("pack:1 l3:1 l2:4 core:1 pu:1");
-  const auto counts = count_relations(topology);
+TEST(C2cPairLabels, DesktopShapeIsAllSharedL3) {
+  const auto machine = topology::from_synthetic("pack:1 l3:1 l2:4 core:1 pu:1");
+  const auto plan = delay::plan_c2c_pairs(machine, delay::usable_cpus(machine, false), 100, 1);
+  const auto counts = count_relations(plan);
   EXPECT_EQ(counts.at("shared L3"), 6);
   EXPECT_EQ(counts.size(), 1u);
 }
 
-TEST(PairLabels, SmtSiblingsAreSkippedUnlessAsked) {
-  const auto topology = topology_view::from_synthetic("pack:1 l3:1 core:4 pu:2");
-  EXPECT_EQ(topology.cpus(true).size(), 8u);
-  const auto one_per_core = topology.cpus(false);
-  ASSERT_EQ(one_per_core.size(), 4u);
-  EXPECT_EQ(one_per_core[1], 2);
-  const auto shape = topology.summary();
-  EXPECT_EQ(shape.text(), "packages=1 l3=1 cores=4 pus=8");
+TEST(C2cPairLabels, SamplingIsBoundedDeterministicAndSaid) {
+  const auto machine = topology::from_synthetic("pack:2 core:16 pu:2");
+  const auto cpus = delay::usable_cpus(machine, true);
+  const auto first = delay::plan_c2c_pairs(machine, cpus, 50, 7);
+  const auto again = delay::plan_c2c_pairs(machine, cpus, 50, 7);
+  EXPECT_TRUE(first.sampled);
+  EXPECT_EQ(first.all_pairs, 64u * 63u / 2u);
+  ASSERT_EQ(first.pairs.size(), 50u);
+  for (std::size_t i = 0; i < first.pairs.size(); ++i) {
+    EXPECT_EQ(first.pairs[i].a, again.pairs[i].a);
+    EXPECT_EQ(first.pairs[i].b, again.pairs[i].b);
+    EXPECT_LT(first.pairs[i].a, first.pairs[i].b);
+  }
 }
 
-TEST(PairLabels, BadInputIsRejected) {
-  EXPECT_THROW(topology_view::from_synthetic("pack:two"), std::invalid_argument);
-  const auto topology = topology_view::from_synthetic("pack:1 core:2 pu:1");
-  EXPECT_THROW(topology.relation(0, 0), std::invalid_argument);
-  EXPECT_THROW(topology.relation(0, 9), std::invalid_argument);
-  EXPECT_THROW(topology.relation(-1, 0), std::invalid_argument);
+TEST(C2cPairLabels, RequestedCoresMustBeUsable) {
+  const auto machine = topology::from_synthetic("pack:1 core:4 pu:2");
+  const auto without_smt = delay::usable_cpus(machine, false);
+  EXPECT_EQ(delay::restrict_to(without_smt, {0, 2}, "--cores"), (std::vector<int>{0, 2}));
+  EXPECT_THROW(delay::restrict_to(without_smt, {0, 1}, "--cores"), lockstep::cli::usage_error);  // 1: SMT sibling
+  EXPECT_THROW(delay::restrict_to(without_smt, {0, 99}, "--cores"), lockstep::cli::usage_error);
 }
 
 }  // namespace

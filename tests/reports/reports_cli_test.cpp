@@ -19,6 +19,20 @@ std::string fixture(const std::string& name) {
   return std::string(LOCKSTEP_SOURCE_DIR) + "/reports/tests/fixtures/" + name;
 }
 
+std::filesystem::path fresh_directory(const std::string& name) {
+  auto directory = std::filesystem::temp_directory_path() / ("lockstep-reports-cli-" + name);
+  std::filesystem::remove_all(directory);
+  std::filesystem::create_directories(directory);
+  return directory;
+}
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  std::ostringstream text;
+  text << stream.rdbuf();
+  return text.str();
+}
+
 TEST(ReportsCli, CompareShowsTheForcedRegressionAndPassesFailAboveThrough) {
   const auto result = run_command({LOCKSTEP_BINARY, "compare", fixture("machine_a.json"),
                                    fixture("machine_a_rerun.json"), "--fail-above", "10"});
@@ -55,6 +69,20 @@ TEST(ReportsCli, MissingReportsDirectoryIsOneLineAndExit2) {
   EXPECT_EQ(result.exit_status, 2);
   EXPECT_EQ(count_lines(result.err), 1) << result.err;
   EXPECT_NE(result.err.find("LOCKSTEP_REPORTS_DIR"), std::string::npos);
+}
+
+TEST(ReportsCli, ReportWritesHtmlAndMarkdown) {
+  const auto out = fresh_directory("report");
+  const auto result = run_command({LOCKSTEP_BINARY, "report", fixture("machine_a.json"), fixture("c2c_b.json"),
+                                   fixture("delay_a.json"), fixture("verify_a.csv"), "--out", out.string()});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const std::string html = slurp(out / "report.html");
+  const std::string markdown = slurp(out / "report.md");
+  EXPECT_NE(html.find("<svg"), std::string::npos);
+  EXPECT_EQ(html.find("src=\"http"), std::string::npos);  // self-contained: nothing fetched
+  EXPECT_EQ(html.find("href=\"http"), std::string::npos);
+  EXPECT_NE(markdown.find("Figure 5"), std::string::npos);
+  std::filesystem::remove_all(out);
 }
 
 }  // namespace

@@ -1,0 +1,81 @@
+#pragma once
+// Where a run's results go: the progress reporter (stderr) that also feeds the
+// run book, and the result file written atomically.
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+#include "bench/harness.hpp"
+
+namespace lockstep::bench {
+
+// Google Benchmark's display reporter for `lockstep run`: prints one progress
+// line per finished entry on stderr ("[i/n] name  median  elapsed, estimate"),
+// nothing on stdout (the summary goes there at the end), and records every
+// entry's repetitions in the run book, which is how later entries read the
+// in-run calibrations.
+class progress_reporter : public benchmark::BenchmarkReporter {
+ public:
+  progress_reporter(run_book& book, std::size_t expected_entries);
+
+  bool ReportContext(const Context& context) override;
+  void ReportRuns(const std::vector<Run>& runs) override;
+
+  std::size_t finished() const noexcept { return finished_; }
+
+ private:
+  run_book& book_;
+  std::size_t expected_;
+  std::size_t finished_ = 0;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
+// Google Benchmark appends "/manual_time", "/real_time" and "/iterations:N"
+// to a name when an entry uses them; lockstep's names carry only key:value
+// segments (the timing is stated once, in the context's lockstep_timing).
+// Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
+// Google Benchmark would write NaN, which no JSON parser accepts.
+class result_json_reporter : public benchmark::JSONReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override;
+};
+
+// The run's name without Google Benchmark's suffixes (see above).
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
+
+// Splits an entry name into its fields: "kind" (the first segment) and every
+// key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
+std::map<std::string, std::string> parse_entry_name(const std::string& name);
+
+// The result file, written atomically: Google Benchmark writes into a
+// temporary file next to the destination, and commit() renames it into place.
+// Until then the destination is untouched. SIGINT and SIGTERM remove the
+// temporary file and end the process (status 130 / 143) with one line on
+// stderr: an interrupted run leaves no half-written result.
+class atomic_result_file {
+ public:
+  // Creates the destination's directory if needed. Throws std::runtime_error
+  // (one line) when it cannot be created or written.
+  explicit atomic_result_file(std::string destination);
+  ~atomic_result_file();  // removes the temporary file unless committed
+  atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path
+  atomic_result_file& operator=(const atomic_result_file&) = delete;
+
+  const std::string& temporary_path() const noexcept { return temporary_; }
+  const std::string& destination() const noexcept { return destination_; }
+  // fsyncs the temporary file and renames it over the destination.
+  void commit();
+
+ private:
+  std::string destination_;
+  std::string temporary_;
+  bool committed_ = false;
+};
+
+// results/<host>-<UTC timestamp>.json
+std::string default_result_path();
+
+}  // namespace lockstep::bench

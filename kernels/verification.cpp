@@ -1,0 +1,256 @@
+#include "kernels/verification.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "kernels/dopri5_reference.hpp"
+#include "kernels/rk4.hpp"
+
+namespace lockstep::kernels {
+namespace {
+
+constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
+constexpr double kRoundingFactor = 16.0;     // roundings of relative size eps per step, worst case
+constexpr double kOrderFitMargin = 100.0;    // truncation must exceed typical rounding by this much
+
+double relative_difference(double value, double reference) { return (value - reference) / reference; }
+
+// max_i sum_k A_ik: the largest amplitude a position can reach.
+double amplitude_scale(const normal_mode_solution& solution) {
+  double scale = 0.0;
+  for (std::size_t position = 0; position < solution.masses_count(); ++position) {
+    double sum = 0.0;
+    for (const normal_mode& mode : solution.modes()) sum += mode.amplitude(position);
+    scale = std::max(scale, sum);
+  }
+  return scale;
+}
+
+verify_check make_check(std::string name, double value, double lower, double upper, std::string basis) {
+  const bool passed = std::isfinite(value) && value >= lower && value <= upper;
+  return {std::move(name), value, lower, upper, true, passed, std::move(basis)};
+}
+
+}  // namespace
+
+std::string verify_settings::invalid_reason() const {
+  // The parameters' names are the command's flags (--m1, --m2, --c1, --c2).
+  if (auto reason = params.invalid_reason(); !reason.empty()) return "--" + reason;
+  if (!std::isfinite(step) || !(step > 0.0)) return fmt::format("--dt must be a positive finite number of seconds, got {}", step);
+  if (!std::isfinite(end_time) || !(end_time > 0.0)) {
+    return fmt::format("--t-end must be a positive finite number of seconds, got {}", end_time);
+  }
+  if (step > end_time) return fmt::format("--dt ({}) must not exceed --t-end ({})", step, end_time);
+  const double ratio = end_time / step;
+  if (ratio > static_cast<double>(kMaxVerifySteps)) {
+    return fmt::format("--t-end / --dt is {:.0f} steps; verify runs at most {} (raise --dt or lower --t-end)", ratio,
+                       kMaxVerifySteps);
+  }
+  const double whole = std::round(ratio);
+  if (std::abs(whole * step - end_time) > 1e-9 * end_time) {
+    return fmt::format("--t-end ({}) must be a whole number of --dt ({}) steps", end_time, step);
+  }
+  if (!std::isfinite(dopri5_tolerance) || !(dopri5_tolerance > 0.0)) {
+    return fmt::format("the dopri5 tolerance must be positive, got {}", dopri5_tolerance);
+  }
+  return {};
+}
+
+std::uint64_t verify_settings::steps() const { return static_cast<std::uint64_t>(std::llround(end_time / step)); }
+
+double rk4_amplification_modulus(double theta) {
+  // |R(i theta)|^2 = (1 - theta^2/2 + theta^4/24)^2 + (theta - theta^3/6)^2 = 1 - theta^6/72 + theta^8/576.
+  const double theta2 = theta * theta;
+  const double theta6 = theta2 * theta2 * theta2;
+  return std::sqrt(1.0 - theta6 / 72.0 + theta6 * theta2 / 576.0);
+}
+
+double rk4_one_step_defect_bound(double theta) {
+  // sum_{j>=5} theta^j / j!, summed directly (e^theta minus the first five
+  // terms would cancel catastrophically for small theta).
+  double term = std::pow(theta, 5) / 120.0;
+  double sum = 0.0;
+  for (int j = 6; j < 200 && term > sum * kEpsilon * 0.25; ++j) {
+    sum += term;
+    term *= theta / j;
+  }
+  return sum;
+}
+
+double rk4_truncation_bound(const normal_mode_solution& solution, double step, std::uint64_t steps) {
+  const double n = static_cast<double>(steps);
+  double bound = 0.0;
+  for (std::size_t position = 0; position < solution.masses_count(); ++position) {
+    double sum = 0.0;
+    for (const normal_mode& mode : solution.modes()) {
+      const double theta = mode.angular_frequency * step;
+      const double growth = std::pow(std::max(1.0, rk4_amplification_modulus(theta)), n > 0.0 ? n - 1.0 : 0.0);
+      sum += mode.amplitude(position) * n * rk4_one_step_defect_bound(theta) * growth;
+    }
+    bound = std::max(bound, sum);
+  }
+  return bound;
+}
+
+double rk4_rounding_allowance(const normal_mode_solution& solution, std::uint64_t steps) {
+  return kRoundingFactor * static_cast<double>(steps) * kEpsilon * amplitude_scale(solution);
+}
+
+double rk4_energy_drift_bound(const normal_mode_solution& solution, double step, std::uint64_t steps) {
+  const double n = static_cast<double>(steps);
+  double bound = 0.0;
+  for (const normal_mode& mode : solution.modes()) {
+    const double theta = mode.angular_frequency * step;
+    const double theta2 = theta * theta;
+    const double theta6 = theta2 * theta2 * theta2;
+    // |R|^(2n) - 1 = expm1(n log1p(|R|^2 - 1)), without cancellation.
+    const double per_step = -theta6 / 72.0 + theta6 * theta2 / 576.0;
+    bound = std::max(bound, std::abs(std::expm1(n * std::log1p(per_step))));
+  }
+  return bound + kRoundingFactor * n * kEpsilon;
+}
+
+verify_report run_verification(const verify_settings& settings) {
+  if (auto reason = settings.invalid_reason(); !reason.empty()) throw std::invalid_argument(reason);
+  verify_report report;
+  report.settings = settings;
+  const two_mass_params& params = settings.params;
+  const two_mass_model model(params);
+  const normal_mode_solution analytic = normal_mode_solution::two_mass(params);
+  const std::uint64_t steps = settings.steps();
+
+  // --- Roots: closed form, Eigen, the paper.
+  root_report& roots = report.roots;
+  roots.computed = two_mass_angular_frequencies(params);
+  const normal_mode_solution eigen = normal_mode_solution::chain(chain_params::from_two_mass(params));
+  roots.eigen = {eigen.modes()[0].angular_frequency, eigen.modes()[1].angular_frequency};
+  roots.closed_form_vs_eigen = std::max(std::abs(relative_difference(roots.computed.slow, roots.eigen.slow)),
+                                        std::abs(relative_difference(roots.computed.fast, roots.eigen.fast)));
+  roots.papers_case = params.is_papers_case();
+  roots.fast_vs_paper = relative_difference(roots.computed.fast, kPaperFastRoot);
+  roots.slow_vs_paper = relative_difference(roots.computed.slow, kPaperSlowRoot);
+  // Equal masses and springs: w_fast^2 w_slow^2 = (C/m)^2 (product of the roots of m^2 w^4 - 3 m C w^2 + C^2).
+  roots.paper_implied_spring_over_mass = kPaperFastRoot * kPaperSlowRoot;
+  roots.spring_over_mass = params.c1 / params.m1;
+  report.checks.push_back(make_check(
+      "roots: closed form vs Eigen's generalized eigensolver (relative)", roots.closed_form_vs_eigen, 0.0,
+      kRootAgreementBound, "two independent computations of the same eigenvalues; double precision leaves ~1e-15"));
+  if (roots.papers_case) {
+    report.checks.push_back(make_check(
+        "roots: computed vs the paper's printed ±51.47j, ±19.66j (relative)",
+        std::max(std::abs(roots.fast_vs_paper), std::abs(roots.slow_vs_paper)), 0.0, kPaperRootBound,
+        fmt::format("the paper prints four significant digits; its roots fit C/m = {:.1f}, not {}",
+                    roots.paper_implied_spring_over_mass, two_mass_params::kPaperSpringOverMass)));
+  }
+
+  // --- The ladder: RK4 against the analytic solution at h, h/2, h/4, h/8.
+  const double scale = amplitude_scale(analytic);
+  std::vector<double> exact(model.equations());
+  for (unsigned rung_index = 0; rung_index < kLadderRungs; ++rung_index) {
+    const std::uint64_t refinement = std::uint64_t{1} << rung_index;
+    ladder_rung rung;
+    rung.step = settings.step / static_cast<double>(refinement);
+    rung.steps = steps * refinement;
+    staged_rk4 integrator(model, rung.step);
+    const bool given_step = rung_index == 0;
+    if (given_step) {
+      report.energy.initial = model.energy(integrator.state());
+      report.trajectory.reserve(steps + 1);
+      report.trajectory.push_back({0.0, integrator.state()[0], integrator.state()[1]});
+    }
+    for (std::uint64_t step = 1; step <= rung.steps; ++step) {
+      integrator.step();
+      const double time = integrator.time();
+      const auto state = integrator.state();
+      analytic.state_at(time, exact);
+      rung.max_error = std::max({rung.max_error, std::abs(state[0] - exact[0]), std::abs(state[1] - exact[1])});
+      if (given_step) {
+        report.trajectory.push_back({time, state[0], state[1]});
+        const double energy = model.energy(state);
+        const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
+                                                         : energy;
+        report.energy.max_relative_drift = std::max(report.energy.max_relative_drift, std::abs(drift));
+        report.energy.final_relative_drift = drift;
+      }
+    }
+    rung.truncation_bound = rk4_truncation_bound(analytic, rung.step, rung.steps);
+    rung.error_bound = rung.truncation_bound + rk4_rounding_allowance(analytic, rung.steps);
+    rung.order_from_previous = report.ladder.empty()
+                                   ? std::numeric_limits<double>::quiet_NaN()
+                                   : std::log2(report.ladder.back().max_error / rung.max_error);
+    const double typical_rounding = std::sqrt(static_cast<double>(rung.steps)) * kEpsilon * scale;
+    rung.in_order_fit = rung.truncation_bound >= kOrderFitMargin * typical_rounding && rung.max_error > 0.0;
+    report.checks.push_back(make_check(
+        fmt::format("RK4 max |error| vs analytic, h = {:.6g} s", rung.step), rung.max_error, 0.0, rung.error_bound,
+        "proved from h: sum_k A_k n tail(w_k h) + 16 n eps A (see kernels/verification.hpp)"));
+    report.ladder.push_back(rung);
+  }
+
+  // --- Observed order: least-squares slope over the rungs above rounding.
+  double sum_x = 0.0, sum_y = 0.0, sum_xx = 0.0, sum_xy = 0.0;
+  for (const ladder_rung& rung : report.ladder) {
+    if (!rung.in_order_fit) continue;
+    const double x = std::log(rung.step);
+    const double y = std::log(rung.max_error);
+    sum_x += x;
+    sum_y += y;
+    sum_xx += x * x;
+    sum_xy += x * y;
+    ++report.order_fit_rungs;
+  }
+  const double fit_count = static_cast<double>(report.order_fit_rungs);
+  report.observed_order = report.order_fit_rungs >= 2
+                              ? (fit_count * sum_xy - sum_x * sum_y) / (fit_count * sum_xx - sum_x * sum_x)
+                              : std::numeric_limits<double>::quiet_NaN();
+  verify_check order_check = make_check(
+      "observed order of convergence", report.observed_order, kOrderLow, kOrderHigh,
+      report.order_fit_rungs >= 2
+          ? fmt::format("RK4 is fourth order; least-squares slope over {} rungs above rounding", report.order_fit_rungs)
+          : std::string("not measurable: the errors are at rounding level (use a larger --dt)"));
+  order_check.checked = report.order_fit_rungs >= 2;
+  report.checks.push_back(order_check);
+
+  // --- Energy drift at the given step.
+  report.energy.bound = rk4_energy_drift_bound(analytic, settings.step, steps);
+  report.checks.push_back(make_check("energy drift max |E - E0| / E0", report.energy.max_relative_drift, 0.0,
+                                     report.energy.bound,
+                                     "each mode's energy scales by |R(i w h)|^2 = 1 - (wh)^6/72 + (wh)^8/576 per step"));
+
+  // --- dopri5 against the analytic solution and against RK4 at the given step.
+  std::vector<double> times(steps + 1);
+  for (std::uint64_t index = 0; index <= steps; ++index) times[index] = report.trajectory[index].time;
+  const chain_model chain(chain_params::from_two_mass(params));
+  dopri5_report& dopri5 = report.dopri5;
+  std::vector<double> exact_at(model.equations());
+  const dopri5_run run = dopri5_solve(
+      chain, times,
+      [&](std::size_t index, std::span<const double> state) {
+        analytic.state_at(times[index], exact_at);
+        const trajectory_point& rk4 = report.trajectory[index];
+        dopri5.max_error_vs_analytic =
+            std::max({dopri5.max_error_vs_analytic, std::abs(state[0] - exact_at[0]), std::abs(state[1] - exact_at[1])});
+        dopri5.max_difference_vs_rk4 =
+            std::max({dopri5.max_difference_vs_rk4, std::abs(state[0] - rk4.x1), std::abs(state[1] - rk4.x2)});
+      },
+      settings.dopri5_tolerance);
+  dopri5.steps = run.steps;
+  dopri5.tolerance = run.tolerance;
+  dopri5.error_bound = static_cast<double>(run.steps) * run.tolerance * (1.0 + 2.0 * run.max_abs_state);
+  dopri5.difference_bound = dopri5.error_bound + report.ladder.front().error_bound;
+  report.checks.push_back(make_check("dopri5 max |error| vs analytic", dopri5.max_error_vs_analytic, 0.0,
+                                     dopri5.error_bound,
+                                     "steps x tolerance x (1 + 2 max|state|): accepted local errors, not amplified"));
+  report.checks.push_back(make_check(fmt::format("RK4 (h = {:.6g} s) max |difference| vs dopri5", settings.step),
+                                     dopri5.max_difference_vs_rk4, 0.0, dopri5.difference_bound,
+                                     "the RK4 bound plus the dopri5 bound"));
+
+  report.passed = std::all_of(report.checks.begin(), report.checks.end(),
+                              [](const verify_check& check) { return check.passed || !check.checked; });
+  return report;
+}
+
+}  // namespace lockstep::kernels

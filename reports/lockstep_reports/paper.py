@@ -1,0 +1,52 @@
+"""What Al-Oraiqat's paper reported, for the side-by-side tables (DESIGN.md, "What the paper did and reported"),
+and the model's own values computed the same way lockstep's kernel defines them."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+# The model's case: m1 = m2, C1 = C2, C/m = 1012.5 s^-2 (m = 0.02 kg, C = 20.25 N/m; the paper's printed
+# units would give 10^7, its roots fix 1012.5), x1(0) = 2, x2(0) = -3, velocities 0.
+C_OVER_M = 1012.5
+INITIAL_POSITIONS = (2.0, -3.0)
+
+# The roots the paper prints (rad/s, purely imaginary, each with its conjugate).
+PAPER_ROOTS = (51.47, 19.66)
+
+# Per-derivative evaluation times (s), high-resolution performance counter, Core i5-2400.
+PAPER_EQUATION_TIMES_S = {"D1": 4.12e-7, "D2": 4.12e-7, "D3": 5.24e-7, "D4": 5.24e-7}
+
+# Figure 5 (Concurrency Visualizer): cross-core context switches / total / percent.
+PAPER_FIGURE5 = (
+    ("main", 23, 47, 48.94),
+    ("worker 1", 0, 30691, 0.0),
+    ("worker 2", 0, 29225, 0.0),
+    ("worker 3", 0, 27146, 0.0),
+    ("worker 4", 0, 26903, 0.0),
+)
+PAPER_MACHINE = "Intel Core i5-2400, 3.1 GHz, 4 cores, Windows 10, Visual Studio 2013"
+
+
+def model_roots(c_over_m: float = C_OVER_M) -> tuple[float, float]:
+    """|lambda| of m^2 l^4 + 3 m C l^2 + C^2 = 0: l^2 = (C/m)(-3 -+ sqrt 5)/2, the faster mode first."""
+    fast = math.sqrt(c_over_m * (3.0 + math.sqrt(5.0)) / 2.0)
+    slow = math.sqrt(c_over_m * (3.0 - math.sqrt(5.0)) / 2.0)
+    return fast, slow
+
+
+def c_over_m_from_roots(roots=PAPER_ROOTS) -> float:
+    """The C/m that the paper's printed roots imply (least squares over both roots)."""
+    factors = ((3.0 + math.sqrt(5.0)) / 2.0, (3.0 - math.sqrt(5.0)) / 2.0)
+    return sum(r * r * f for r, f in zip(roots, factors)) / sum(f * f for f in factors)
+
+
+def analytic_trajectory(t, c_over_m: float = C_OVER_M, start=INITIAL_POSITIONS):
+    """x1(t), x2(t) of the normal-mode solution (velocities 0 at t = 0)."""
+    stiffness = np.array([[2.0 * c_over_m, -c_over_m], [-c_over_m, c_over_m]])
+    eigenvalues, modes = np.linalg.eigh(stiffness)
+    frequencies = np.sqrt(eigenvalues)
+    amplitudes = modes.T @ np.asarray(start, dtype=float)
+    t = np.asarray(t, dtype=float)
+    positions = modes @ (amplitudes[:, None] * np.cos(np.outer(frequencies, t)))
+    return positions[0], positions[1]

@@ -1,0 +1,126 @@
+"""`lockstep report`: the HTML and Markdown it writes, their figures and tables, and their determinism."""
+import hashlib
+import os
+import re
+import tempfile
+import unittest
+
+from support import fixture, run_tool
+
+from lockstep_reports import figures, paper
+from lockstep_reports.inputs import load_any
+
+ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "delay_a.json", "verify_a.csv"]
+
+
+def digest_tree(directory):
+    digests = {}
+    for root, _, files in os.walk(directory):
+        for name in sorted(files):
+            path = os.path.join(root, name)
+            with open(path, "rb") as stream:
+                digests[os.path.relpath(path, directory)] = hashlib.sha256(stream.read()).hexdigest()
+    return digests
+
+
+class Report(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.directory = tempfile.TemporaryDirectory()
+        cls.out = os.path.join(cls.directory.name, "first")
+        status, _, err = run_tool("report", *[fixture(name) for name in ALL_INPUTS], "--out", cls.out)
+        assert status == 0, err
+        with open(os.path.join(cls.out, "report.html"), encoding="utf-8") as stream:
+            cls.html = stream.read()
+        with open(os.path.join(cls.out, "report.md"), encoding="utf-8") as stream:
+            cls.markdown = stream.read()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.directory.cleanup()
+
+    def test_same_input_gives_the_same_bytes(self):
+        again = os.path.join(self.directory.name, "second")
+        status, _, _ = run_tool("report", *[fixture(name) for name in ALL_INPUTS], "--out", again)
+        self.assertEqual(status, 0)
+        self.assertEqual(digest_tree(self.out), digest_tree(again))
+
+    def test_html_is_self_contained(self):
+        self.assertNotRegex(self.html, r"<(script|img|link|iframe)[^>]+(src|href)=\"(https?:)?//")
+        self.assertNotIn("@import", self.html)
+        self.assertNotIn("<?xml", self.html)
+        self.assertNotIn("<dc:date>", self.html)  # matplotlib's date metadata is removed
+
+    def test_ids_are_unique_across_inline_figures(self):
+        ids = re.findall(r'\bid="([^"]+)"', self.html)
+        self.assertEqual(len(ids), len(set(ids)))
+
+    def test_every_figure_the_issue_lists_is_there(self):
+        for slug in ("heatmap-", "bars-", "penalties-", "c2c-", "delay-", "trajectory-"):
+            self.assertIn(f'<figure id="{slug}', self.html, slug)
+        # Two run files x (compact, migrate) x (2, 4 threads), for heat maps and bars each.
+        self.assertEqual(self.html.count('<figure id="heatmap-'), 8)
+        self.assertEqual(self.html.count('<figure id="bars-'), 8)
+        figure_files = os.listdir(os.path.join(self.out, "figures"))
+        self.assertEqual(len(figure_files), self.html.count("<figure "))
+        for name in figure_files:
+            self.assertIn(f"](figures/{name})", self.markdown)
+
+    def test_one_c2c_map_per_measuring_method(self):
+        self.assertIn('<figure id="c2c-2-cas"', self.html)
+        self.assertIn('<figure id="c2c-2-store-load"', self.html)
+        self.assertIn("| store_load | shared L3 |", self.markdown)
+
+    def test_layout_effects_side_by_side_for_two_machines(self):
+        self.assertIn("machine_b.json: vs packed", self.markdown)
+
+    def test_paper_values_beside_this_machines(self):
+        for text in ("±51.47j", "±19.66j", "±51.49j", "±19.67j", "4.12e-07 s", "5.24e-07 s",
+                     "48.94 %", "30691", "29225", "27146", "26903"):
+            self.assertIn(text, self.markdown, text)
+            self.assertIn(text, self.html, text)
+        self.assertIn("Figure 5: this machine (pinned) beside the paper", self.markdown)
+        self.assertIn("Figure 5: this machine unpinned", self.markdown)
+
+    def test_machines_and_ranks(self):
+        self.assertIn("AMD EPYC 7232P 8-Core Processor", self.markdown)
+        self.assertIn("Fastest combinations: machine_b.json", self.markdown)
+
+    def test_report_of_run_results_alone(self):
+        out = os.path.join(self.directory.name, "alone")
+        status, _, _ = run_tool("report", fixture("machine_a.json"), "--out", out)
+        self.assertEqual(status, 0)
+        with open(os.path.join(out, "report.md"), encoding="utf-8") as stream:
+            markdown = stream.read()
+        self.assertNotIn("Multi-core delay", markdown)
+        self.assertIn("±51.47j", markdown)
+
+    def test_bad_input_is_one_line_and_exit_2(self):
+        for name in ("truncated.json", "foreign.json"):
+            status, _, err = run_tool("report", fixture(name), "--out", os.path.join(self.directory.name, "bad"))
+            self.assertEqual(status, 2)
+            self.assertEqual(err.count("\n"), 1)
+            self.assertIn(name, err)
+
+
+class Pieces(unittest.TestCase):
+    def test_topology_order_puts_siblings_and_cache_domains_together(self):
+        document = load_any(fixture("c2c_b.json")).document
+        order = figures.topology_order(document["pairs"])
+        self.assertEqual(order[:4], [0, 8, 1, 9])
+        self.assertEqual(set(order[:8]), {0, 1, 2, 3, 8, 9, 10, 11})
+
+    def test_model_roots_and_the_papers(self):
+        fast, slow = paper.model_roots()
+        self.assertAlmostEqual(fast, 51.49, places=2)
+        self.assertAlmostEqual(slow, 19.67, places=2)
+        self.assertAlmostEqual(paper.c_over_m_from_roots(), 1011.9, delta=0.3)
+
+    def test_analytic_trajectory_starts_at_the_initial_state(self):
+        x1, x2 = paper.analytic_trajectory([0.0])
+        self.assertAlmostEqual(float(x1[0]), 2.0)
+        self.assertAlmostEqual(float(x2[0]), -3.0)
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,207 @@
+// `lockstep run` and `lockstep list` as a user runs them: bad input is one
+// line and exit 2; a tiny run writes a JSON file that parses and carries the
+// agreed names, counters and context keys; Ctrl-C leaves no result file.
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "platform/placement.hpp"
+#include "sync/registry.hpp"
+#include "tests/support/run_command.hpp"
+#include "tests/support/watchdog.hpp"
+
+namespace {
+
+using lockstep::testing::count_lines;
+using lockstep::testing::run_command;
+using lockstep::testing::watchdog;
+namespace fs = std::filesystem;
+
+// A fresh directory per test, removed afterwards.
+class scratch_directory {
+ public:
+  scratch_directory() {
+    char name[] = "/tmp/lockstep-run-test-XXXXXX";
+    if (::mkdtemp(name) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = name;
+  }
+  ~scratch_directory() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  scratch_directory(const scratch_directory&) = delete;  // owns the directory
+  scratch_directory& operator=(const scratch_directory&) = delete;
+  const fs::path& path() const noexcept { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+std::vector<std::string> run_args(std::initializer_list<std::string> extra) {
+  std::vector<std::string> args{LOCKSTEP_BINARY, "run"};
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+TEST(RunCli, BadInputIsOneLineAndExitTwo) {
+  watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep run with bad input hung");
+  const std::vector<std::vector<std::string>> bad_inputs{
+      run_args({"--sync", "no_such_barrier"}),
+      run_args({"--sync", "std_barrier,nope"}),
+      run_args({"--pin", "everywhere"}),
+      run_args({"--threads", "0"}),
+      run_args({"--threads", "two"}),
+      run_args({"--threads", "2,1000"}),
+      run_args({"--repetitions", "-3"}),
+      run_args({"--repetitions", "many"}),
+      run_args({"--", "--benchmark_out=/tmp/x.json"}),
+      run_args({"--", "--benchmark_no_such_flag=1"}),
+      run_args({"stray"}),
+  };
+  for (const auto& args : bad_inputs) {
+    const auto result = run_command(args);
+    std::string shown;
+    for (const auto& arg : args) shown += arg + " ";
+    EXPECT_EQ(result.exit_status, 2) << shown << "\nstderr: " << result.err;
+    EXPECT_EQ(count_lines(result.err), 1) << shown << "\nstderr: " << result.err;
+    EXPECT_TRUE(result.out.empty()) << shown << "\nstdout: " << result.out;
+  }
+}
+
+TEST(RunCli, UnknownSyncListsTheValidOnes) {
+  watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
+  const auto result = run_command(run_args({"--sync", "nope"}));
+  EXPECT_EQ(result.exit_status, 2);
+  for (const auto& info : lockstep::sync::all_primitive_info)
+    EXPECT_NE(result.err.find(std::string(info.name)), std::string::npos) << info.name << " missing in: " << result.err;
+}
+
+TEST(RunCli, TinyRunWritesAgreedJson) {
+  watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a tiny lockstep run did not finish");
+  scratch_directory scratch;
+  const fs::path out = scratch.path() / "nested" / "tiny.json";
+  const auto result = run_command(run_args({"--quick", "--sync", "std_barrier,futex_spin", "--threads", "2", "--pin",
+                                            "compact", "--repetitions", "2", "--out", out.string(), "--",
+                                            "--benchmark_min_time=0.001"}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find(out.string()), std::string::npos) << "the summary names the result file:\n" << result.out;
+  EXPECT_NE(result.err.find("[1/"), std::string::npos) << "progress on stderr:\n" << result.err;
+
+  // Only the result file: no temporary left behind.
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(out.parent_path())) files.push_back(entry.path().filename());
+  EXPECT_EQ(files, std::vector<std::string>{"tiny.json"});
+
+  std::ifstream file(out);
+  const nlohmann::json document = nlohmann::json::parse(file);  // throws (fails) if it does not parse
+  ASSERT_TRUE(document.contains("context"));
+  ASSERT_TRUE(document.contains("benchmarks"));
+  for (const char* key : {"lockstep_version", "lockstep_schema", "git_revision", "compiler", "cxx_flags", "build_type",
+                          "cpu_model", "hypervisor", "kernel", "topology", "topology_packages", "topology_l3",
+                          "topology_cores", "topology_pus", "hwloc_version", "benchmark_version", "boost_version",
+                          "c2c_one_way_ns", "serial_step_ns", "oversubscribed_note"}) {
+    ASSERT_TRUE(document["context"].contains(key)) << "context lacks " << key;
+    EXPECT_TRUE(document["context"][key].is_string()) << key << " must be a string";
+  }
+
+  std::set<std::string> names;
+  for (const auto& entry : document["benchmarks"])
+    if (entry.value("run_type", "") == "iteration") names.insert(entry["name"].get<std::string>());
+  for (const char* name : {"rk4/serial", "barrier/sync:std_barrier/pin:compact/threads:2",
+                           "barrier/sync:futex_spin/pin:compact/threads:2"})
+    EXPECT_TRUE(names.count(name)) << "missing entry " << name;
+  if (lockstep::platform::affinity_cpu_count() >= 2) {
+    EXPECT_TRUE(names.count("c2c/pin:compact/threads:2"));
+  }
+
+  for (const auto& entry : document["benchmarks"]) {
+    const std::string name = entry["name"];
+    if (entry.value("run_type", "") != "iteration" || entry.value("error_occurred", false)) continue;
+    if (name.rfind("barrier/", 0) == 0) {
+      for (const char* counter : {"ns_per_episode", "futex_waits_per_episode", "futex_wakes_per_episode",
+                                  "yields_per_episode", "spins_exhausted_per_episode", "timeouts", "oversubscribed"})
+        EXPECT_TRUE(entry.contains(counter)) << name << " lacks " << counter;
+      EXPECT_GT(entry["ns_per_episode"].get<double>(), 0.0) << name;
+    }
+    if (name == "rk4/serial") {
+      EXPECT_GT(entry["ns_per_step"].get<double>(), 0.0);
+    }
+  }
+}
+
+TEST(RunCli, InterruptLeavesNoResultFile) {
+  watchdog guard(std::chrono::seconds(120 * lockstep::testing::kSlowdown), "an interrupted run did not end");
+  scratch_directory scratch;
+  const fs::path out = scratch.path() / "interrupted.json";
+  std::vector<std::string> args = run_args({"--sync", "std_barrier", "--repetitions", "50", "--out", out.string()});
+  std::vector<char*> argv;
+  for (auto& arg : args) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = 0;
+  ASSERT_EQ(::posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ), 0);
+  posix_spawn_file_actions_destroy(&actions);
+
+  // Wait until Google Benchmark writes into the temporary file, then interrupt.
+  bool partial_seen = false;
+  for (int poll = 0; poll < 600 && !partial_seen; ++poll) {
+    for (const auto& entry : fs::directory_iterator(scratch.path()))
+      if (entry.path().filename().string().find(".partial-") != std::string::npos) partial_seen = true;
+    if (!partial_seen) std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));  // mid-run
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  EXPECT_TRUE(partial_seen) << "the run never started writing";
+  ASSERT_TRUE(WIFEXITED(status)) << "the run died by a signal instead of handling it";
+  EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT);
+  EXPECT_TRUE(fs::is_empty(scratch.path())) << "an interrupted run left a file behind";
+}
+
+TEST(ListCli, NamesEverySyncAndPlacementOnALineEach) {
+  watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
+  const auto result = run_command({LOCKSTEP_BINARY, "list"});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const auto line_starting = [&](const std::string& name) {
+    std::size_t lines = 0;
+    std::size_t start = 0;
+    while (start < result.out.size()) {
+      std::size_t end = result.out.find('\n', start);
+      if (end == std::string::npos) end = result.out.size();
+      const std::string line = result.out.substr(start, end - start);
+      if (line.rfind("  " + name + " ", 0) == 0 && line.size() > name.size() + 10) ++lines;
+      start = end + 1;
+    }
+    return lines;
+  };
+  for (const auto& info : lockstep::sync::all_primitive_info)
+    EXPECT_EQ(line_starting(std::string(info.name)), 1u) << info.name << " in:\n" << result.out;
+  for (const auto& placement : lockstep::platform::placements())
+    EXPECT_EQ(line_starting(std::string(placement.name)), 1u) << placement.name << " in:\n" << result.out;
+}
+
+TEST(ListCli, UnknownGroupIsExitTwo) {
+  watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
+  const auto result = run_command({LOCKSTEP_BINARY, "list", "nonsense"});
+  EXPECT_EQ(result.exit_status, 2);
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+}
+
+}  // namespace

@@ -1,0 +1,202 @@
+// `lockstep verify` as a user runs it: exit status, what it prints, and the
+// CSV and JSON it writes.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kernels/normal_modes.hpp"
+#include "tests/support/run_command.hpp"
+
+namespace {
+
+using lockstep::testing::command_result;
+using lockstep::testing::count_lines;
+using lockstep::testing::run_command;
+
+command_result verify(std::vector<std::string> arguments) {
+  arguments.insert(arguments.begin(), {LOCKSTEP_BINARY, "verify"});
+  return run_command(arguments);
+}
+
+// A fresh directory for one test's files, removed afterwards.
+class scratch_directory {
+ public:
+  scratch_directory() {
+    std::string pattern = (std::filesystem::temp_directory_path() / "lockstep-verify-XXXXXX").string();
+    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = pattern;
+  }
+  ~scratch_directory() { std::filesystem::remove_all(path_); }
+  scratch_directory(const scratch_directory&) = delete;  // one owner removes the directory
+  scratch_directory& operator=(const scratch_directory&) = delete;
+  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
+  [[nodiscard]] std::vector<std::string> entries() const {
+    std::vector<std::string> names;
+    for (const auto& entry : std::filesystem::directory_iterator(path_)) names.push_back(entry.path().filename().string());
+    return names;
+  }
+
+ private:
+  std::filesystem::path path_;
+};
+
+std::string slurp(const std::string& path) {
+  std::ifstream input(path);
+  std::stringstream text;
+  text << input.rdbuf();
+  return text.str();
+}
+
+TEST(VerifyCli, PapersCasePassesAndShowsRootsBesideThePapers) {
+  const command_result result = verify({});
+  EXPECT_EQ(result.exit_status, 0) << result.out << result.err;
+  EXPECT_EQ(result.err, "");
+  EXPECT_NE(result.out.find("±51.4855j"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("±19.6657j"), std::string::npos);
+  EXPECT_NE(result.out.find("±51.47j"), std::string::npos);
+  EXPECT_NE(result.out.find("±19.66j"), std::string::npos);
+  EXPECT_NE(result.out.find("C/m = 1011.9"), std::string::npos) << "the C/m the paper's roots imply";
+  EXPECT_NE(result.out.find("observed order 4.0"), std::string::npos);
+  EXPECT_NE(result.out.find("dopri5"), std::string::npos);
+  EXPECT_NE(result.out.find("Energy"), std::string::npos);
+  EXPECT_EQ(result.out.find("FAIL"), std::string::npos);
+}
+
+TEST(VerifyCli, BadInputIsExitTwoWithOneLine) {
+  const std::vector<std::vector<std::string>> bad_inputs = {
+      {"--dt", "0"},     {"--dt", "-0.001"}, {"--dt", "nan"},   {"--dt", "inf"},     {"--t-end", "nan"},
+      {"--t-end", "0"},  {"--m1", "0"},      {"--m2", "-0.02"}, {"--c1", "0"},       {"--c2", "-20"},
+      {"--m1", "nan"},   {"--c2", "inf"},    {"--m2", "-inf"},  {"--bogus"},         {"--dt", "abc"},
+      {"--dt", "0.3"},   {"--dt", "2"},      {"--t-end", "1e9"}, {"--csv"},           {"extra"}};
+  for (const auto& arguments : bad_inputs) {
+    const command_result result = verify(arguments);
+    std::string shown;
+    for (const auto& argument : arguments) shown += argument + " ";
+    EXPECT_EQ(result.exit_status, 2) << shown << result.out << result.err;
+    EXPECT_EQ(count_lines(result.err), 1) << shown << result.err;
+    EXPECT_EQ(result.out, "") << shown;
+  }
+  // The message names what is wrong.
+  EXPECT_NE(verify({"--dt", "0"}).err.find("--dt"), std::string::npos);
+  EXPECT_NE(verify({"--m2", "-1"}).err.find("--m2"), std::string::npos);
+  EXPECT_NE(verify({"--c1", "nan"}).err.find("--c1"), std::string::npos);
+}
+
+TEST(VerifyCli, UnwritableOutputIsExitTwo) {
+  for (const char* flag : {"--csv", "--json"}) {
+    const command_result result = verify({flag, "/nonexistent-lockstep-dir/out"});
+    EXPECT_EQ(result.exit_status, 2) << flag;
+    EXPECT_EQ(count_lines(result.err), 1) << result.err;
+    EXPECT_NE(result.err.find("/nonexistent-lockstep-dir/out"), std::string::npos);
+  }
+}
+
+TEST(VerifyCli, ErrorsOutsideTheBoundsAreExitOne) {
+  const command_result result = verify({"--dt", "0.05"});  // w_fast h = 2.6: RK4 far from fourth order
+  EXPECT_EQ(result.exit_status, 1) << result.out << result.err;
+  EXPECT_NE(result.out.find("FAIL"), std::string::npos);
+}
+
+TEST(VerifyCli, CsvHoldsTheTrajectory) {
+  const scratch_directory directory;
+  const std::string path = directory.file("trajectory.csv");
+  const command_result result = verify({"--dt", "0.002", "--t-end", "0.5", "--csv", path});
+  ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
+  std::istringstream csv(slurp(path));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line, "t,x1,x2");
+  const lockstep::kernels::normal_mode_solution exact =
+      lockstep::kernels::normal_mode_solution::two_mass(lockstep::kernels::two_mass_params{});
+  int rows = 0;
+  while (std::getline(csv, line)) {
+    double time = 0, x1 = 0, x2 = 0;
+    char comma1 = 0, comma2 = 0;
+    std::istringstream row(line);
+    ASSERT_TRUE(row >> time >> comma1 >> x1 >> comma2 >> x2) << line;
+    ASSERT_EQ(comma1, ',');
+    ASSERT_EQ(comma2, ',');
+    EXPECT_NEAR(time, rows * 0.002, 1e-12);
+    const std::vector<double> state = exact.state_at(time);
+    // RK4 at h = 2 ms over 0.5 s: the bound from h is about 1.4e-4 m.
+    EXPECT_NEAR(x1, state[0], 2e-4) << "t = " << time;
+    EXPECT_NEAR(x2, state[1], 2e-4) << "t = " << time;
+    if (rows == 0) {
+      EXPECT_EQ(x1, 2.0);
+      EXPECT_EQ(x2, -3.0);
+    }
+    ++rows;
+  }
+  EXPECT_EQ(rows, 251);
+  EXPECT_EQ(directory.entries(), std::vector<std::string>{"trajectory.csv"}) << "no temporary file left behind";
+}
+
+TEST(VerifyCli, JsonHoldsTheFigures) {
+  const scratch_directory directory;
+  const std::string path = directory.file("verify.json");
+  const command_result result = verify({"--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
+  const nlohmann::json json = nlohmann::json::parse(slurp(path));
+  EXPECT_EQ(json.at("kind"), "verify");
+  EXPECT_EQ(json.at("lockstep_schema"), 1);
+  EXPECT_TRUE(json.at("passed").get<bool>());
+  EXPECT_TRUE(json.at("parameters").at("papers_case").get<bool>());
+  EXPECT_DOUBLE_EQ(json.at("parameters").at("m1").get<double>(), 0.02);
+  EXPECT_DOUBLE_EQ(json.at("parameters").at("c2").get<double>(), 20.25);
+  const auto& roots = json.at("roots");
+  EXPECT_NEAR(roots.at("computed_rad_s").at("fast").get<double>(), 51.49, 0.005);
+  EXPECT_NEAR(roots.at("computed_rad_s").at("slow").get<double>(), 19.67, 0.005);
+  EXPECT_EQ(roots.at("paper_rad_s").at("fast").get<double>(), 51.47);
+  EXPECT_EQ(roots.at("paper_rad_s").at("slow").get<double>(), 19.66);
+  EXPECT_NEAR(roots.at("paper_implied_c_over_m").get<double>(), 1011.9, 0.05);
+  EXPECT_LE(std::abs(roots.at("relative_difference_vs_paper").at("fast").get<double>()), 1e-3);
+  const auto& ladder = json.at("ladder");
+  ASSERT_EQ(ladder.size(), 4U);
+  for (const auto& rung : ladder) EXPECT_LE(rung.at("max_error").get<double>(), rung.at("bound").get<double>());
+  EXPECT_DOUBLE_EQ(ladder[1].at("dt").get<double>(), ladder[0].at("dt").get<double>() / 2);
+  const double order = json.at("observed_order").get<double>();
+  EXPECT_GE(order, 3.9);
+  EXPECT_LE(order, 4.1);
+  EXPECT_LE(json.at("energy").at("max_relative_drift").get<double>(), json.at("energy").at("bound").get<double>());
+  EXPECT_LE(json.at("dopri5").at("max_difference_vs_rk4").get<double>(),
+            json.at("dopri5").at("difference_bound").get<double>());
+  EXPECT_GT(json.at("dopri5").at("steps").get<int>(), 0);
+  for (const auto& check : json.at("checks")) {
+    EXPECT_TRUE(check.at("passed").get<bool>()) << check.dump();
+    EXPECT_FALSE(check.at("basis").get<std::string>().empty());
+  }
+  EXPECT_EQ(directory.entries(), std::vector<std::string>{"verify.json"}) << "no temporary file left behind";
+}
+
+TEST(VerifyCli, OtherParametersAreUsed) {
+  const scratch_directory directory;
+  const std::string path = directory.file("verify.json");
+  const command_result result =
+      verify({"--m1", "0.05", "--m2", "0.01", "--c1", "3", "--c2", "70", "--dt", "0.0005", "--t-end", "0.5", "--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
+  EXPECT_NE(result.out.find("not the paper's case"), std::string::npos);
+  const nlohmann::json json = nlohmann::json::parse(slurp(path));
+  EXPECT_FALSE(json.at("parameters").at("papers_case").get<bool>());
+  EXPECT_DOUBLE_EQ(json.at("parameters").at("c2").get<double>(), 70.0);
+  const lockstep::kernels::two_mass_frequencies expected = lockstep::kernels::two_mass_angular_frequencies(
+      {.m1 = 0.05, .m2 = 0.01, .c1 = 3.0, .c2 = 70.0});
+  EXPECT_DOUBLE_EQ(json.at("roots").at("computed_rad_s").at("fast").get<double>(), expected.fast);
+}
+
+TEST(VerifyCli, HelpNamesTheFlags) {
+  const command_result result = run_command({LOCKSTEP_BINARY, "help", "verify"});
+  EXPECT_EQ(result.exit_status, 0);
+  for (const char* flag : {"--m1", "--m2", "--c1", "--c2", "--dt", "--t-end", "--csv", "--json"}) {
+    EXPECT_NE(result.out.find(flag), std::string::npos) << flag;
+  }
+}
+
+}  // namespace

@@ -1,0 +1,184 @@
+// The Win32 emulation's semantics, and the paper's lost wake-up forced
+// deterministically: win_event_faithful loses it (a timeout, counted),
+// win_event does not.
+#include <sys/syscall.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <sstream>
+#include <string>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "sync/phase_run.hpp"
+#include "sync/win32_emulation.hpp"
+#include "sync/win_event.hpp"
+#include "sync/win_event_faithful.hpp"
+#include "tests/support/watchdog.hpp"
+
+namespace lockstep::sync {
+namespace {
+
+using namespace std::chrono_literals;
+using lockstep::testing::kSlowdown;
+using lockstep::testing::watchdog;
+
+// The scheduler state of thread `tid` ('S' = sleeping), from /proc.
+char thread_state(pid_t tid) {
+  std::ifstream stat("/proc/self/task/" + std::to_string(tid) + "/stat");
+  std::string line;
+  std::getline(stat, line);
+  const auto close = line.rfind(')');
+  return close == std::string::npos || close + 2 >= line.size() ? '?' : line[close + 2];
+}
+
+TEST(ManualResetEvent, WaitOnASetEventReturnsAtOnce) {
+  win32::manual_reset_event event;
+  sync_counters counters;
+  event.set(counters);
+  EXPECT_EQ(event.wait(1000ms, counters), win32::wait_result::object_0);
+  EXPECT_EQ(event.wait(1000ms, counters), win32::wait_result::object_0) << "stays set until reset";
+  EXPECT_EQ(counters.futex_waits, 0u);
+  EXPECT_EQ(counters.futex_wakes, 1u);
+}
+
+TEST(ManualResetEvent, TimeoutIsReportedAndCounted) {
+  win32::manual_reset_event event;
+  sync_counters counters;
+  EXPECT_EQ(event.wait(5ms, counters), win32::wait_result::timed_out);
+  EXPECT_EQ(counters.timeouts, 1u);
+  sync_counters set_counters;
+  event.set(set_counters);
+  event.reset();
+  EXPECT_EQ(event.wait(5ms, counters), win32::wait_result::timed_out) << "a reset event does not release";
+  EXPECT_EQ(counters.timeouts, 2u);
+}
+
+// Windows: SetEvent releases every thread waiting at that moment, even if
+// ResetEvent follows before the waiter runs again.
+TEST(ManualResetEvent, SetReleasesSleepingWaitersEvenIfResetFollows) {
+  watchdog guard(30s * kSlowdown, "a waiter released by set() + reset() never returned");
+  win32::manual_reset_event event;
+  constexpr int kWaiters = 3;
+  std::atomic<pid_t> tids[kWaiters] = {};
+  std::atomic<int> released{0};
+  std::atomic<int> timed_out{0};
+  std::vector<std::jthread> waiters;
+  for (int index = 0; index < kWaiters; ++index)
+    waiters.emplace_back([&, index] {
+      tids[index].store(static_cast<pid_t>(syscall(SYS_gettid)));
+      sync_counters counters;
+      if (event.wait(20s, counters) == win32::wait_result::object_0) ++released;
+      else ++timed_out;
+    });
+  // Wait until every waiter sleeps in the kernel (inside wait()).
+  for (int index = 0; index < kWaiters; ++index) {
+    while (tids[index].load() == 0) std::this_thread::yield();
+    while (thread_state(tids[index].load()) != 'S') std::this_thread::sleep_for(1ms);
+  }
+  sync_counters counters;
+  event.set(counters);
+  event.reset();
+  waiters.clear();  // join
+  EXPECT_EQ(released.load(), kWaiters);
+  EXPECT_EQ(timed_out.load(), 0);
+  EXPECT_FALSE(event.signalled());
+}
+
+TEST(WaitForMultipleObjects, WaitAllReturnsWhenEverySetAndTimesOutOtherwise) {
+  watchdog guard(30s * kSlowdown);
+  win32::manual_reset_event first, second, never;
+  sync_counters counters;
+  std::jthread setter([&] {
+    sync_counters mine;
+    first.set(mine);
+    second.set(mine);
+  });
+  win32::manual_reset_event* both[] = {&first, &second};
+  EXPECT_EQ(win32::wait_for_multiple_objects(both, win32::kInfinite, counters), win32::wait_result::object_0);
+  win32::manual_reset_event* with_unset[] = {&first, &never};
+  EXPECT_EQ(win32::wait_for_multiple_objects(with_unset, 5ms, counters), win32::wait_result::timed_out);
+  EXPECT_EQ(counters.timeouts, 1u);
+}
+
+// A hook that parks participant 0 right after its decrement, at phase 0 only,
+// until participant 1 has returned from the same phase.
+struct parking_hooks {
+  std::atomic<bool> decremented{false};
+  std::atomic<bool> other_returned{false};
+  bool armed = true;  // read and written by participant 0 only
+  void after_decrement(participant& self) noexcept {
+    if (self.id != 0 || !armed) return;
+    armed = false;
+    decremented.store(true);
+    decremented.notify_all();
+    other_returned.wait(false);
+  }
+};
+
+// The paper's lost wake-up: participant 0 has decremented but not yet waited;
+// participant 1 arrives last, sets the event, resets it (every thread resets
+// after its wait) and leaves. Participant 0 then waits on a reset event that
+// nobody will set for this phase.
+template <class Barrier>
+struct forced_interleaving {
+  participant parked{0, {}};
+  participant last{1, {}};
+  std::chrono::nanoseconds parked_wait{};
+
+  void run(Barrier& barrier) {
+    std::jthread first([&] {
+      const auto start = std::chrono::steady_clock::now();
+      barrier.arrive_and_wait(parked);  // parks in the hook
+      parked_wait = std::chrono::steady_clock::now() - start;
+    });
+    std::jthread second([&] {
+      barrier.hooks().decremented.wait(false);
+      barrier.arrive_and_wait(last);
+      barrier.hooks().other_returned.store(true);
+      barrier.hooks().other_returned.notify_all();
+    });
+  }
+};
+
+// After the forced phase, both keep going: the barrier still works.
+template <class Barrier>
+std::uint64_t more_phases(Barrier& barrier, forced_interleaving<Barrier>& forced) {
+  std::jthread first([&] {
+    for (int phase = 0; phase < 200; ++phase) barrier.arrive_and_wait(forced.parked);
+  });
+  for (int phase = 0; phase < 200; ++phase) barrier.arrive_and_wait(forced.last);
+  return 200;
+}
+
+TEST(WinEventFaithful, LosesTheWakeUpOfALateWaiterAndCountsTheTimeout) {
+  watchdog guard(60s * kSlowdown, "win_event_faithful: the lost wake-up did not end in a timeout");
+  basic_win_event_faithful<parking_hooks> barrier(2, 50ms);  // a short timeout keeps the test quick
+  forced_interleaving<basic_win_event_faithful<parking_hooks>> forced;
+  forced.run(barrier);
+  EXPECT_EQ(forced.parked.counters.timeouts, 1u) << "the parked participant's wake-up was lost: one timeout";
+  EXPECT_GE(forced.parked_wait, 50ms) << "it waited for the whole timeout";
+  EXPECT_EQ(forced.last.counters.timeouts, 0u);
+  EXPECT_EQ(forced.last.counters.futex_wakes, 1u) << "the last arriver set the event once";
+  more_phases(barrier, forced);  // the counter is intact after the loss
+}
+
+TEST(WinEvent, TheSameInterleavingLosesNothing) {
+  watchdog guard(60s * kSlowdown, "win_event lost the wake-up (it waits again after each timeout)");
+  basic_win_event<parking_hooks> barrier(2, 2000ms);
+  forced_interleaving<basic_win_event<parking_hooks>> forced;
+  forced.run(barrier);
+  EXPECT_EQ(forced.parked.counters.timeouts, 0u) << "the late waiter found its phase's event still set";
+  EXPECT_EQ(forced.parked.counters.futex_waits, 0u) << "it did not even need to sleep";
+  EXPECT_EQ(forced.last.counters.timeouts, 0u);
+  more_phases(barrier, forced);
+  EXPECT_EQ(forced.parked.counters.timeouts + forced.last.counters.timeouts, 0u);
+}
+
+}  // namespace
+}  // namespace lockstep::sync
