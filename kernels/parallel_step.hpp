@@ -1,0 +1,409 @@
+#pragma once
+// The composed parallel RK4 step: any synchronisation primitive x any layout,
+// T persistent participants, each owning a contiguous block of equations
+// (DESIGN.md, The composed step; issue 4).
+//
+// What one participant does per step (kernels/rk4.hpp names the arithmetic):
+//
+//     for stage s in 0..3:
+//         read the stage input its block needs (its own values and the
+//             published values of its dependencies, through the layout)
+//         k_s of its block = model.derivative(i, stage inputs)
+//         at s = 3: x_{n+1} of its block = rk4_update(x_n, k_0..k_3)
+//         publish (k_s for s < 3, x_{n+1} at s = 3: what its consumers read next)
+//         sync:  barrier primitives: every participant arrives and waits;
+//                dataflow primitives: receive from the producers its block
+//                depends on, and only those
+//         copy in (per_thread with a barrier: the dependencies from the board)
+//
+// Four syncs per step, as in the paper (one per stage). Folding the update
+// into stage 3 saves the fifth: the owner has every k it needs for its own
+// update once it has computed k_3.
+//
+// Determinism: every value is computed by rk4_stage_input, model.derivative
+// and rk4_update from the same inputs as in staged_rk4, so every combination
+// produces the serial trajectory bit for bit (tests/matrix checks it).
+//
+// Applicability (a trait the harness queries before instantiating):
+//     applicable<Sync, Layout>()  -> {bool, reason}
+//   barrier x packed/padded64/padded128/per_thread   applicable
+//   channel x per_thread                             applicable
+//   channel x packed/padded64/padded128              not applicable: the channel
+//       carries the values in its own slots into the consumers' private copies,
+//       so a shared array layout would go unused (the reason says so)
+//   not_applicable_reason<Sync, Layout>(equations, threads) adds the runtime
+//   condition (every thread must own at least one equation); empty = runs.
+// Instantiating parallel_rk4 with a non-applicable pair is a compile error.
+//
+// Dataflow overrun: a producer can run several stages ahead of a consumer it
+// does not itself depend on (two masses on four threads: block 1 can lead
+// block 4 by three stages). The channels are built from this step's
+// dependency graph and apply back-pressure before overwriting a stage a
+// consumer has not received (sync/concepts.hpp, stage_channel), and every
+// consumer here receives every stage of every producer it depends on, in
+// order, so overrun cannot happen and back-pressure cannot deadlock (a
+// producer blocked on consumer C waits for a stage C has already been given).
+//
+// API for the harness and tests
+//
+//   parallel_rk4<Sync, Layout, Model = two_mass_model, Timing = sync_timing::off>
+//       step(model, dt, threads [, initial_state [, sync_args...]]);
+//     Allocates and lays out everything; throws std::invalid_argument
+//     (layouts::partition_error) when threads is 0 or more than the equations.
+//   step.run(self, steps)
+//     Called once per participant, each on its own thread, self.id in
+//     [0, threads) (the caller launches the team with sync::team_of_t<Sync>
+//     and pins it as it likes). Runs `steps` steps; may be called again for
+//     more (the next call continues the trajectory). Every participant must
+//     make the same calls with the same `steps`. Allocates nothing, throws
+//     nothing, reads no clock unless Timing is on.
+//   step.run_bounded(self, steps, deadline)
+//     As run, but once the steady_clock deadline has passed the whole team
+//     stops after one agreed step (a stalled combination is bounded in time);
+//     returns the steps completed, the same on every participant.
+//   step.state()            the state after the team joined (n values)
+//   step.steps_taken()      steps completed (after the team joined)
+//   step.sync_time(p)       with Timing = on: nanoseconds participant p spent
+//                           inside stage syncs and the number of syncs it made
+//                           (sync_ns_per_stage = nanoseconds / syncs)
+//   run_team(step, steps [, before])   launches a whole team (team_of<Sync>),
+//                           calls before(id) on each participant's thread
+//                           first (pinning), runs, joins, and returns the
+//                           summed sync::sync_counters of the participants.
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "kernels/oscillator.hpp"
+#include "kernels/parallel_exchange.hpp"
+#include "kernels/rk4.hpp"
+#include "layouts/partition.hpp"
+#include "layouts/shared_slots.hpp"
+#include "platform/cache_line.hpp"
+#include "sync/concepts.hpp"
+#include "sync/team.hpp"
+
+namespace lockstep::kernels {
+
+// Whether a participant times its stage syncs. Off: no clock is read on the
+// measured path. On: two steady_clock reads per stage around the sync.
+enum class sync_timing { off, on };
+
+// What a participant accumulated with sync_timing::on.
+struct stage_sync_time {
+  std::uint64_t nanoseconds = 0;  // inside the stage syncs (barrier wait or receives)
+  std::uint64_t syncs = 0;        // stage syncs made (4 per step)
+};
+
+struct applicability {
+  bool applicable;
+  std::string_view reason;  // empty when applicable
+};
+
+template <class Sync, class Layout>
+[[nodiscard]] constexpr applicability applicable() noexcept {
+  constexpr bool barrier = sync::phase_barrier<Sync>;
+  constexpr bool channel = sync::graph_channel<Sync>;
+  constexpr bool private_copy = Layout::kKind == layouts::layout_kind::private_copy;
+  if (barrier) return {true, {}};
+  if (channel && private_copy) return {true, {}};
+  if (channel)
+    return {false,
+            "a dataflow channel carries each producer's values in its own slots straight into the consumers' "
+            "private copies, so a shared array layout would go unused; only per_thread applies"};
+  return {false, "neither a phase_barrier nor a graph_channel (sync/concepts.hpp)"};
+}
+
+// Empty when Sync x Layout runs `threads` participants over `equations`;
+// otherwise one line saying why not.
+template <class Sync, class Layout>
+[[nodiscard]] std::string not_applicable_reason(std::size_t equations, unsigned threads) {
+  constexpr applicability verdict = applicable<Sync, Layout>();
+  if (!verdict.applicable) return std::string(verdict.reason);
+  if (threads == 0) return "at least one thread is needed";
+  if (threads > equations)
+    return std::to_string(threads) + " threads but " + std::to_string(equations) +
+           " equations: every thread must own at least one equation";
+  return {};
+}
+
+namespace detail {
+
+template <class Sync, class Layout>
+struct exchange_for {
+  using type = std::conditional_t<
+      sync::phase_barrier<Sync>,
+      std::conditional_t<Layout::kKind == layouts::layout_kind::shared, barrier_in_place<Sync, Layout>,
+                         barrier_copy_in<Sync>>,
+      channel_copy_in<Sync>>;
+};
+
+// The stage-sync clock: a policy so that the step's loop has no branch on it.
+template <sync_timing Timing>
+struct sync_clock {
+  void start() noexcept {}
+  void stop(stage_sync_time& /*time*/) noexcept {}
+};
+template <>
+struct sync_clock<sync_timing::on> {
+  std::chrono::steady_clock::time_point started;
+  void start() noexcept { started = std::chrono::steady_clock::now(); }
+  void stop(stage_sync_time& time) noexcept {
+    time.nanoseconds += static_cast<std::uint64_t>(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - started).count());
+    ++time.syncs;
+  }
+};
+
+}  // namespace detail
+
+template <class Sync, class Layout, oscillator_model Model = two_mass_model,
+          sync_timing Timing = sync_timing::off>
+class parallel_rk4 {
+  static_assert(applicable<Sync, Layout>().applicable,
+                "this Sync x Layout is not applicable: applicable<Sync, Layout>().reason says why");
+
+ public:
+  using sync_type = Sync;
+  using layout_type = Layout;
+  using model_type = Model;
+  static constexpr sync_timing kTiming = Timing;
+
+  parallel_rk4(const Model& model, double dt, unsigned threads)
+      : parallel_rk4(model, dt, threads, model.initial_state()) {}
+
+  // sync_args: passed on to the primitive's constructor after the
+  // participant count (barriers) or the graph and width (channels).
+  template <class... SyncArgs>
+  parallel_rk4(const Model& model, double dt, unsigned threads, std::span<const double> initial_state,
+               SyncArgs&&... sync_args)
+      : model_(model),
+        coefficients_(dt),
+        blocks_(model_.equations(), threads),
+        plans_(plan(model_, blocks_)),
+        exchange_(blocks_, plans_, std::forward<SyncArgs>(sync_args)...),
+        records_(threads) {
+    if (initial_state.size() != model_.equations())
+      throw std::invalid_argument("the initial state must hold one value per equation");
+    for (std::size_t equation = 0; equation < initial_state.size(); ++equation)
+      exchange_.write_initial_state(equation, initial_state[equation]);
+    // Barriers: every participant is one sync from participant 0. Channels:
+    // the longest shortest path from participant 0 (breadth-first over
+    // producer -> consumer edges). A participant participant 0 cannot reach
+    // could lead it without bound: run_bounded then runs to the end.
+    std::size_t farthest = 1;
+    if constexpr (!sync::phase_barrier<Sync>) {
+      std::vector<std::size_t> distance(threads, SIZE_MAX);
+      std::vector<unsigned> frontier{0};
+      distance[0] = 0;
+      for (std::size_t head = 0; head < frontier.size(); ++head)
+        for (unsigned consumer = 0; consumer < threads; ++consumer)
+          if (distance[consumer] == SIZE_MAX &&
+              std::binary_search(plans_[consumer].producers.begin(), plans_[consumer].producers.end(),
+                                 frontier[head])) {
+            distance[consumer] = distance[frontier[head]] + 1;
+            frontier.push_back(consumer);
+          }
+      farthest = *std::max_element(distance.begin(), distance.end());
+      bounded_supported_ = farthest != SIZE_MAX;
+    }
+    stop_margin_ = bounded_supported_ ? (farthest + kRk4Stages - 1) / kRk4Stages + 1 : 1;
+  }
+
+  parallel_rk4(const parallel_rk4&) = delete;  // participants hold references into it
+  parallel_rk4& operator=(const parallel_rk4&) = delete;
+
+  [[nodiscard]] unsigned threads() const noexcept { return blocks_.participants(); }
+  [[nodiscard]] const layouts::partition& blocks() const noexcept { return blocks_; }
+  [[nodiscard]] const participant_plan& plan_of(unsigned participant) const noexcept { return plans_[participant]; }
+
+  // The work of participant self.id for `steps` steps (see the API above).
+  void run(sync::participant& self, std::uint64_t steps) { (void)run_steps<false>(self, steps, {}); }
+
+  // As run(), but the team stops early, every participant after the same
+  // step, once `deadline` has passed: participant 0 reads the clock every
+  // kDeadlineCheckSteps steps and, when late, names a stop step far enough
+  // ahead that no participant has begun it yet (stop_margin_steps()). Returns
+  // the steps this call completed (the same on every participant).
+  std::uint64_t run_bounded(sync::participant& self, std::uint64_t steps,
+                            std::chrono::steady_clock::time_point deadline) {
+    return run_steps<true>(self, steps, deadline);
+  }
+  static constexpr std::uint64_t kDeadlineCheckSteps = 16;
+  // How many steps ahead of participant 0 a stop is set (see run_steps).
+  [[nodiscard]] std::uint64_t stop_margin_steps() const noexcept { return stop_margin_; }
+
+ private:
+  // The step loop. Bounded = false compiles to the plain loop (no clock, no
+  // stop check). Bounded = true adds, per step, one relaxed load of stop_step_
+  // (a line written at most once per run) and, on participant 0 every
+  // kDeadlineCheckSteps steps, one clock read.
+  //
+  // Stop protocol (Bounded): participant 0, at the top of step s, stores
+  // S = s + stop_margin_ into stop_step_ (1); every participant, at the top of
+  // each of its steps, loads it (2) and ends its run before step S.
+  //  * Nobody has begun step S when (1) happens: a participant can lead
+  //    participant 0 by at most d stages, d its distance from participant 0 in
+  //    the producer -> consumer graph (it needs inputs that depend, through d
+  //    syncs, on participant 0's), and stop_margin_ = ceil(d_max / 4) + 1 steps.
+  //  * Everyone sees (1) before beginning step S: beginning step S needs the
+  //    stage syncs of step S - 1, which happen-after participant 0's
+  //    publications of stage 4 S - d >= 4 s + 4 - ... > its stage 4 s, which
+  //    it made after (1) (barrier or channel release/acquire edges, the
+  //    primitives' contracts); so (2), relaxed, reads S or a later store by
+  //    coherence. Relaxed suffices: the sync edges carry the ordering.
+  //  * A request is only made for S < this run's end, so every stored S is at
+  //    most the step the run ends on: a later run, which starts there, treats
+  //    any S <= its first step as stale.
+  template <bool Bounded>
+  std::uint64_t run_steps(sync::participant& self, std::uint64_t steps,
+                          std::chrono::steady_clock::time_point deadline) {
+    const unsigned me = self.id;
+    const layouts::equation_block block = blocks_.block(me);
+    participant_record& record = records_[me];
+    detail::sync_clock<Timing> clock;
+    const std::uint64_t first_step = record.steps_taken;
+    std::uint64_t end = first_step + steps;
+    bool stop_requested = false;
+    for (;;) {
+      const std::uint64_t step = record.steps_taken;
+      if constexpr (Bounded) {
+        if (me == 0 && !stop_requested && bounded_supported_ && (step - first_step) % kDeadlineCheckSteps == 0 &&
+            std::chrono::steady_clock::now() >= deadline && step + stop_margin_ < end) {
+          // (1) relaxed: ordered for the readers by the stage syncs (above).
+          stop_step_.value.store(step + stop_margin_, std::memory_order_relaxed);
+          stop_requested = true;
+        }
+        // (2) relaxed: see (1).
+        const std::uint64_t requested = stop_step_.value.load(std::memory_order_relaxed);
+        if (requested > first_step && requested < end) end = requested;
+      }
+      if (step >= end) break;
+      const auto parity = static_cast<unsigned>(step & 1U);
+      const auto x = exchange_.states(me, parity);
+      for (unsigned stage = 0; stage < kRk4Stages; ++stage) {
+        const auto k_previous = exchange_.stage_values(me, stage == 0 ? 0 : stage - 1);
+        const rk4_stage_inputs<decltype(x), decltype(k_previous)> inputs{coefficients_, stage, x, k_previous};
+        for (std::size_t equation = block.first; equation < block.last; ++equation)
+          exchange_.write_stage_value(me, stage, equation, model_.derivative(equation, inputs));
+        if (stage == kRk4Stages - 1) {
+          for (std::size_t equation = block.first; equation < block.last; ++equation)
+            exchange_.write_next_state(
+                me, parity, equation,
+                rk4_update(coefficients_, x[equation], exchange_.own_stage_value(me, 0, equation),
+                           exchange_.own_stage_value(me, 1, equation), exchange_.own_stage_value(me, 2, equation),
+                           exchange_.own_stage_value(me, 3, equation)));
+        }
+        const std::uint64_t global_stage = step * kRk4Stages + stage;
+        exchange_.publish(me, self, global_stage);
+        clock.start();
+        exchange_.wait(me, self, global_stage);
+        clock.stop(record.sync_time);
+        exchange_.copy_in(me, stage);
+      }
+      record.steps_taken = step + 1;
+    }
+    return record.steps_taken - first_step;
+  }
+
+
+ public:
+  // After the team joined: x after steps_taken() steps.
+  [[nodiscard]] std::vector<double> state() {
+    const auto parity = static_cast<unsigned>(steps_taken() & 1U);
+    std::vector<double> result(model_.equations());
+    for (std::size_t equation = 0; equation < result.size(); ++equation)
+      result[equation] = exchange_.final_state(parity, equation);
+    return result;
+  }
+
+  [[nodiscard]] std::uint64_t steps_taken() const noexcept { return records_[0].steps_taken; }
+
+  // With Timing = on: time participant p spent in stage syncs (zero when off).
+  [[nodiscard]] stage_sync_time sync_time(unsigned participant) const noexcept {
+    return records_[participant].sync_time;
+  }
+  // Summed over the participants.
+  [[nodiscard]] stage_sync_time sync_time() const noexcept {
+    stage_sync_time total;
+    for (const participant_record& record : records_) {
+      total.nanoseconds += record.sync_time.nanoseconds;
+      total.syncs += record.sync_time.syncs;
+    }
+    return total;
+  }
+
+ private:
+  // Written only by its participant's thread; a line pair of its own so that
+  // the bookkeeping of one participant never shares a line (or an adjacent
+  // line prefetch pair) with another's.
+  struct alignas(platform::kPrefetchPair) participant_record {
+    std::uint64_t steps_taken = 0;
+    stage_sync_time sync_time{};
+  };
+  static_assert(sizeof(participant_record) % platform::kPrefetchPair == 0,
+                "participant records in an array must not share a line pair");
+
+  static std::vector<participant_plan> plan(const Model& model, const layouts::partition& blocks) {
+    std::vector<participant_plan> plans(blocks.participants());
+    for (unsigned participant = 0; participant < blocks.participants(); ++participant) {
+      participant_plan& entry = plans[participant];
+      entry.block = blocks.block(participant);
+      entry.dependencies = block_dependencies(model, entry.block.first, entry.block.last);
+      for (std::size_t equation : entry.dependencies) entry.producers.push_back(blocks.owner(equation));
+      std::sort(entry.producers.begin(), entry.producers.end());
+      entry.producers.erase(std::unique(entry.producers.begin(), entry.producers.end()), entry.producers.end());
+    }
+    for (const participant_plan& consumer : plans)
+      for (unsigned producer : consumer.producers) plans[producer].has_consumers = true;
+    return plans;
+  }
+
+  Model model_;
+  rk4_coefficients coefficients_;
+  layouts::partition blocks_;
+  std::vector<participant_plan> plans_;
+  typename detail::exchange_for<Sync, Layout>::type exchange_;
+  std::vector<participant_record> records_;
+  std::uint64_t stop_margin_ = 1;
+  bool bounded_supported_ = true;
+  struct alignas(platform::kPrefetchPair) stop_line {
+    std::atomic<std::uint64_t> value{0};
+  } stop_step_;  // read by every participant each step of a bounded run: its own line pair
+};
+
+// Runs every participant of `step` for `steps` steps on a team of the
+// primitive's own kind, calling before(id) on each participant's thread first
+// (a pinning hook; the default does nothing). Returns the participants'
+// summed counters. For tests, `lockstep delay` and anything that does not
+// manage its own team.
+struct no_hook {
+  void operator()(unsigned /*participant*/) const noexcept {}
+};
+
+template <class Step, class Before = no_hook>
+sync::sync_counters run_team(Step& step, std::uint64_t steps, Before&& before = {}) {
+  const unsigned threads = step.threads();
+  std::vector<sync::participant> participants(threads);
+  for (unsigned id = 0; id < threads; ++id) participants[id].id = id;
+  sync::team_of_t<typename Step::sync_type> team(threads);
+  team.run([&](unsigned id) {
+    before(id);
+    step.run(participants[id], steps);
+  });
+  sync::sync_counters total;
+  for (const sync::participant& participant : participants) total += participant.counters;
+  return total;
+}
+
+}  // namespace lockstep::kernels

@@ -1,0 +1,134 @@
+#pragma once
+// padded64, padded128: what each thread writes sits in blocks of its own
+// (DESIGN.md, Layouts).
+//
+// Each participant owns one region that starts on a `Pad`-byte boundary and
+// fills whole `Pad`-byte blocks; inside it, its equations' five slots
+// (shared_slots.hpp) slot-major: x_even[b], x_odd[b], k_0[b], k_1[b], k_2[b]
+// for its b equations. No block holds values of two writers, so a
+// publication invalidates only the lines its readers need.
+//   padded64  = padded<platform::kCacheLine>:   one 64-byte line per writer at least.
+//   padded128 = padded<platform::kPrefetchPair>: whole 128-byte line pairs, because
+//               the adjacent-line prefetcher pulls 64-byte lines in pairs and can
+//               make two writers 64 bytes apart interfere anyway.
+// The sizes are the named constants of platform/cache_line.hpp, never
+// std::hardware_destructive_interference_size (see there why).
+//
+// Access costs one table lookup (the region of the equation's owner) more
+// than packed; the tables are written once and only read afterwards.
+#include <cstddef>
+#include <string_view>
+#include <vector>
+
+#include "layouts/aligned_buffer.hpp"
+#include "layouts/partition.hpp"
+#include "layouts/shared_slots.hpp"
+#include "platform/cache_line.hpp"
+
+namespace lockstep::layouts {
+
+// Bytes of the region of a participant that owns `block_size` equations.
+[[nodiscard]] constexpr std::size_t padded_region_bytes(std::size_t block_size, std::size_t pad) noexcept {
+  return round_up(kSharedSlots * block_size * sizeof(double), pad);
+}
+
+// Byte offset of the region of `participant`.
+[[nodiscard]] constexpr std::size_t padded_region_offset(std::size_t equations, unsigned participants,
+                                                         std::size_t pad, unsigned participant) noexcept {
+  std::size_t offset = 0;
+  for (unsigned before = 0; before < participant; ++before)
+    offset += padded_region_bytes(block_of(equations, participants, before).size(), pad);
+  return offset;
+}
+
+// Byte offset of (slot, equation).
+[[nodiscard]] constexpr std::size_t padded_offset(std::size_t equations, unsigned participants, std::size_t pad,
+                                                  std::size_t slot, std::size_t equation) noexcept {
+  const unsigned owner = owner_of(equations, participants, equation);
+  const equation_block block = block_of(equations, participants, owner);
+  return padded_region_offset(equations, participants, pad, owner) +
+         (slot * block.size() + (equation - block.first)) * sizeof(double);
+}
+
+template <std::size_t Pad>
+class padded {
+  static_assert(Pad == platform::kCacheLine || Pad == platform::kPrefetchPair,
+                "padded is measured at one cache line or one prefetch pair (platform/cache_line.hpp)");
+  static_assert(Pad % sizeof(double) == 0, "a region must hold whole doubles");
+
+ public:
+  static constexpr std::size_t kPad = Pad;
+  static constexpr std::string_view kName = Pad == platform::kCacheLine ? "padded64" : "padded128";
+  static constexpr std::string_view kDescription =
+      Pad == platform::kCacheLine
+          ? "what each thread writes on cache lines of its own (64-byte blocks)"
+          : "what each thread writes on 128-byte line pairs of its own (adjacent-line prefetch)";
+  static constexpr layout_kind kKind = layout_kind::shared;
+
+  explicit padded(const partition& blocks)
+      : slots_(padded_region_offset(blocks.equations(), blocks.participants(), Pad, blocks.participants()) /
+                   sizeof(double),
+               Pad),
+        region_(blocks.equations()),
+        block_size_(blocks.equations()) {
+    for (std::size_t equation = 0; equation < blocks.equations(); ++equation) {
+      const unsigned owner = blocks.owner(equation);
+      const equation_block block = blocks.block(owner);
+      region_[equation] =
+          padded_region_offset(blocks.equations(), blocks.participants(), Pad, owner) / sizeof(double) +
+          (equation - block.first);
+      block_size_[equation] = block.size();
+    }
+  }
+
+  padded(const padded&) = delete;  // participants hold references into it
+  padded& operator=(const padded&) = delete;
+
+  [[nodiscard]] double& state(unsigned parity, std::size_t equation) noexcept {
+    return slots_[region_[equation] + state_slot(parity) * block_size_[equation]];
+  }
+  [[nodiscard]] double& stage(unsigned stage_index, std::size_t equation) noexcept {
+    return slots_[region_[equation] + stage_slot(stage_index) * block_size_[equation]];
+  }
+
+  [[nodiscard]] std::size_t bytes() const noexcept { return slots_.size() * sizeof(double); }
+
+ private:
+  aligned_buffer slots_;
+  std::vector<std::size_t> region_;      // per equation: index of its slot 0 (owner's region + place in block)
+  std::vector<std::size_t> block_size_;  // per equation: its owner's block size (the slot stride)
+};
+
+using padded64 = padded<platform::kCacheLine>;
+using padded128 = padded<platform::kPrefetchPair>;
+
+// Proofs, with the offset function the constructor uses: no block of Pad
+// bytes holds values of two owners, for the paper's case (4 equations on 4
+// and 2 threads) and an uneven chain (6 equations on 4 threads).
+namespace padded_proof {
+template <std::size_t Equations, unsigned Participants, std::size_t Pad>
+constexpr bool isolated() {
+  constexpr auto offset = [](std::size_t slot, std::size_t equation) {
+    return padded_offset(Equations, Participants, Pad, slot, equation);
+  };
+  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation); };
+  return !owners_share_a_block(offset, owner, Equations, kSharedSlots, Pad);
+}
+static_assert(padded_region_bytes(1, platform::kCacheLine) == 64,
+              "padded64: one equation's five slots (40 bytes) round up to one line");
+static_assert(padded_region_bytes(2, platform::kCacheLine) == 128,
+              "padded64: two equations' ten slots (80 bytes) round up to two lines");
+static_assert(padded_region_bytes(1, platform::kPrefetchPair) == 128,
+              "padded128: one equation's slots take a whole line pair");
+static_assert(padded_region_offset(4, 4, platform::kCacheLine, 3) == 3 * 64,
+              "padded64, paper's case: thread p's region starts on line p");
+static_assert(padded_offset(4, 4, platform::kPrefetchPair, stage_slot(2), 1) == 128 + 4 * sizeof(double),
+              "padded128: k_2 of equation 1 is the fifth double of the second line pair");
+static_assert(isolated<4, 4, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 4)");
+static_assert(isolated<4, 2, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 2)");
+static_assert(isolated<6, 4, platform::kCacheLine>(), "padded64: no line holds two writers (6 on 4)");
+static_assert(isolated<4, 4, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 on 4)");
+static_assert(isolated<6, 4, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (6 on 4)");
+}  // namespace padded_proof
+
+}  // namespace lockstep::layouts

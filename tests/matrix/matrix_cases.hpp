@@ -1,0 +1,170 @@
+#pragma once
+// The bitwise-determinism scenario of the composed RK4 step, shared by the
+// matrix suites (unit, sanitize subset, stress): run a sync x layout x
+// threads x placement combination for some steps, in segments, and require
+// the state after each segment to be bit for bit the serial staged RK4's.
+//
+// Registration is dynamic (::testing::RegisterTest), one CTest test per
+// combination, named Matrix.<sync>/<layout>/threads<T>/pin_<placement>,
+// so that a failure names its combination and a filter can pick one.
+#include <pthread.h>
+#include <sched.h>
+
+#include <chrono>
+#include <cstdint>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <thread>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "kernels/oscillator.hpp"
+#include "kernels/parallel_step.hpp"
+#include "kernels/rk4.hpp"
+#include "layouts/layouts.hpp"
+#include "sync/registry.hpp"
+#include "tests/support/watchdog.hpp"
+
+namespace lockstep::testing::matrix {
+
+// 1 ms: the paper's oscillator (periods of 0.12 s and 0.32 s) is well
+// resolved, and a few hundred steps cover a fraction of a period.
+inline constexpr double kStepSize = 1e-3;
+
+enum class placement { none, compact };
+
+inline std::string_view to_string(placement kind) {
+  return kind == placement::none ? "none" : "compact";
+}
+
+// CPUs this process may run on, in ascending order.
+inline std::vector<unsigned> allowed_cpus() {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  std::vector<unsigned> cpus;
+  if (sched_getaffinity(0, sizeof(set), &set) == 0)
+    for (unsigned cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+      if (CPU_ISSET(cpu, &set)) cpus.push_back(cpu);
+  return cpus;
+}
+
+// compact: participant i on the i-th allowed CPU (wrapping when there are
+// more participants than CPUs). A stand-in until the matrix runs the
+// platform's placement plans; the step does not care who pins it.
+struct pin_hook {
+  placement kind = placement::none;
+  std::vector<unsigned> cpus = allowed_cpus();
+
+  void operator()(unsigned participant) const {
+    if (kind == placement::none || cpus.empty()) return;
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(cpus[participant % cpus.size()], &set);
+    ASSERT_EQ(pthread_setaffinity_np(pthread_self(), sizeof(set), &set), 0) << "pinning participant " << participant;
+  }
+};
+
+inline unsigned cpu_count() {
+  const auto cpus = allowed_cpus();
+  return cpus.empty() ? 1U : static_cast<unsigned>(cpus.size());
+}
+
+// Where two states first differ, with both values' bits, or empty if equal.
+inline std::string first_difference(const std::vector<double>& parallel, std::span<const double> serial) {
+  if (parallel.size() != serial.size()) return "sizes differ";
+  for (std::size_t index = 0; index < parallel.size(); ++index) {
+    if (std::memcmp(&parallel[index], &serial[index], sizeof(double)) != 0) {
+      std::ostringstream out;
+      out.precision(17);
+      out << "x" << index + 1 << ": parallel " << parallel[index] << " serial " << serial[index];
+      return out.str();
+    }
+  }
+  return {};
+}
+
+// Steps for a combination: a few hundred, fewer where a primitive is slow by
+// design in this regime, fewer still under a sanitizer:
+//  * spinners: the pure-spin ck barriers, and omp_barrier, whose libgomp
+//    waiters spin up to GOMP_SPINCOUNT (300000 by default) before sleeping.
+//    On a loaded 2-core machine a phase can last a timeslice whenever the
+//    thread they wait for is not running, which is always the case with more
+//    threads than CPUs: 30 steps, 12 when oversubscribed;
+//  * lost wake-ups (win_event_faithful) cost a timeout each: a fifth.
+template <class Sync>
+constexpr bool spins_long() {
+  return sync::info_of<Sync>().pure_spin || Sync::kName == std::string_view("omp_barrier");
+}
+
+template <class Sync>
+std::uint64_t steps_for(unsigned threads, std::uint64_t base) {
+  std::uint64_t steps = base;
+  if (spins_long<Sync>() && threads > 1) steps = threads > cpu_count() ? 12 : 30;
+  if (sync::info_of<Sync>().may_lose_wakeups && threads > 1) steps = base / 5;
+  if (kSlowdown > 1) steps = steps / 3;
+  return steps < 6 ? 6 : steps;
+}
+
+// The scenario: segments of 1, a third, and the rest of `steps` steps, each
+// run by a fresh team on the same step object (so resuming is checked too).
+template <class Sync, class Layout, class Model, kernels::sync_timing Timing = kernels::sync_timing::off>
+void expect_bitwise_serial(const Model& model, unsigned threads, placement pin, std::uint64_t steps) {
+  const watchdog guard(std::chrono::milliseconds(60'000 * kSlowdown),
+                       std::string(Sync::kName) + " x " + std::string(Layout::kName) + " stalled");
+  const std::vector<double> initial = model.initial_state();
+  kernels::parallel_rk4<Sync, Layout, Model, Timing> parallel(model, kStepSize, threads, initial);
+  kernels::staged_rk4<Model> serial(model, kStepSize, initial);
+  const pin_hook hook{pin};
+  const std::uint64_t segments[] = {1, steps / 3, steps - 1 - steps / 3};
+  std::uint64_t done = 0;
+  for (std::uint64_t segment : segments) {
+    kernels::run_team(parallel, segment, hook);
+    serial.run(segment);
+    done += segment;
+    ASSERT_EQ(parallel.steps_taken(), done);
+    const std::string difference = first_difference(parallel.state(), serial.state());
+    ASSERT_TRUE(difference.empty()) << "after " << done << " steps the trajectory is not bitwise serial: "
+                                    << difference;
+  }
+  if constexpr (Timing == kernels::sync_timing::on) {
+    for (unsigned participant = 0; participant < threads; ++participant)
+      EXPECT_EQ(parallel.sync_time(participant).syncs, kernels::kRk4Stages * steps)
+          << "participant " << participant << " must time exactly one sync per stage";
+  }
+}
+
+// A test whose body is a closure: what RegisterTest's factory returns.
+class scenario_test : public ::testing::Test {
+ public:
+  explicit scenario_test(std::function<void()> body) : body_(std::move(body)) {}
+  void TestBody() override { body_(); }
+
+ private:
+  std::function<void()> body_;
+};
+
+inline void register_scenario(const std::string& suite, const std::string& name, std::function<void()> body) {
+  ::testing::RegisterTest(suite.c_str(), name.c_str(), nullptr, nullptr, __FILE__, __LINE__,
+                          [body = std::move(body)]() -> ::testing::Test* { return new scenario_test(body); });
+}
+
+template <class Sync, class Layout>
+std::string combination_name(unsigned threads, placement pin) {
+  return std::string(Sync::kName) + "/" + std::string(Layout::kName) + "/threads" + std::to_string(threads) +
+         "/pin_" + std::string(to_string(pin));
+}
+
+// Calls visit.template operator()<Layout>() for every layout.
+template <class Visitor>
+void for_each_layout(Visitor&& visit) {
+  std::apply([&](auto... layouts) { (visit.template operator()<typename decltype(layouts)::type>(), ...); },
+             std::tuple<std::type_identity<layouts::packed>, std::type_identity<layouts::padded64>,
+                        std::type_identity<layouts::padded128>, std::type_identity<layouts::per_thread>>{});
+}
+
+}  // namespace lockstep::testing::matrix
