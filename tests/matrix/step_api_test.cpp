@@ -114,6 +114,13 @@ TEST(SyncTiming, OnCountsEveryStageSyncAndKeepsTheTrajectory) {
       kernels::two_mass_model{}, 4, placement::none, 60);
 }
 
+TEST(SyncTiming, SampledTimesOneStepInSixteen) {
+  expect_bitwise_serial<sync::futex_spin, layouts::packed, kernels::two_mass_model, kernels::sync_timing::sampled>(
+      kernels::two_mass_model{}, 2, placement::none, 100);
+  expect_bitwise_serial<sync::spsc_queue, layouts::per_thread, kernels::two_mass_model,
+                        kernels::sync_timing::sampled>(kernels::two_mass_model{}, 4, placement::none, 100);
+}
+
 TEST(SyncTiming, OffReadsNoClockAndReportsZero) {
   const watchdog guard(std::chrono::milliseconds(30'000 * kSlowdown));
   kernels::parallel_rk4<sync::std_barrier, layouts::packed> step(kernels::two_mass_model{}, kStepSize, 2);
