@@ -21,7 +21,6 @@
 #include "bench/delay_common.hpp"
 #include "platform/cache_line.hpp"
 #include "platform/clock.hpp"
-#include "platform/cpu_relax.hpp"
 #include "platform/placement.hpp"
 #include "platform/stats.hpp"
 #include "platform/topology.hpp"
@@ -96,7 +95,8 @@ std::vector<double> measure_stride(const std::vector<int>& cpus, std::size_t str
       // release: publishes errors[t] to the main thread's acquire load of ready.
       ready.value.fetch_add(1, std::memory_order_release);
       // acquire: pairs with the main thread's release store of start.
-      while (start.value.load(std::memory_order_acquire) == 0) platform::cpu_relax();
+      // (yield, not a pause: the main thread needs a CPU to set start)
+      while (start.value.load(std::memory_order_acquire) == 0) std::this_thread::yield();
       if (!errors[t].empty()) return;
       std::atomic<std::uint64_t>& counter = *counters[t];
       std::uint64_t writes = 0;
@@ -130,6 +130,8 @@ std::vector<double> measure_stride(const std::vector<int>& cpus, std::size_t str
   start.value.store(1, std::memory_order_release);  // release: pairs with the writers' acquire wait
   // The window opens only when every writer is writing, so that the writes
   // timed are contended writes (on a loaded machine a writer may start late).
+  // relaxed (both): `running` is a count and `window` a signal; neither
+  // carries data (the writers' results reach us through join).
   while (running.value.load(std::memory_order_relaxed) != static_cast<int>(threads)) std::this_thread::yield();
   window.value.store(1, std::memory_order_relaxed);
   std::this_thread::sleep_for(std::chrono::milliseconds(milliseconds));

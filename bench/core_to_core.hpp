@@ -217,6 +217,8 @@ inline std::vector<double> measure_pair(const pair_request& request) {
     // (makes shared_word / error_a visible).
     while ((seen = stage.load(std::memory_order_acquire)) == 0) spin();
     if (seen != 1) return;
+    // relaxed: ordered after the initiator's store by the acquire load of
+    // stage above (which pairs with the release half of its CAS to 1).
     std::atomic<std::uint64_t>& word = *shared_word.load(std::memory_order_relaxed);
     stage.store(2, std::memory_order_release);  // release: pairs with the initiator's acquire wait for 2
     for (std::uint64_t k = 0; k < total_rounds; ++k) detail::responder_round(word, request.how, k);
@@ -226,6 +228,7 @@ inline std::vector<double> measure_pair(const pair_request& request) {
     try {
       detail::pin_this_thread(request.cpu_a);
       detail::fresh_page page;
+      // relaxed: published by the release half of the CAS of stage to 1 below.
       shared_word.store(&page.word(), std::memory_order_relaxed);
       int expected = 0;
       // release: publishes the page (and shared_word) to the responder's acquire load.

@@ -114,7 +114,7 @@ double rk4_energy_drift_bound(const normal_mode_solution& solution, double step,
   return bound + kRoundingFactor * n * kEpsilon;
 }
 
-verify_report run_verification(const verify_settings& settings) {
+verify_report run_verification(const verify_settings& settings, const verify_progress& progress) {
   if (auto reason = settings.invalid_reason(); !reason.empty()) throw std::invalid_argument(reason);
   verify_report report;
   report.settings = settings;
@@ -155,6 +155,10 @@ verify_report run_verification(const verify_settings& settings) {
     ladder_rung rung;
     rung.step = settings.step / static_cast<double>(refinement);
     rung.steps = steps * refinement;
+    if (progress) {
+      progress(fmt::format("RK4 rung {} of {}: h = {:.6g} s, {} steps", rung_index + 1, kLadderRungs, rung.step,
+                           rung.steps));
+    }
     staged_rk4 integrator(model, rung.step);
     const bool given_step = rung_index == 0;
     if (given_step) {
@@ -225,6 +229,7 @@ verify_report run_verification(const verify_settings& settings) {
   for (std::uint64_t index = 0; index <= steps; ++index) times[index] = report.trajectory[index].time;
   const chain_model chain(chain_params::from_two_mass(params));
   dopri5_report& dopri5 = report.dopri5;
+  if (progress) progress(fmt::format("dopri5 over {} output times", times.size()));
   std::vector<double> exact_at(model.equations());
   const dopri5_run run = dopri5_solve(
       chain, times,

@@ -47,6 +47,7 @@
 //  * RK4 against dopri5: at most the sum of the two bounds above.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -153,8 +154,11 @@ struct verify_report {
   bool passed = false;  // every check that could be measured passed
 };
 
+// One line of progress ("RK4 rung 2 of 4: h = ..."), for long runs.
+using verify_progress = std::function<void(const std::string& line)>;
+
 // Runs everything. Throws std::invalid_argument with settings.invalid_reason()
-// when the settings cannot run.
-[[nodiscard]] verify_report run_verification(const verify_settings& settings);
+// when the settings cannot run. `progress`, when given, hears of each phase.
+[[nodiscard]] verify_report run_verification(const verify_settings& settings, const verify_progress& progress = {});
 
 }  // namespace lockstep::kernels

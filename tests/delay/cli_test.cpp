@@ -2,6 +2,11 @@
 // each command runs briefly and writes parseable JSON in the agreed shape.
 // No test asserts a latency.
 #include <gtest/gtest.h>
+#include <linux/capability.h>
+#include <sys/prctl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -143,6 +148,169 @@ TEST(MigrateCommand, WritesParseableJson) {
     EXPECT_EQ(document[key]["count"], 5) << key;
     EXPECT_TRUE(document[key]["p50"].is_number()) << key;
   }
+}
+
+TEST(DelayCommand, BadInputExitsTwoWithOneLine) {
+  expect_usage_error({"delay", "--period", "1x"});
+  expect_usage_error({"delay", "--period", "1"});
+  expect_usage_error({"delay", "--period", "5us"});
+  expect_usage_error({"delay", "--period", "fast"});
+  expect_usage_error({"delay", "--duration", "0s"});
+  expect_usage_error({"delay", "--period", "10ms", "--duration", "5ms"});
+  expect_usage_error({"delay", "--sync", "nope"});
+  expect_usage_error({"delay", "--layout", "nope"});
+  expect_usage_error({"delay", "--pin", "nope"});
+  expect_usage_error({"delay", "--threads", "0"});
+  expect_usage_error({"delay", "--threads", "5"});  // the model has 4 equations
+  expect_usage_error({"delay", "--sync", "seqlock", "--layout", "packed"});  // not applicable
+  expect_usage_error({"delay", "--fifo", "0"});
+  expect_usage_error({"delay", "--fifo", "100"});
+  expect_usage_error({"delay", "--compare-pinning", "--pin", "none"});
+  expect_usage_error({"delay", "--json", "/nonexistent-dir/d.json"});
+}
+
+void expect_delay_json(const nlohmann::json& document, int periods, int threads) {
+  EXPECT_EQ(document["kind"], "delay");
+  EXPECT_EQ(document["lockstep_schema"], 1);
+  EXPECT_TRUE(document["context"]["kernel"].is_string());
+  const auto& settings = document["settings"];
+  EXPECT_EQ(settings["period_ns"], 1'000'000);
+  EXPECT_EQ(settings["threads"], threads);
+  for (const char* key : {"duration_s", "sync", "layout", "pin", "fifo_priority", "mlock"})
+    EXPECT_TRUE(settings.contains(key)) << key;
+  EXPECT_EQ(document["wakeup_latency_ns"]["count"], periods * threads);
+  EXPECT_EQ(document["completion_ns"]["count"], periods);
+  for (const char* key : {"min", "p50", "p99", "p999", "max"}) {
+    EXPECT_TRUE(document["wakeup_latency_ns"][key].is_number()) << key;
+    EXPECT_TRUE(document["completion_ns"][key].is_number()) << key;
+  }
+  EXPECT_LE(document["deadline_misses"].get<int>(), periods);
+  std::uint64_t in_histogram = 0;
+  for (const auto& count : document["histogram"]["counts"]) in_histogram += count.get<std::uint64_t>();
+  EXPECT_EQ(in_histogram, static_cast<std::uint64_t>(periods * threads));
+  EXPECT_GT(document["histogram"]["bucket_ns"].get<int>(), 0);
+  ASSERT_EQ(document["figure5"].size(), static_cast<std::size_t>(threads + 1));
+  EXPECT_EQ(document["figure5"][0]["thread"], "main");
+  for (const auto& row : document["figure5"]) {
+    for (const char* key : {"thread", "role", "cross_core_csw", "total_csw", "pct"}) EXPECT_TRUE(row.contains(key));
+    if (row["cross_core_csw"].is_number()) {
+      EXPECT_LE(row["cross_core_csw"], row["total_csw"]);
+    }
+  }
+}
+
+TEST(DelayCommand, PacedRunWritesTheAgreedJson) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep delay");
+  const auto path = temp_json("delay");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration",
+                                   "20ms", "--sync", "futex_spin", "--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("wake-up latency"), std::string::npos);
+  EXPECT_NE(result.out.find("Figure 5"), std::string::npos);
+  const auto document = read_json(path);
+  expect_delay_json(document, 20, 2);
+  EXPECT_TRUE(document["settings"]["fifo_priority"].is_null());
+  EXPECT_EQ(document["settings"]["mlock"], false);
+  EXPECT_FALSE(document.contains("figure5_unpinned"));
+}
+
+TEST(DelayCommand, ComparePinningAddsTheUnpinnedTable) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --compare-pinning");
+  const auto path = temp_json("delay-compare");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--duration", "10ms", "--layout",
+                                   "per_thread", "--sync", "seqlock", "--compare-pinning", "--json", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("unpinned"), std::string::npos);
+  const auto document = read_json(path);
+  expect_delay_json(document, 10, 2);
+  ASSERT_EQ(document["figure5_unpinned"].size(), 3u);
+  EXPECT_EQ(document["unpinned"]["completion_ns"]["count"], 10);
+}
+
+// Runs lockstep in a child that has really lost a permission: the capability
+// is dropped from the bounding set (so even root does not regain it at exec)
+// and the matching resource limit is set to 0.
+lockstep::testing::command_result run_without(int capability, int resource, const std::vector<std::string>& args) {
+  char err_name[] = "/tmp/lockstep-delay-err-XXXXXX";
+  const int err_fd = ::mkstemp(err_name);
+  const pid_t child = ::fork();
+  if (child == 0) {
+    ::prctl(PR_CAPBSET_DROP, capability, 0, 0, 0);  // fails without CAP_SETPCAP: then we never had it
+    const rlimit none{0, 0};
+    ::setrlimit(resource, &none);
+    ::dup2(err_fd, STDERR_FILENO);
+    const int null_fd = ::open("/dev/null", O_WRONLY);
+    ::dup2(null_fd, STDOUT_FILENO);
+    std::vector<char*> argv{const_cast<char*>(LOCKSTEP_BINARY)};
+    for (const auto& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+    argv.push_back(nullptr);
+    ::execv(LOCKSTEP_BINARY, argv.data());
+    ::_exit(127);
+  }
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  lockstep::testing::command_result result;
+  result.exit_status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  ::lseek(err_fd, 0, SEEK_SET);
+  result.err = lockstep::testing::detail::slurp(err_fd);
+  ::unlink(err_name);
+  return result;
+}
+
+TEST(DelayCommand, WithoutFifoPermissionExitsTwoAndSaysHowToRunWithout) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60), "delay without CAP_SYS_NICE");
+  const auto result = run_without(CAP_SYS_NICE, RLIMIT_RTPRIO, {"delay", "--fifo", "50", "--duration", "10ms"});
+  EXPECT_EQ(result.exit_status, 2) << result.err;
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+  EXPECT_NE(result.err.find("SCHED_FIFO"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("without --fifo"), std::string::npos) << result.err;
+}
+
+TEST(DelayCommand, WithoutMlockPermissionExitsTwoAndSaysHowToRunWithout) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60), "delay without CAP_IPC_LOCK");
+  const auto result = run_without(CAP_IPC_LOCK, RLIMIT_MEMLOCK, {"delay", "--mlock", "--duration", "10ms"});
+  EXPECT_EQ(result.exit_status, 2) << result.err;
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+  EXPECT_NE(result.err.find("mlock"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("without --mlock"), std::string::npos) << result.err;
+}
+
+TEST(DelayCommand, FifoAndMlockWhenPermitted) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --fifo --mlock");
+  const auto path = temp_json("delay-fifo");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--fifo", "10",
+                                   "--mlock", "--json", path});
+  if (result.exit_status == 2) GTEST_SKIP() << "not permitted here: " << result.err;
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const auto document = read_json(path);
+  expect_delay_json(document, 10, 1);
+  EXPECT_EQ(document["settings"]["fifo_priority"], 10);
+  EXPECT_EQ(document["settings"]["mlock"], true);
+}
+
+const std::string kScript = std::string(LOCKSTEP_SOURCE_DIR) + "/bench/vs_cyclictest.sh";
+
+TEST(VsCyclictestScript, BadInputExitsTwoWithOneLine) {
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"--priority", "0"}, {"--period-us", "5"}, {"--cpu", "4095"}, {"--duration-s", "x"}, {"--bogus"}}) {
+    std::vector<std::string> argv{kScript, "--lockstep", LOCKSTEP_BINARY};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const auto result = run_command(argv);
+    EXPECT_EQ(result.exit_status, 2) << args[0] << "\n" << result.err;
+    EXPECT_EQ(count_lines(result.err), 1) << args[0] << "\n" << result.err;
+  }
+}
+
+TEST(VsCyclictestScript, PrintsBothDistributions) {
+  if (::access("/usr/bin/cyclictest", X_OK) != 0) GTEST_SKIP() << "cyclictest is not installed";
+  if (::geteuid() != 0) GTEST_SKIP() << "SCHED_FIFO and mlock need root here";
+  lockstep::testing::watchdog guard(std::chrono::seconds(120), "vs_cyclictest.sh");
+  const auto result = run_command({kScript, "--lockstep", LOCKSTEP_BINARY, "--duration-s", "1", "--cpu", "0",
+                                   "--period-us", "2000"});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  for (const char* row : {"min", "median", "p99", "max", "samples"}) EXPECT_NE(result.out.find(row), std::string::npos) << row;
+  EXPECT_NE(result.out.find("cyclictest"), std::string::npos);
+  EXPECT_NE(result.out.find(" 500 "), std::string::npos) << result.out;  // 1 s / 2 ms periods, both tools
 }
 
 }  // namespace
