@@ -72,12 +72,16 @@ namespace lockstep::sync {
 
 namespace detail {
 #if defined(__SANITIZE_THREAD__)
-// TSan: see the header (fences are not modelled, so the payload carries them).
+// TSan: see the header. Fences are not modelled (GCC warns -Wtsan), so the
+// payload carries their edges: a release payload store orders (W1) before it,
+// an acquire payload load orders (R4) after it, exactly what (W2)/(R3) give.
 inline constexpr std::memory_order kPayloadStore = std::memory_order_release;
 inline constexpr std::memory_order kPayloadLoad = std::memory_order_acquire;
+inline void seqlock_fence(std::memory_order) noexcept {}
 #else
 inline constexpr std::memory_order kPayloadStore = std::memory_order_relaxed;
 inline constexpr std::memory_order kPayloadLoad = std::memory_order_relaxed;
+inline void seqlock_fence(std::memory_order order) noexcept { std::atomic_thread_fence(order); }
 #endif
 }  // namespace detail
 
@@ -104,7 +108,8 @@ class seqlock_slot {
     first().sequence.store(2 * version - 1, std::memory_order_relaxed);
     // (W2) release fence: pairs with the reader's acquire fence (R3): a reader
     // whose payload load saw a value stored below also sees (W1) or later at (R4).
-    std::atomic_thread_fence(std::memory_order_release);
+    // (Under TSan the payload stores are release instead: same edge, one TSan sees.)
+    detail::seqlock_fence(std::memory_order_release);
     for (std::size_t index = 0; index < width_; ++index)
       // relaxed (release under TSan): ordered by (W2) and (W4).
       word(index).store(values[index], detail::kPayloadStore);
@@ -126,8 +131,9 @@ class seqlock_slot {
     for (std::size_t index = 0; index < width_; ++index)
       // (R2) relaxed (acquire under TSan): validated by (R3)/(R4).
       out[index] = word(index).load(detail::kPayloadLoad);
-    // (R3) acquire fence: pairs with (W2), see there.
-    std::atomic_thread_fence(std::memory_order_acquire);
+    // (R3) acquire fence: pairs with (W2), see there. (Under TSan the payload
+    // loads are acquire instead.)
+    detail::seqlock_fence(std::memory_order_acquire);
     // (R4) relaxed: ordered after (R2) by (R3).
     const std::uint64_t after = first().sequence.load(std::memory_order_relaxed);
     return after == before ? before / 2 : 0;
