@@ -8,6 +8,7 @@
 #include <string>
 
 #include "bench/command.hpp"
+#include "bench/rk4_benchmarks.hpp"
 #include "platform/placement.hpp"
 #include "sync/registry.hpp"
 
@@ -28,6 +29,12 @@ void print_list(const std::string& what) {
     for (const auto& info : sync::all_primitive_info)
       fmt::print("  {:<20} [{}] {}\n", info.name, primitive_tags(info), info.description);
   }
+  if (what.empty() || what == "layout") {
+    if (what.empty()) fmt::print("\n");
+    fmt::print("Layouts (--layout):\n");
+    for (const auto& [name, description] : bench::layout_descriptions())
+      fmt::print("  {:<20} {}\n", name, description);
+  }
   if (what.empty() || what == "placement") {
     if (what.empty()) fmt::print("\n");
     fmt::print("Placements (--pin):\n");
@@ -41,8 +48,8 @@ void print_list(const std::string& what) {
 void add_list(CLI::App& app, int& result) {
   auto what = std::make_shared<std::string>();
   CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout and placement");
-  list->add_option("what", *what, "Only one group: sync, placement")
-      ->check(CLI::IsMember({"sync", "placement"}));
+  list->add_option("what", *what, "Only one group: sync, layout, placement")
+      ->check(CLI::IsMember({"sync", "layout", "placement"}));
   list->callback([what, &result] {
     print_list(*what);
     result = kExitOk;

@@ -114,6 +114,12 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
     entry.repetitions.push_back(std::move(counters));
   }
   entry.fields = parse_entry_name(entry.name);
+  // Some repetitions measured, some stopped: the entry counts as measured
+  // (its medians come from the measured ones) and the stop becomes a note.
+  if (!entry.error.empty() && !entry.repetitions.empty()) {
+    book_.notes.push_back(entry.name + ": some repetitions were flagged and left out: " + entry.error);
+    entry.error.clear();
+  }
   ++finished_;
 
   const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();

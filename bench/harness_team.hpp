@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <vector>
@@ -131,6 +132,7 @@ struct harness_state {
   std::map<std::string, std::uint64_t> units_per_batch;  // entry name -> from its probe
   std::map<std::string, std::string> stalled;            // entry name -> reason
   std::map<std::string, unsigned> stalls_of_sync;        // "sync threads:T" -> stalled entries so far
+  std::set<std::string> measured;                        // entries with a repetition measured
   // After this many stalled entries of one primitive at one thread count, its
   // remaining entries at that count are skipped at once (each stall costs up
   // to the stall bound or a 1000 ms timeout; the verdict is already known).
@@ -155,31 +157,64 @@ struct primitive_traits {
 
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
-// first call (8 batches of one unit); run the timed call; feed Google
-// Benchmark the batch times. Returns the call's result, or nothing when the
-// entry was skipped (SkipWithError, with the reason).
-template <class Team, class Work>
+// first call (8 batches of one unit); call before_timed(); run the timed
+// call; feed Google Benchmark the batch times. Returns the call's result, or
+// nothing when the entry was skipped (SkipWithError, with the reason).
+struct nothing_before_timed {
+  void operator()() const noexcept {}
+};
+template <class Team, class Work, class BeforeTimed = nothing_before_timed>
 std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
                                          const primitive_traits& primitive, const platform::placement_plan& plan,
                                          Team& team, std::vector<participant_slot>& slots, Work& work,
-                                         bool accounting, const char* unit) {
+                                         bool accounting, const char* unit, BeforeTimed before_timed = {}) {
   const run_settings& settings = harness.settings;
   const auto skip = [&](const std::string& reason) {
     state.SkipWithError(reason.c_str());
     return std::optional<call_result>{};
   };
-  if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) return skip(known->second);
+  // Google Benchmark requires every repetition of an entry to report the same
+  // iteration count (it aborts otherwise), and a skipped call reports none.
+  // So once a repetition of this entry was measured, a later call that stops
+  // early still walks all its iterations, then is flagged as an error, which
+  // keeps it out of the aggregates; its times are not a measurement.
+  const bool measured_before = harness.measured.count(name) > 0;
+  const auto flag_measured_entry = [&](const call_result& result, const std::string& reason) {
+    std::vector<std::int64_t> times = result.batches.batch_ns;
+    std::int64_t filler = result.batches.slowest_unit_ns * static_cast<std::int64_t>(result.batches.units_per_batch);
+    if (!times.empty()) {
+      std::vector<std::int64_t> sorted = times;
+      std::sort(sorted.begin(), sorted.end());
+      filler = sorted[sorted.size() / 2];
+    }
+    std::size_t batch = 0;
+    for (auto _ : state) {
+      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) * 1e-9);
+      ++batch;
+    }
+    const std::string message = reason + " (this repetition stopped after " + std::to_string(times.size()) + " of " +
+                                std::to_string(batch) + " batches; its times are not a measurement)";
+    state.SkipWithError(message.c_str());
+    return std::optional<call_result>{};
+  };
+
   const std::string stall_key = primitive.name + " threads:" + std::to_string(plan.threads);
-  if (!primitive.name.empty()) {
-    const unsigned stalls = harness.stalls_of_sync[stall_key];
-    if (stalls >= harness.stalls_before_skipping_sync)
-      return skip("skipped: " + stall_key + " already stalled in " + std::to_string(stalls) +
-                  " entries of this run");
+  if (!measured_before) {
+    if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) return skip(known->second);
+    if (!primitive.name.empty()) {
+      const unsigned stalls = harness.stalls_of_sync[stall_key];
+      if (stalls >= harness.stalls_before_skipping_sync)
+        return skip("skipped: " + stall_key + " already stalled in " + std::to_string(stalls) +
+                    " entries of this run");
+    }
   }
-  const auto record_stall = [&](const call_result& result) {
+  // A stall (one unit beyond the bound) says something about the primitive;
+  // running out of the call's budget only about this call.
+  const auto record_stop = [&](const call_result& result) {
     std::string reason = stall_reason(result, unit, primitive.pure_spin, primitive.may_lose_wakeups, plan, settings);
+    if (measured_before) return flag_measured_entry(result, reason);
     harness.stalled[name] = reason;
-    if (!primitive.name.empty()) ++harness.stalls_of_sync[stall_key];
+    if (result.batches.stalled && !primitive.name.empty()) ++harness.stalls_of_sync[stall_key];
     return skip(reason);
   };
 
@@ -188,15 +223,20 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
     constexpr unsigned kProbeBatches = 8;
     call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
     if (!probe.failure.empty()) return skip("cannot place the team: " + probe.failure);
-    if (probe.batches.stalled || probe.batches.over_budget) return record_stall(probe);
+    if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
     batch_size = harness.units_per_batch.emplace(name, units_for_batch(median_unit_ns(probe.batches), settings)).first;
   }
 
+  before_timed();
   const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
   call_result result = run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work);
-  if (!result.failure.empty()) return skip("cannot place the team: " + result.failure);
+  if (!result.failure.empty()) {
+    if (measured_before) return flag_measured_entry(result, "cannot place the team: " + result.failure);
+    return skip("cannot place the team: " + result.failure);
+  }
   if (result.batches.stalled || result.batches.over_budget || result.batches.batch_ns.size() < wanted)
-    return record_stall(result);
+    return record_stop(result);
+  harness.measured.insert(name);
 
   std::size_t batch = 0;
   for (auto _ : state) {

@@ -4,14 +4,19 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <string_view>
+#include <tuple>
 #include <exception>
 #include <vector>
 
 #include "bench/core_to_core.hpp"
 #include "kernels/oscillator.hpp"
+#include "kernels/parallel_step.hpp"
 #include "kernels/rk4.hpp"
+#include "layouts/layouts.hpp"
 #include "platform/clock.hpp"
 #include "platform/stats.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::bench {
 
@@ -76,7 +81,148 @@ void serial_entry(benchmark::State& state, harness_state& harness) {
       static_cast<double>(total_ns) / (static_cast<double>(batches) * static_cast<double>(steps));
 }
 
+// One call of an RK4 entry: the composed step on a pinned team.
+template <class Sync, class Layout, kernels::sync_timing Timing>
+void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
+  constexpr bool kInstrumented = Timing == kernels::sync_timing::on;
+  constexpr sync::primitive_info info = sync::info_of<Sync>();
+  affinity_guard restore_caller;  // omp_team runs participant 0 on the benchmark thread
+  const platform::placement_plan plan = platform::plan_placement(*harness.machine, spec.pin, spec.threads);
+  const kernels::two_mass_model model;
+  kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, Timing> step(model, kBenchmarkStepSeconds,
+                                                                            spec.threads);
+  sync::team_of_t<Sync> team(spec.threads);
+  std::vector<participant_slot> slots(spec.threads);
+  auto steps = [&step](sync::participant& self, std::uint64_t count) { step.run(self, count); };
+  kernels::stage_sync_time sync_before{};
+  const primitive_traits traits{std::string(info.name), info.pure_spin, info.may_lose_wakeups};
+  const auto result = measure_entry(state, harness, spec.name(), traits, plan, team, slots, steps, kInstrumented,
+                                    "step", [&] { sync_before = step.sync_time(); });
+  if (!result) return;
+
+  const double steps_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));
+  const double step_ns = ns_per_unit(*result);
+  state.counters["ns_per_step"] = step_ns;
+  if (const auto serial = harness.book->serial_step_ns(); serial && *serial > 0.0)
+    state.counters["vs_serial"] = step_ns / *serial;
+  if constexpr (kInstrumented) {
+    const kernels::stage_sync_time sync_after = step.sync_time();
+    const std::uint64_t syncs = sync_after.syncs - sync_before.syncs;
+    if (syncs > 0) {
+      const double per_stage =
+          static_cast<double>(sync_after.nanoseconds - sync_before.nanoseconds) / static_cast<double>(syncs);
+      state.counters["sync_ns_per_stage"] = per_stage;
+      if (const auto c2c = harness.book->c2c_one_way_ns(); c2c && *c2c > 0.0)
+        state.counters["vs_c2c"] = per_stage / *c2c;
+    }
+  }
+  set_accounting_counters(state, *result, "step");
+  state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
+  state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
+  state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
+}
+
+// Calls visit.template operator()<Layout>() for every layout, in order.
+template <class Visitor, class... Layouts>
+void for_each_layout_in(Visitor& visit, std::tuple<Layouts...>* /*list*/) {
+  (visit.template operator()<Layouts>(), ...);
+}
+template <class Visitor>
+void for_each_layout(Visitor&& visit) {
+  for_each_layout_in(visit, static_cast<layouts::all_layouts*>(nullptr));
+}
+
+bool selected(const std::vector<std::string>& names, std::string_view name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+template <class Sync, class Layout>
+void register_rk4_entry(const entry_spec& spec, harness_state& harness, bool instrumented) {
+  auto* entry =
+      instrumented
+          ? benchmark::RegisterBenchmark(spec.name().c_str(),
+                                         [&harness, spec](benchmark::State& state) {
+                                           rk4_entry<Sync, Layout, kernels::sync_timing::on>(state, harness, spec);
+                                         })
+          : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
+              rk4_entry<Sync, Layout, kernels::sync_timing::off>(state, harness, spec);
+            });
+  entry->UseManualTime()->Unit(benchmark::kNanosecond);
+}
+
 }  // namespace
+
+std::vector<std::string> layout_names() {
+  std::vector<std::string> names;
+  for_each_layout([&]<class Layout>() { names.emplace_back(Layout::kName); });
+  return names;
+}
+
+std::vector<std::pair<std::string, std::string>> layout_descriptions() {
+  std::vector<std::pair<std::string, std::string>> layouts;
+  for_each_layout([&]<class Layout>() { layouts.emplace_back(Layout::kName, Layout::kDescription); });
+  return layouts;
+}
+
+std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  const std::size_t equations = kernels::two_mass_model::kEquations;
+  sync::for_each_primitive([&]<class Sync>() {
+    if (!selected(selection.syncs, Sync::kName)) return;
+    for_each_layout([&]<class Layout>() {
+      if (!selected(selection.layouts, Layout::kName)) return;
+      for (unsigned threads : selection.threads) {
+        for (platform::placement pin : selection.pins) {
+          const entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
+          const std::string reason = kernels::not_applicable_reason<Sync, Layout>(equations, threads);
+          if (!reason.empty()) {
+            harness.book->not_applicable.push_back({spec.name(), reason});
+            continue;
+          }
+          if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+            register_rk4_entry<Sync, Layout>(spec, harness, harness.settings.accounting);
+            registered.push_back(spec.name());
+          }
+        }
+      }
+    });
+  });
+  return registered;
+}
+
+std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  const std::size_t equations = kernels::two_mass_model::kEquations;
+  // The preferred combination first: the suite's own contender, on the layout
+  // that keeps writers apart, pinned, two threads (one per core here).
+  const unsigned threads =
+      std::find(selection.threads.begin(), selection.threads.end(), 2u) != selection.threads.end()
+          ? 2u
+          : selection.threads.front();
+  const platform::placement pin =
+      std::find(selection.pins.begin(), selection.pins.end(), platform::placement::compact) != selection.pins.end()
+          ? platform::placement::compact
+          : selection.pins.front();
+  bool done = false;
+  const auto try_pair = [&]<class Sync, class Layout>() {
+    if (done || !selected(selection.syncs, Sync::kName) || !selected(selection.layouts, Layout::kName)) return;
+    if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+      if (!kernels::not_applicable_reason<Sync, Layout>(equations, threads).empty()) return;
+      for (bool accounting : {false, true}) {
+        const entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
+                              pin,                  threads,                 accounting};
+        register_rk4_entry<Sync, Layout>(spec, harness, accounting);
+        registered.push_back(spec.name());
+      }
+      done = true;
+    }
+  };
+  try_pair.template operator()<sync::futex_spin, layouts::padded64>();
+  sync::for_each_primitive([&]<class Sync>() {
+    for_each_layout([&]<class Layout>() { try_pair.template operator()<Sync, Layout>(); });
+  });
+  return registered;
+}
 
 std::vector<std::string> register_calibration_benchmarks(harness_state& harness) {
   std::vector<std::string> registered;

@@ -17,6 +17,7 @@
 // Both calibrations are registered first, so that Google Benchmark (which runs
 // entries in registration order) has measured them when the RK4 entries need them.
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "bench/harness.hpp"
@@ -32,5 +33,37 @@ inline constexpr double kBenchmarkStepSeconds = 1e-4;
 // c2c and rk4/serial. c2c needs two CPUs in the affinity set; without them it
 // is recorded as not applicable in the run book. Returns the names registered.
 std::vector<std::string> register_calibration_benchmarks(harness_state& harness);
+
+// rk4/sync:S/layout:L/pin:P/threads:T for every selected combination that
+// applies; the others go into the run book's not_applicable list with the
+// reason (kernels/parallel_step.hpp: applicable, not_applicable_reason).
+// Counters, per step unless named otherwise (summed over the team):
+//   ns_per_step          batch time / steps
+//   sync_ns_per_stage    mean time a participant spent in one stage sync
+//                        (the step's instrumentation; absent with accounting off)
+//   vs_serial            ns_per_step / this run's rk4/serial median
+//   vs_c2c               sync_ns_per_stage / this run's c2c one-way median
+//   csw_vol_per_kstep, csw_invol_per_kstep, migrations_per_kstep
+//                        context switches and migrations of the whole team per
+//                        1000 steps (warm-up batch and harness barriers
+//                        included); migrations absent when unavailable
+//   cross_core_csw_pct   the paper's Figure 5 share (absent when unavailable)
+//   futex_waits_per_step the primitive's futex sleeps, summed over the team
+//   timeouts             waits that ended by timeout in the repetition (a count)
+//   oversubscribed       1 when the threads outnumber the CPUs
+// With settings.accounting off the entries run without instrumentation and
+// without accounting (their counters are omitted).
+std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness);
+
+// The harness-overhead pair, side by side: overhead/accounting:off/... and
+// overhead/accounting:on/... on one combination (futex_spin, padded64,
+// compact, 2 threads when selected; else the first selected that applies).
+// The summary quotes on / off.
+std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness);
+
+// The layout names, in layouts::all_layouts order (for --layout and `list`).
+std::vector<std::string> layout_names();
+// (name, one-line description) of every layout, for `lockstep list`.
+std::vector<std::pair<std::string, std::string>> layout_descriptions();
 
 }  // namespace lockstep::bench

@@ -61,6 +61,7 @@ TEST(RunCli, BadInputIsOneLineAndExitTwo) {
       run_args({"--sync", "no_such_barrier"}),
       run_args({"--sync", "std_barrier,nope"}),
       run_args({"--pin", "everywhere"}),
+      run_args({"--layout", "diagonal"}),
       run_args({"--threads", "0"}),
       run_args({"--threads", "two"}),
       run_args({"--threads", "2,1000"}),
@@ -92,8 +93,9 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a tiny lockstep run did not finish");
   scratch_directory scratch;
   const fs::path out = scratch.path() / "nested" / "tiny.json";
-  const auto result = run_command(run_args({"--quick", "--sync", "std_barrier,futex_spin", "--threads", "2", "--pin",
-                                            "compact", "--repetitions", "2", "--out", out.string(), "--",
+  const auto result = run_command(run_args({"--quick", "--sync", "std_barrier,futex_spin,seqlock", "--layout",
+                                            "padded64,per_thread", "--threads", "2", "--pin", "compact",
+                                            "--repetitions", "2", "--out", out.string(), "--",
                                             "--benchmark_min_time=0.001"}));
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find(out.string()), std::string::npos) << "the summary names the result file:\n" << result.out;
@@ -120,11 +122,21 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
   for (const auto& entry : document["benchmarks"])
     if (entry.value("run_type", "") == "iteration") names.insert(entry["name"].get<std::string>());
   for (const char* name : {"rk4/serial", "barrier/sync:std_barrier/pin:compact/threads:2",
-                           "barrier/sync:futex_spin/pin:compact/threads:2"})
+                           "barrier/sync:futex_spin/pin:compact/threads:2",
+                           "rk4/sync:std_barrier/layout:padded64/pin:compact/threads:2",
+                           "rk4/sync:futex_spin/layout:per_thread/pin:compact/threads:2",
+                           "rk4/sync:seqlock/layout:per_thread/pin:compact/threads:2",
+                           "overhead/accounting:off/sync:futex_spin/layout:padded64/pin:compact/threads:2",
+                           "overhead/accounting:on/sync:futex_spin/layout:padded64/pin:compact/threads:2"})
     EXPECT_TRUE(names.count(name)) << "missing entry " << name;
   if (lockstep::platform::affinity_cpu_count() >= 2) {
     EXPECT_TRUE(names.count("c2c/pin:compact/threads:2"));
   }
+  // A dataflow channel on a shared layout is listed as not applicable, with the reason.
+  const std::string not_applicable = document["context"].value("not_applicable", "");
+  EXPECT_NE(not_applicable.find("rk4/sync:seqlock/layout:padded64/pin:compact/threads:2: "), std::string::npos)
+      << not_applicable;
+  const bool migrations = document["context"].value("migrations", "").rfind("available", 0) == 0;
 
   for (const auto& entry : document["benchmarks"]) {
     const std::string name = entry["name"];
@@ -134,6 +146,21 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
                                   "yields_per_episode", "spins_exhausted_per_episode", "timeouts", "oversubscribed"})
         EXPECT_TRUE(entry.contains(counter)) << name << " lacks " << counter;
       EXPECT_GT(entry["ns_per_episode"].get<double>(), 0.0) << name;
+    }
+    if (name.rfind("rk4/sync:", 0) == 0) {
+      for (const char* counter : {"ns_per_step", "sync_ns_per_stage", "vs_serial", "csw_vol_per_kstep",
+                                  "csw_invol_per_kstep", "futex_waits_per_step", "timeouts", "oversubscribed"})
+        EXPECT_TRUE(entry.contains(counter)) << name << " lacks " << counter;
+      if (lockstep::platform::affinity_cpu_count() >= 2) {
+        EXPECT_TRUE(entry.contains("vs_c2c")) << name;
+      }
+      // Migrations: a counter when the machine gives them, absent (never 0 made up) when not.
+      EXPECT_EQ(entry.contains("migrations_per_kstep"), migrations) << name;
+    }
+    if (name.rfind("overhead/accounting:off/", 0) == 0) {
+      EXPECT_TRUE(entry.contains("ns_per_step")) << name;
+      EXPECT_FALSE(entry.contains("sync_ns_per_stage")) << name << ": instrumentation must be off";
+      EXPECT_FALSE(entry.contains("csw_vol_per_kstep")) << name << ": accounting must be off";
     }
     if (name == "rk4/serial") {
       EXPECT_GT(entry["ns_per_step"].get<double>(), 0.0);
