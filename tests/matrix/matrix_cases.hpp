@@ -9,6 +9,7 @@
 // so that a failure names its combination and a filter can pick one.
 #include <chrono>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <functional>
@@ -115,10 +116,20 @@ void expect_bitwise_serial(const Model& model, unsigned threads, placement pin, 
   const std::uint64_t segments[] = {1, steps / 3, steps - 1 - steps / 3};
   std::uint64_t done = 0;
   for (std::uint64_t segment : segments) {
-    kernels::run_team(parallel, segment, hook);
+    const sync::sync_counters counters = kernels::run_team(parallel, segment, hook);
     serial.run(segment);
     done += segment;
     ASSERT_EQ(parallel.steps_taken(), done);
+    if (sync::info_of<Sync>().may_lose_wakeups && counters.timeouts > 0) {
+      // The paper's ThreadWaiter synchronises only while it loses no wake-up
+      // (see tests/sync/conformance.hpp): after a timeout a participant may
+      // read a stage that is not complete, so the trajectory is no longer an
+      // oracle. The harness flags such entries the same way.
+      std::printf("[ lost wake-up ] %s x %s: %llu timeouts after %llu steps; bitwise check not applicable\n",
+                  std::string(Sync::kName).c_str(), std::string(Layout::kName).c_str(),
+                  static_cast<unsigned long long>(counters.timeouts), static_cast<unsigned long long>(done));
+      return;
+    }
     const std::string difference = first_difference(parallel.state(), serial.state());
     ASSERT_TRUE(difference.empty()) << "after " << done << " steps the trajectory is not bitwise serial: "
                                     << difference;
