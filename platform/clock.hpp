@@ -13,7 +13,8 @@
 //
 // Cost: one vDSO call when the clocksource is tsc or kvm-clock (about 20 to
 // 30 ns on current x86 parts); a system call (about 0.5 to 1 us) when it is
-// hpet or acpi_pm. `clock_read_cost_ns()` measures it on this machine and
+// hpet or acpi_pm (measured: 22.6 ns per reading on the 2-core development
+// VM, clocksource tsc, with other builds running). `clock_read_cost_ns()` measures it on this machine and
 // `clocksource()` says which source the kernel uses; commands put both in
 // their context so a slow clock is visible. Measure spans of at least a few
 // microseconds with it, or batch many operations per reading.

@@ -47,9 +47,18 @@ int logical_or_none(hwloc_obj_t object) {
   return object == nullptr ? kNoObject : static_cast<int>(object->logical_index);
 }
 
+// The nearest ancestor of this type, or nullptr (hwloc's inline helper does
+// the same but trips GCC's -Wnull-dereference at -O2).
+hwloc_obj_t ancestor_of_type(hwloc_obj_t object, hwloc_obj_type_t type) {
+  for (hwloc_obj_t parent = object != nullptr ? object->parent : nullptr; parent != nullptr; parent = parent->parent) {
+    if (parent->type == type) return parent;
+  }
+  return nullptr;
+}
+
 // The L2 / L3 ancestor of a PU: a data or unified cache of that level.
 hwloc_obj_t cache_ancestor(hwloc_obj_t pu, unsigned level) {
-  for (hwloc_obj_t parent = pu->parent; parent != nullptr; parent = parent->parent) {
+  for (hwloc_obj_t parent = pu != nullptr ? pu->parent : nullptr; parent != nullptr; parent = parent->parent) {
     if (hwloc_obj_type_is_dcache(parent->type) && parent->attr->cache.depth == level) return parent;
   }
   return nullptr;
@@ -103,9 +112,10 @@ struct topology_loader {
     if (pu_total <= 0) throw topology_error(fmt::format("hwloc found no PU ({})", machine.source_));
     for (int index = 0; index < pu_total; ++index) {
       hwloc_obj_t pu = hwloc_get_obj_by_type(handle, HWLOC_OBJ_PU, static_cast<unsigned>(index));
-      hwloc_obj_t core = hwloc_get_ancestor_obj_by_type(handle, HWLOC_OBJ_CORE, pu);
+      if (pu == nullptr) continue;
+      hwloc_obj_t core = ancestor_of_type(pu, HWLOC_OBJ_CORE);
       hwloc_obj_t core_key = core != nullptr ? core : pu;
-      hwloc_obj_t package = hwloc_get_ancestor_obj_by_type(handle, HWLOC_OBJ_PACKAGE, pu);
+      hwloc_obj_t package = ancestor_of_type(pu, HWLOC_OBJ_PACKAGE);
 
       pu_info info;
       info.os_index = pu->os_index;
@@ -143,6 +153,7 @@ struct topology_loader {
       const int count = hwloc_get_nbobjs_by_type(handle, type);
       for (int index = 0; index < count; ++index) {
         hwloc_obj_t cache = hwloc_get_obj_by_type(handle, type, static_cast<unsigned>(index));
+        if (cache == nullptr || cache->attr == nullptr) continue;
         const auto& attributes = cache->attr->cache;
         auto [slot, inserted] = caches.try_emplace({attributes.depth, static_cast<int>(attributes.type)});
         if (inserted) {

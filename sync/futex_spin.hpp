@@ -26,13 +26,13 @@
 // per FUTEX_WAIT that slept or found the phase already over, futex_wakes per
 // FUTEX_WAKE issued. yields and timeouts stay 0 (it neither yields nor times out).
 //
-// Spin budget: a waiter spins `budget` pause iterations. The cap is
-// kDedicatedSpin when the participants fit in the union of their affinity sets
-// (learned during phase 0; see cpu_union) and kOversubscribedSpin when they do
-// not. Within the cap each participant adapts: the budget halves when it runs
-// out (the phase was long, or the thread we wait for is not running) and
-// doubles when the phase completed during the spin.
-#include <algorithm>
+// Spin budget: a waiter spins `budget` pause iterations: kDedicatedSpin when
+// the participants fit in the union of their affinity sets (learned during
+// phase 0; see cpu_union), kOversubscribedSpin when they do not. It does not
+// also shrink phase by phase: a first version halved the budget whenever it
+// ran out, and one late wake-up then fed itself (the woken thread arrives
+// late, so its partner's short spin runs out and it sleeps too), settling
+// into sleeping every phase even with a core per participant.
 #include <atomic>
 #include <cassert>
 #include <climits>
@@ -68,9 +68,6 @@ class futex_spin {
   // behind us on our own CPU: spin only long enough to catch a phase that is
   // completing on the other CPU right now, then get out of its way.
   static constexpr std::uint32_t kOversubscribedSpin = 32;
-  // The adaptive budget never drops below this (a handful of pauses is cheaper
-  // than any syscall, and catches a releaser that is one store away).
-  static constexpr std::uint32_t kMinimumSpin = 8;
 
   explicit futex_spin(unsigned participants)
       : participants_(participants), slots_(std::make_unique<slot[]>(participants)) {
@@ -91,8 +88,7 @@ class futex_spin {
     } else if (mine.arrivals == 1) {
       // Phase 0 is over, so every participant's add is visible ((1) then (3)/(4)).
       const unsigned cpus = cpus_.count();
-      mine.cap = (cpus != 0 && participants_ > cpus) ? kOversubscribedSpin : kDedicatedSpin;
-      mine.budget = mine.cap;
+      mine.budget = (cpus != 0 && participants_ > cpus) ? kOversubscribedSpin : kDedicatedSpin;
     }
     ++mine.arrivals;
     const std::uint32_t sense = mine.sense ^ 1u;  // the value the sense word takes when this phase ends
@@ -120,14 +116,10 @@ class futex_spin {
 
     // Spin. (4) acquire: pairs with the release half of (3).
     for (std::uint32_t spin = 0; spin < mine.budget; ++spin) {
-      if (phase_.sense.load(std::memory_order_acquire) == sense) {
-        mine.budget = std::min(mine.cap, mine.budget * 2);
-        return;
-      }
+      if (phase_.sense.load(std::memory_order_acquire) == sense) return;
       platform::cpu_relax();
     }
     ++self.counters.spins_exhausted;
-    mine.budget = std::max(kMinimumSpin, mine.budget / 2);
 
     // Sleep. (5) seq_cst: announce the sleeper before the check (6); pairs
     // with (3)/(7) as explained there.
@@ -162,7 +154,6 @@ class futex_spin {
   struct alignas(platform::kCacheLine) slot {
     std::uint32_t sense = 0;
     std::uint32_t budget = kDedicatedSpin;
-    std::uint32_t cap = kDedicatedSpin;
     std::uint64_t arrivals = 0;
   };
   static_assert(sizeof(arrival_counter) == platform::kCacheLine, "the arrival counter must have a line of its own");
