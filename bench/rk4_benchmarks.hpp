@@ -40,7 +40,8 @@ std::vector<std::string> register_calibration_benchmarks(harness_state& harness)
 // Counters, per step unless named otherwise (summed over the team):
 //   ns_per_step          batch time / steps
 //   sync_ns_per_stage    mean time a participant spent in one stage sync
-//                        (the step's instrumentation; absent with accounting off)
+//                        (the step's sampled instrumentation: the syncs of one
+//                        step in kSyncTimingSampleSteps; absent with accounting off)
 //   vs_serial            ns_per_step / this run's rk4/serial median
 //   vs_c2c               sync_ns_per_stage / this run's c2c one-way median
 //   csw_vol_per_kstep, csw_invol_per_kstep, migrations_per_kstep
