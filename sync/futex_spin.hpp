@@ -15,24 +15,35 @@
 //  * Destroy it only after every participant has returned from its last call
 //    (the last arriver still touches the barrier after the others are free).
 //  * Not copyable or movable: participants hold its address.
-// Progress: blocking. A waiter spins for at most its budget, then sleeps until
-// the last arriver wakes it, so it never takes a CPU from the thread it waits
-// for for longer than the budget: with 4 participants on 2 CPUs (or on 1) it
-// still makes progress.
+// Progress: blocking. A waiter spins (and, oversubscribed, yields) for at most
+// its budget, then sleeps until the last arriver wakes it, so it never takes a
+// CPU from the thread it waits for for longer than the budget: with 4
+// participants on 2 CPUs (or on 1) it still makes progress.
 // Memory ordering: everything a participant wrote before arrive_and_wait
 // happens-before everything any participant does after its arrive_and_wait of
 // the same phase returns (edges (1), (3), (4)/(6) below).
-// Counters (self.counters): spins_exhausted when the budget ran out, futex_waits
-// per FUTEX_WAIT that slept or found the phase already over, futex_wakes per
-// FUTEX_WAKE issued. yields and timeouts stay 0 (it neither yields nor times out).
+// Counters (self.counters): spins_exhausted when the spin and yield budget ran
+// out, futex_waits per FUTEX_WAIT that slept or found the phase already over,
+// futex_wakes per FUTEX_WAKE issued, yields per sched_yield. timeouts stay 0
+// (it never times out).
 //
-// Spin budget: a waiter spins `budget` pause iterations: kDedicatedSpin when
-// the participants fit in the union of their affinity sets (learned during
-// phase 0; see cpu_union), kOversubscribedSpin when they do not. It does not
+// Budget: a waiter spins `budget` pause iterations: kDedicatedSpin when the
+// participants fit in the union of their affinity sets (learned during phase
+// 0; see cpu_union), kOversubscribedSpin when they do not. Oversubscribed, it
+// then yields its CPU up to kOversubscribedYields times before it sleeps: the
+// participant it waits for is most likely runnable on this very CPU, and
+// sched_yield hands the CPU over for the price of a syscall, where a futex
+// sleep plus wake-up costs an IPI and two scheduler passes (on the 2-vCPU VM
+// this was tuned on, bare pthread_barrier and win_event episodes, which sleep
+// every phase, took 25-31 us; with sleeping only, futex_spin's RK4 step at 4
+// threads on 2 CPUs was 10x std::barrier's, which yields in libstdc++'s
+// atomic wait). The budget does not
 // also shrink phase by phase: a first version halved the budget whenever it
 // ran out, and one late wake-up then fed itself (the woken thread arrives
 // late, so its partner's short spin runs out and it sleeps too), settling
 // into sleeping every phase even with a core per participant.
+#include <sched.h>
+
 #include <atomic>
 #include <cassert>
 #include <climits>
@@ -68,11 +79,15 @@ class futex_spin {
   // behind us on our own CPU: spin only long enough to catch a phase that is
   // completing on the other CPU right now, then get out of its way.
   static constexpr std::uint32_t kOversubscribedSpin = 32;
+  // Yields before sleeping when oversubscribed: each hands the CPU to a
+  // runnable participant (~1 us when one is queued here, ~0.3 us when not), so
+  // 64 of them bound the wait at about the cost of two futex round trips.
+  static constexpr std::uint32_t kOversubscribedYields = 64;
 
   explicit futex_spin(unsigned participants)
       : participants_(participants), slots_(std::make_unique<slot[]>(participants)) {
     assert(participants >= 1);
-    remaining_.value.store(participants, std::memory_order_relaxed);  // published by the thread start
+    phase_.remaining.store(participants, std::memory_order_relaxed);  // published by the thread start
   }
   futex_spin(const futex_spin&) = delete;  // participants hold its address
   futex_spin& operator=(const futex_spin&) = delete;
@@ -88,7 +103,9 @@ class futex_spin {
     } else if (mine.arrivals == 1) {
       // Phase 0 is over, so every participant's add is visible ((1) then (3)/(4)).
       const unsigned cpus = cpus_.count();
-      mine.budget = (cpus != 0 && participants_ > cpus) ? kOversubscribedSpin : kDedicatedSpin;
+      const bool oversubscribed = cpus != 0 && participants_ > cpus;
+      mine.budget = oversubscribed ? kOversubscribedSpin : kDedicatedSpin;
+      mine.yields = oversubscribed ? kOversubscribedYields : 0;
     }
     ++mine.arrivals;
     const std::uint32_t sense = mine.sense ^ 1u;  // the value the sense word takes when this phase ends
@@ -96,11 +113,11 @@ class futex_spin {
 
     // (1) acq_rel: release publishes this participant's writes to the last
     // arriver; acquire (in the last arriver) takes every earlier arriver's
-    // release, since all the decrements form one release sequence on remaining_.
-    if (remaining_.value.fetch_sub(1, std::memory_order_acq_rel) == 1) {
+    // release, since all the decrements form one release sequence on remaining.
+    if (phase_.remaining.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       // (2) relaxed: rearm for the next phase. Ordered before (3), and nobody
       // decrements again before acquiring (3), so they all see the reset.
-      remaining_.value.store(participants_, std::memory_order_relaxed);
+      phase_.remaining.store(participants_, std::memory_order_relaxed);
       // (3) seq_cst: the release half pairs with the acquire loads (4) and (6)
       // of the waiters (this publishes (1)'s gathered writes and (2)); the
       // seq_cst half pairs with (5) in a store-buffering pair: either we see a
@@ -118,6 +135,12 @@ class futex_spin {
     for (std::uint32_t spin = 0; spin < mine.budget; ++spin) {
       if (phase_.sense.load(std::memory_order_acquire) == sense) return;
       platform::cpu_relax();
+    }
+    // Yield (oversubscribed only). (4') acquire: as (4).
+    for (std::uint32_t yield = 0; yield < mine.yields; ++yield) {
+      sched_yield();
+      ++self.counters.yields;
+      if (phase_.sense.load(std::memory_order_acquire) == sense) return;
     }
     ++self.counters.spins_exhausted;
 
@@ -138,30 +161,30 @@ class futex_spin {
   }
 
  private:
-  // Written by every arriver: its own line, so that the spinners' line (the
-  // sense word) is not invalidated by each arrival, only by the release.
-  struct alignas(platform::kCacheLine) arrival_counter {
-    std::atomic<std::uint32_t> value{0};
-  };
-  // Read by every spinner, written once per phase by the last arriver. The
-  // sleepers count shares the line on purpose: the releaser reads it right
-  // after writing the sense, so the read hits the line it already owns.
+  // One line for the whole phase, as in ck's centralized barrier: the arrival
+  // counter, the sense word every spinner reads, and the sleepers count. A
+  // first version gave the counter a line of its own, so that arrivals would
+  // not disturb the spinners; with the few participants this suite runs, that
+  // costs one more line transfer per phase than it saves (bare episode at 2
+  // threads pinned: 285 ns against ck_centralized's 107 ns, c2c one-way 118
+  // ns). The releaser reads sleepers right after writing the sense: a hit on
+  // the line it already owns.
   struct alignas(platform::kCacheLine) phase_word {
-    std::atomic<std::uint32_t> sense{0};  // the futex word: 0/1, flips every phase
+    std::atomic<std::uint32_t> remaining{0};  // arrivals still missing in this phase
+    std::atomic<std::uint32_t> sense{0};      // the futex word: 0/1, flips every phase
     std::atomic<std::uint32_t> sleepers{0};
   };
   // Per participant, touched only by its own thread.
   struct alignas(platform::kCacheLine) slot {
     std::uint32_t sense = 0;
     std::uint32_t budget = kDedicatedSpin;
+    std::uint32_t yields = 0;
     std::uint64_t arrivals = 0;
   };
-  static_assert(sizeof(arrival_counter) == platform::kCacheLine, "the arrival counter must have a line of its own");
-  static_assert(sizeof(phase_word) == platform::kCacheLine, "the sense word must have a line of its own");
+  static_assert(sizeof(phase_word) == platform::kCacheLine, "the phase word must have a line of its own");
   static_assert(sizeof(slot) % platform::kCacheLine == 0, "participant slots must not share a line");
 
   const unsigned participants_;
-  arrival_counter remaining_;
   phase_word phase_;
   std::unique_ptr<slot[]> slots_;
   cpu_union cpus_;
