@@ -87,9 +87,9 @@ def _sample(run, time_kind: str) -> tuple[list[float], bool]:
     if times:
         return times, True
     for aggregate in ("median", "mean"):
-        if aggregate in run.aggregates:
-            value = run.aggregates[aggregate]
-            return [value.real_ns if time_kind == "real" else value.cpu_ns], False
+        value = run.aggregate_time_ns(aggregate, time_kind)
+        if value is not None:
+            return [value], False
     return [], False
 
 
@@ -145,7 +145,7 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     if untested:
         warnings.append(f"{len(untested)} of {len(rows)} matched entries have fewer than "
                         f"{statistics.MIN_REPETITIONS} repetitions on a side: no Mann-Whitney U test for them "
-                        f"(run with --benchmark_repetitions={max(statistics.MIN_REPETITIONS, 10)} or more)")
+                        f"(`lockstep run --repetitions {max(statistics.MIN_REPETITIONS, 10)}` or more)")
     errored.sort(key=lambda item: item[0].sort_key())
     return Comparison(baseline, contender, rows,
                       added=sorted(keys_b - keys_a, key=BenchmarkKey.sort_key),
@@ -311,7 +311,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     a, b = "A", letter
     out = [f"== {b} ({comparison.contender.label}) against A ({comparison.baseline.label})", ""]
     kind = "real" if comparison.time_kind == "real" else "CPU"
-    out.append(f"time: {kind} time per iteration, median of the repetitions; ratio {b}/A of the medians "
+    out.append(f"time: {kind} time (the ns_per_step counter where an entry has it, else per iteration), median of the repetitions; ratio {b}/A of the medians "
                f"(> 1: {b} is slower) with a {int(statistics.CONFIDENCE * 100)}% bootstrap interval "
                f"({statistics.BOOTSTRAP_RESAMPLES} resamples, fixed seed); p: two-sided Mann-Whitney U, "
                f"Holm-corrected over the {sum(r.p_raw is not None for r in comparison.rows)} tests of this "

@@ -125,7 +125,8 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
             run = run_file.runs.get(_rk4_key(sync, layout, pin, threads))
             if run is None or run.errored:
                 continue
-            times = run.times_ns() or ([run.aggregates["median"].real_ns] if "median" in run.aggregates else [])
+            median_only = run.aggregate_time_ns("median")
+            times = run.times_ns() or ([median_only] if median_only is not None else [])
             if not times:
                 continue
             x = row + (column - (len(layouts) - 1) / 2) * width

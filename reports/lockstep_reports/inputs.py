@@ -29,6 +29,9 @@ KNOWN_GB_JSON_SCHEMA = 1
 # lockstep's result schema (CMakeLists.txt, LOCKSTEP_RESULT_SCHEMA).
 KNOWN_LOCKSTEP_SCHEMA = 1
 
+# The per-step time counter of lockstep's rk4 entries (DESIGN.md, Measurements).
+STEP_COUNTER = "ns_per_step"
+
 TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
 # Fields of a Google Benchmark entry that are not user counters.
@@ -72,7 +75,26 @@ class Run:
         return bool(self.errors)
 
     def times_ns(self, time_kind: str = "real") -> list[float]:
-        return [r.real_ns if time_kind == "real" else r.cpu_ns for r in self.repetitions]
+        """Per-repetition times. lockstep's rk4 entries time a batch of steps per Google Benchmark
+        iteration and report the step itself in the ns_per_step counter: the real time is that
+        counter when every repetition has it, else Google Benchmark's real_time."""
+        if time_kind == "real":
+            per_step = [r.counters.get(STEP_COUNTER) for r in self.repetitions]
+            if per_step and all(v is not None and math.isfinite(v) and v > 0 for v in per_step):
+                return per_step
+            return [r.real_ns for r in self.repetitions]
+        return [r.cpu_ns for r in self.repetitions]
+
+    def aggregate_time_ns(self, aggregate: str, time_kind: str = "real") -> float | None:
+        entry = self.aggregates.get(aggregate)
+        if entry is None:
+            return None
+        if time_kind == "real":
+            per_step = entry.counters.get(STEP_COUNTER)
+            if per_step is not None and math.isfinite(per_step) and per_step > 0:
+                return per_step
+            return entry.real_ns
+        return entry.cpu_ns
 
     def counter_values(self, counter: str) -> list[float]:
         values = [r.counters[counter] for r in self.repetitions if counter in r.counters]

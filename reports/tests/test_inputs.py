@@ -33,6 +33,22 @@ class RunFiles(unittest.TestCase):
         self.assertNotIn("repetition_index", run.repetitions[0].counters)
         self.assertEqual(run_file.context_number("c2c_one_way_ns"), 61.5)
 
+    def test_step_time_comes_from_ns_per_step_when_iterations_are_batches(self):
+        import json, os, tempfile
+        with open(fixture("machine_a.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        for entry in document["benchmarks"]:
+            entry["real_time"] *= 64  # one Google Benchmark iteration = a batch of 64 steps
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "batched.json")
+            with open(path, "w", encoding="utf-8") as stream:
+                json.dump(document, stream)
+            batched = load_run_file(path)
+        plain = load_run_file(fixture("machine_a.json"))
+        key = parse_name("rk4/sync:seqlock/layout:padded128/pin:compact/threads:2")
+        self.assertEqual(batched.runs[key].times_ns(), plain.runs[key].times_ns())
+        self.assertEqual(batched.runs[key].times_ns("cpu"), plain.runs[key].times_ns("cpu"))
+
     def test_later_schema_with_new_fields_nan_and_infinity_is_read(self):
         later = load_run_file(fixture("later_schema.json"))
         baseline = load_run_file(fixture("machine_a.json"))
