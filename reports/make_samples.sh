@@ -2,12 +2,17 @@
 # Regenerates reports/samples/ from real runs on this machine, so that a new
 # user can compare their own machine with it at once:
 #
-#   reports/make_samples.sh            build the release preset, then run everything (about 10 minutes)
+#   reports/make_samples.sh            build the release preset, then run everything (about 5 minutes)
 #   LOCKSTEP=path/to/lockstep reports/make_samples.sh     use that binary instead of building
 #
 # What it writes (each file replaced only when its command succeeded):
 #   samples/run.json           `lockstep run` (the default matrix)
-#   samples/run-rerun.json     a second default run, except that the entries of one
+#   samples/pair-a.json        a focused run made for comparing: a few primitives at
+#                              2 threads pinned, with enough repetitions (REPETITIONS,
+#                              default 12) for a Mann-Whitney U test to reach
+#                              significance after Holm's correction (5 against 5
+#                              repetitions never can: the smallest p is 0.008)
+#   samples/pair-b.json        the same run again, except that the entries of one
 #                              primitive (LOSER, default std_barrier) come from a run
 #                              made while a CPU-bound process competes for the cores:
 #                              real measurements, spliced so that exactly that
@@ -15,7 +20,7 @@
 #   samples/c2c.json           `lockstep c2c --json`
 #   samples/delay.json         `lockstep delay --json --compare-pinning`
 #   samples/verify.csv         `lockstep verify --csv`
-#   samples/compare.txt        `lockstep compare run.json run-rerun.json`
+#   samples/compare.txt        `lockstep compare pair-a.json pair-b.json`
 #   samples/report/            `lockstep report` on all of them (report.html, report.md, figures/)
 #
 # Measure on a quiet machine: every other job competes with the benchmark.
@@ -24,7 +29,12 @@ cd "$(dirname "$0")/.."
 
 samples=reports/samples
 loser=${LOSER:-std_barrier}
-delay_seconds=${DELAY_SECONDS:-20}
+delay_seconds=${DELAY_SECONDS:-10}
+repetitions=${REPETITIONS:-12}
+# The focused pair: the suite's contender, the C++ baseline, glibc's barrier
+# and a dataflow channel, each on its best layout family, 2 threads pinned.
+pair_syncs="futex_spin,std_barrier,pthread_barrier,seqlock"
+pair=(--layout "padded64,per_thread" --threads 2 --pin compact --repetitions "$repetitions")
 
 fail() { echo "make_samples: $*" >&2; exit 1; }
 
@@ -58,19 +68,23 @@ step() { echo "make_samples: $*" >&2; }
 step "lockstep run (default matrix)"
 "$lockstep" run --out "$work/run.json" || fail "lockstep run failed"
 
-step "lockstep run again (the rerun)"
-"$lockstep" run --out "$work/rerun.json" || fail "lockstep run (rerun) failed"
+step "lockstep run, the focused pair (a)"
+"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/pair-a.json" >/dev/null || fail "lockstep run (pair a) failed"
+
+step "lockstep run, the focused pair again (b)"
+"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/rerun.json" >/dev/null || fail "lockstep run (pair b) failed"
 
 step "lockstep run --sync $loser with a competing CPU-bound process (the forced loser)"
 /usr/bin/python3 -c 'while True: pass' &
 hog_pid=$!
-"$lockstep" run --sync "$loser" --out "$work/loser.json" || fail "lockstep run --sync $loser failed"
+"$lockstep" run --sync "$loser" "${pair[@]}" --out "$work/loser.json" >/dev/null ||
+  fail "lockstep run --sync $loser failed"
 kill "$hog_pid" 2>/dev/null || true
 wait "$hog_pid" 2>/dev/null || true
 hog_pid=""
 
 step "splicing: rerun with the $loser entries of the loaded run"
-/usr/bin/python3 - "$work/rerun.json" "$work/loser.json" "$loser" "$work/run-rerun.json" <<'PY'
+/usr/bin/python3 - "$work/rerun.json" "$work/loser.json" "$loser" "$work/pair-b.json" <<'PY'
 import json, sys
 rerun_path, loser_path, loser, out_path = sys.argv[1:]
 rerun = json.load(open(rerun_path))
@@ -94,7 +108,7 @@ step "lockstep c2c"
 step "lockstep delay (${delay_seconds} s, pinned and unpinned)"
 delay_arguments=(--json "$work/delay.json" --compare-pinning)
 if "$lockstep" help delay 2>/dev/null | grep -q -- "--duration"; then
-  delay_arguments+=(--duration "$delay_seconds")
+  delay_arguments+=(--duration "${delay_seconds}s")
 fi
 "$lockstep" delay "${delay_arguments[@]}" || fail "lockstep delay failed"
 
@@ -103,13 +117,13 @@ step "lockstep verify --csv"
 
 step "lockstep compare"
 status=0
-"$lockstep" compare "$work/run.json" "$work/run-rerun.json" --fail-above 10 >"$work/compare.txt" 2>"$work/compare.err" || status=$?
+"$lockstep" compare "$work/pair-a.json" "$work/pair-b.json" --fail-above 10 >"$work/compare.txt" 2>"$work/compare.err" || status=$?
 [ "$status" -le 1 ] || fail "lockstep compare failed ($status): $(cat "$work/compare.err")"
 cat "$work/compare.err" >>"$work/compare.txt"
 
 # Publish: move everything into samples/ at once, labels as in the file names.
 mkdir -p "$samples"
-for name in run.json run-rerun.json c2c.json delay.json verify.csv compare.txt; do
+for name in run.json pair-a.json pair-b.json c2c.json delay.json verify.csv compare.txt; do
   mv "$work/$name" "$samples/$name"
 done
 
