@@ -261,7 +261,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
 
 # ---------------------------------------------------------------- text output
 
-def _ns(value: float | None) -> str:
+def format_ns(value: float | None) -> str:
     if value is None or not math.isfinite(value):
         return "unavailable"
     if value >= 1e6:
@@ -323,7 +323,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     rows = []
     for row in comparison.rows:
         interval = f"[{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else "-"
-        cells = [row.key.display, _ns(row.median_a), _ns(row.median_b), f"{row.ratio:.3f}", interval,
+        cells = [row.key.display, format_ns(row.median_a), format_ns(row.median_b), f"{row.ratio:.3f}", interval,
                  f"{row.repetitions_a}/{row.repetitions_b}", _p(row.p_adjusted), row.verdict(comparison.alpha)]
         for counter, _ in counters_present:
             before, after = row.counters.get(counter, (None, None))
@@ -381,7 +381,7 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
             for entries in per_file:
                 if rank < len(entries):
                     name, step, vs_serial = entries[rank]
-                    cells.append(f"{name} {_ns(step)} ({_number(vs_serial)}x)")
+                    cells.append(f"{name} {format_ns(step)} ({_number(vs_serial)}x)")
                 else:
                     cells.append("")
             rank_rows.append(cells)

@@ -19,7 +19,7 @@ import tempfile
 from dataclasses import dataclass, field
 
 from . import figures, paper
-from .compare import calibration, fingerprint, FINGERPRINT_KEYS, layout_effects, rank_tables
+from .compare import calibration, fingerprint, FINGERPRINT_KEYS, format_ns, layout_effects, rank_tables
 from .inputs import C2cFile, DelayFile, InputError, RunFile, VerifyFile, load_any, unique_labels
 
 
@@ -52,16 +52,6 @@ def _fmt(value, digits: int = 1, unit: str = "") -> str:
     if isinstance(value, float):
         return f"{value:.{digits}f}{unit}"
     return f"{value}{unit}"
-
-
-def _ns(value) -> str:
-    if value is None or not math.isfinite(value):
-        return "unavailable"
-    if value >= 1e6:
-        return f"{value / 1e6:.3f} ms"
-    if value >= 1e3:
-        return f"{value / 1e3:.2f} us"
-    return f"{value:.1f} ns"
 
 
 # ---------------------------------------------------------------- sections
@@ -122,7 +112,7 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     rank_rows = []
     for (pin, threads), per_file in rank_tables([run_file], top=5).items():
         for rank, (name, step, vs_serial) in enumerate(per_file[0], start=1):
-            rank_rows.append([f"pin:{pin} threads:{threads}", str(rank), name, _ns(step),
+            rank_rows.append([f"pin:{pin} threads:{threads}", str(rank), name, format_ns(step),
                               _fmt(vs_serial, 2, "x")])
     sections.append(Section(f"Fastest combinations: {run_file.label}",
                             paragraphs=["The five fastest sync/layout pairs per placement and thread count; x serial "
@@ -188,7 +178,7 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
     summary_rows = []
     for name, key in (("wake-up latency", "wakeup_latency_ns"), ("completion", "completion_ns")):
         summary = document.get(key) or {}
-        summary_rows.append([name] + [_ns(summary.get(q)) if isinstance(summary.get(q), (int, float)) else "unavailable"
+        summary_rows.append([name] + [format_ns(summary.get(q)) if isinstance(summary.get(q), (int, float)) else "unavailable"
                                       for q in ("min", "p50", "p99", "p999", "max")]
                             + [str(summary.get("count", "unavailable"))])
     paragraphs = [
