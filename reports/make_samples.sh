@@ -40,8 +40,8 @@ repetitions=${REPETITIONS:-12}
 # and a dataflow channel, each on its best layout family, 2 threads pinned.
 pair_syncs="futex_spin,std_barrier,pthread_barrier,seqlock"
 pair=(--layout "padded64,per_thread" --threads 2 --pin compact --repetitions "$repetitions")
-# Google Benchmark's flags for the focused runs (after `--`): repetitions in random order.
-interleaving=(-- --benchmark_enable_random_interleaving=true)
+# The focused runs shuffle their repetitions (Google Benchmark's random interleaving).
+interleaving=(--interleave)
 
 fail() { echo "make_samples: $*" >&2; exit 1; }
 
@@ -54,6 +54,10 @@ else
 fi
 [ -x "$lockstep" ] || fail "no lockstep binary at $lockstep"
 [ -x /usr/bin/python3 ] || fail "/usr/bin/python3 is missing: run scripts/setup.sh"
+# A binary from before `lockstep run --interleave`: pass Google Benchmark's own flag.
+if ! "$lockstep" help run 2>/dev/null | grep -q -- "--interleave"; then
+  interleaving=(-- --benchmark_enable_random_interleaving=true)
+fi
 
 # Every command this script needs must exist in this binary (`lockstep help X`
 # fails for a command that is not registered yet).

@@ -41,8 +41,10 @@ FINGERPRINT_KEYS = (
     "cpu_model", "topology", "hypervisor", "kernel", "num_cpus", "mhz_per_cpu", "host_name",
     "compiler", "cxx_flags", "build_type", "lockstep_version", "lockstep_schema", "git_revision",
     "benchmark_version", "hwloc_version", "boost_version", "c2c_one_way_ns", "serial_step_ns",
-    "oversubscribed_note", "date",
+    "oversubscribed_note", "lockstep_order", "date",
 )
+# lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).
+BACK_TO_BACK_ORDER = "registration order"
 # Keys whose difference means "another machine" rather than "another run".
 MACHINE_KEYS = ("cpu_model", "topology", "hypervisor", "kernel", "num_cpus")
 
@@ -265,6 +267,13 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     for key in sorted(keys_b - keys_a, key=BenchmarkKey.sort_key):
         if contender.runs[key].errored:
             errored.append((key, contender.label, "; ".join(contender.runs[key].errors)))
+    back_to_back = [run_file.label for run_file in (baseline, contender)
+                    if str(run_file.context.get("lockstep_order", "")).startswith(BACK_TO_BACK_ORDER)]
+    if back_to_back:
+        warnings.append(f"{' and '.join(back_to_back)} measured every entry's repetitions back to back "
+                        f"(context lockstep_order): a drift of the machine during the run shifts the entries that "
+                        f"ran at that moment, with a tiny p; `lockstep run --interleave` spreads it over every "
+                        f"entry")
     if untested:
         warnings.append(f"{len(untested)} of {len(rows)} matched entries have fewer than "
                         f"{statistics.MIN_REPETITIONS} repetitions on a side: no Mann-Whitney U test for them "

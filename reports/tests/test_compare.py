@@ -367,6 +367,21 @@ class NoiseThreshold(unittest.TestCase):
         self.assertIn("geometric mean of B/A over the 3 matched pairs", out)
         self.assertIn("accounting overhead of " + base.display, out)
 
+    def test_back_to_back_repetitions_are_warned_about(self):
+        first = run_document("25.0", "20.00", 560.0)
+        first["context"]["lockstep_order"] = "registration order: every entry's repetitions back to back"
+        second = run_document("25.0", "20.00", 560.0)
+        second["context"]["lockstep_order"] = "random interleaving: the repetitions of every entry shuffled"
+        a, b = self.write("a.json", first), self.write("b.json", second)
+        _, out, _ = run_tool("compare", a, b)
+        warning = next(line for line in out.splitlines() if "back to back (context lockstep_order)" in line)
+        self.assertIn("a.json measured", warning)
+        self.assertNotIn("b.json", warning)
+        self.assertIn("--interleave", warning)
+        self.assertIn("lockstep_order*", out)
+        _, out, _ = run_tool("compare", b, b)
+        self.assertNotIn("back to back (context lockstep_order)", out)
+
     def test_a_moved_calibration_never_fails_the_gate(self):
         a, b = self.pair(560.0, c2c_counter=40.0)
         comparison = compare_pair(load_run_file(a), load_run_file(b))
