@@ -180,6 +180,14 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   // So once a repetition of this entry was measured, a later call that stops
   // early still walks all its iterations, then is flagged as an error, which
   // keeps it out of the aggregates; its times are not a measurement.
+  // Google Benchmark 1.7.1 also computes an entry's aggregates from its first
+  // repetition's statistics list, which it leaves uninitialised when that
+  // repetition was flagged (google/benchmark#1406): a flagged first
+  // repetition followed by two measured ones read a wild pointer and crashed
+  // the run (exit 139). A call flagged while Google Benchmark still sizes the
+  // first repetition becomes that repetition, so no later call may measure:
+  // once a call of an entry stopped, every later call of it stops too, and
+  // either every repetition is flagged or the first one was measured.
   const bool measured_before = harness.measured.count(name) > 0;
   const auto flag_measured_entry = [&](const call_result& result, const std::string& reason) {
     std::vector<std::int64_t> times = result.batches.batch_ns;
@@ -201,22 +209,32 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   };
 
   const std::string stall_key = primitive.name + " threads:" + std::to_string(plan.threads);
-  if (!measured_before) {
-    if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) return skip(known->second);
-    if (!primitive.name.empty()) {
-      const unsigned stalls = harness.stalls_of_sync[stall_key];
-      if (stalls >= harness.stalls_before_skipping_sync)
-        return skip("skipped: " + stall_key + " already stalled in " + std::to_string(stalls) +
-                    " entries of this run");
+  if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) {
+    if (measured_before) return flag_measured_entry(call_result{}, "an earlier call stopped: " + known->second);
+    return skip(known->second);
+  }
+  if (!measured_before && !primitive.name.empty()) {
+    const unsigned stalls = harness.stalls_of_sync[stall_key];
+    if (stalls >= harness.stalls_before_skipping_sync) {
+      const std::string reason =
+          "skipped: " + stall_key + " already stalled in " + std::to_string(stalls) + " entries of this run";
+      harness.stalled[name] = reason;
+      return skip(reason);
     }
   }
   // A stall (one unit beyond the bound) says something about the primitive;
   // running out of the call's budget only about this call.
   const auto record_stop = [&](const call_result& result) {
     std::string reason = stall_reason(result, unit, primitive.pure_spin, primitive.may_lose_wakeups, plan, settings);
-    if (measured_before) return flag_measured_entry(result, reason);
     harness.stalled[name] = reason;
+    if (measured_before) return flag_measured_entry(result, reason);
     if (result.batches.stalled && !primitive.name.empty()) ++harness.stalls_of_sync[stall_key];
+    return skip(reason);
+  };
+  const auto record_placement_failure = [&](const call_result& result) {
+    const std::string reason = "cannot place the team: " + result.failure;
+    harness.stalled[name] = reason;
+    if (measured_before) return flag_measured_entry(result, reason);
     return skip(reason);
   };
 
@@ -224,7 +242,7 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   if (batch_size == harness.units_per_batch.end()) {
     constexpr unsigned kProbeBatches = 8;
     call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
-    if (!probe.failure.empty()) return skip("cannot place the team: " + probe.failure);
+    if (!probe.failure.empty()) return record_placement_failure(probe);
     if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
     batch_size = harness.units_per_batch.emplace(name, units_for_batch(median_unit_ns(probe.batches), settings)).first;
   }
@@ -232,10 +250,7 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
   call_result result =
       run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work, std::move(warmed_up));
-  if (!result.failure.empty()) {
-    if (measured_before) return flag_measured_entry(result, "cannot place the team: " + result.failure);
-    return skip("cannot place the team: " + result.failure);
-  }
+  if (!result.failure.empty()) return record_placement_failure(result);
   if (result.batches.stalled || result.batches.over_budget || result.batches.batch_ns.size() < wanted)
     return record_stop(result);
   harness.measured.insert(name);
