@@ -117,7 +117,8 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
     }
   }
   set_accounting_counters(state, *result, "step");
-  state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
+  if constexpr (info.counts_futex_waits)  // else unavailable: omitted, never a 0 nobody counted
+    state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
   state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
 }
