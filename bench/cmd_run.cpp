@@ -26,6 +26,7 @@
 #include "bench/harness_summary.hpp"
 #include "bench/harness_team.hpp"
 #include "bench/rk4_benchmarks.hpp"
+#include "platform/clock.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 #include "sync/registry.hpp"
@@ -44,6 +45,7 @@ struct run_options {
   std::string out;
   bool quick = false;
   bool no_accounting = false;
+  bool interleave = false;
   std::vector<std::string> benchmark_flags;
 };
 
@@ -173,6 +175,9 @@ int execute(const run_options& options) {
   }
   if (options.repetitions > 0) repetitions = options.repetitions;
   if (options.min_time > 0) min_time = options.min_time;
+  // What one clock reading costs here, taken off every timed sync span
+  // (rk4_benchmarks.cpp) and stated in the context.
+  book.clock_read_ns = platform::clock_read_cost_ns();
 
   bench::atomic_result_file result_file(options.out.empty() ? bench::default_result_path() : options.out);
 
@@ -182,6 +187,7 @@ int execute(const run_options& options) {
                                      "--benchmark_out_format=json",
                                      fmt::format("--benchmark_repetitions={}", repetitions),
                                      fmt::format("--benchmark_min_time={}", min_time)};
+  if (options.interleave) arguments.emplace_back("--benchmark_enable_random_interleaving=true");
   arguments.insert(arguments.end(), options.benchmark_flags.begin(), options.benchmark_flags.end());
   std::vector<char*> argv;
   for (auto& argument : arguments) argv.push_back(argument.data());
@@ -202,6 +208,11 @@ int execute(const run_options& options) {
       if (!info.counts_futex_waits) hidden += (hidden.empty() ? "" : ",") + std::string(info.name);
     benchmark::AddCustomContext("futex_waits_unavailable", hidden.empty() ? "none" : hidden);
   }
+  benchmark::AddCustomContext("lockstep_order", options.interleave
+                                                    ? "random interleaving: the repetitions of every entry "
+                                                      "shuffled over the whole run"
+                                                    : "registration order: every entry's repetitions back to back");
+  benchmark::AddCustomContext("clock_read_ns", fmt::format("{:.1f}", book.clock_read_ns));
   benchmark::AddCustomContext(
       "lockstep_timing",
       "manual time per batch of steps (episodes) on a persistent pinned team; team start-up outside the timed "
@@ -219,6 +230,7 @@ int execute(const run_options& options) {
   std::fflush(stderr);
   benchmark::RunSpecifiedBenchmarks(&progress, &json);
   benchmark::Shutdown();
+  book.derive_ratios();
 
   // The in-run context keys, then the rename.
   nlohmann::json document;
@@ -232,6 +244,7 @@ int execute(const run_options& options) {
   }
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
+  bench::derive_ratios(document, book.c2c_one_way_ns(), book.serial_step_ns());
   bench::context_map in_run;
   in_run["c2c_one_way_ns"] = book.c2c_one_way_ns() ? fmt::format("{:.1f}", *book.c2c_one_way_ns()) : "unavailable";
   in_run["serial_step_ns"] = book.serial_step_ns() ? fmt::format("{:.2f}", *book.serial_step_ns()) : "unavailable";
@@ -277,6 +290,10 @@ void add_run(CLI::App& app, int& result) {
                   "Minimum measured seconds per repetition (default 0.04; --quick 0.005)");
   run->add_option("--out", options->out, "Result file (default results/<host>-<timestamp>.json)");
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
+  run->add_flag("--interleave", options->interleave,
+                "Shuffle the repetitions of all entries over the whole run (Google Benchmark's random "
+                "interleaving): a machine that drifts during the run widens every entry's spread instead of "
+                "shifting the entries that ran at the wrong moment; use it for runs you will compare");
   run->add_flag("--no-accounting", options->no_accounting,
                 "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");
   run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");

@@ -86,6 +86,25 @@ std::optional<double> run_book::serial_step_ns() const {
   return entry->median("ns_per_step");
 }
 
+bool has_derived_ratios(const captured_entry& entry) {
+  const std::string kind = entry.field("kind");
+  return (kind == "rk4" && entry.field("variant") != "serial") || kind == "overhead";
+}
+
+void run_book::derive_ratios() {
+  const std::optional<double> serial = serial_step_ns();
+  const std::optional<double> c2c = c2c_one_way_ns();
+  for (captured_entry& entry : entries_) {
+    if (!has_derived_ratios(entry)) continue;
+    for (auto& repetition : entry.repetitions) {
+      if (const auto step = repetition.find("ns_per_step"); step != repetition.end() && serial && *serial > 0.0)
+        repetition["vs_serial"] = step->second / *serial;
+      if (const auto sync = repetition.find("sync_ns_per_stage"); sync != repetition.end() && c2c && *c2c > 0.0)
+        repetition["vs_c2c"] = sync->second / *c2c;
+    }
+  }
+}
+
 std::uint64_t units_for_batch(double unit_ns, const run_settings& settings) {
   if (!(unit_ns > 0.0)) return 1;
   const double units = std::floor(static_cast<double>(settings.target_batch_ns) / unit_ns);

@@ -34,6 +34,7 @@
 //     timeout), slowly, and the bound catches the slowness.
 #include <barrier>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <string>
@@ -103,6 +104,10 @@ struct captured_entry {
   std::string field(const std::string& key) const;
 };
 
+// Whether an entry carries vs_serial and vs_c2c: the composed step's entries
+// (rk4/sync:..., overhead/...), not the calibrations.
+bool has_derived_ratios(const captured_entry& entry);
+
 // A combination that was not registered, and why.
 struct skipped_combination {
   std::string name;
@@ -122,6 +127,17 @@ class run_book {
   std::optional<double> c2c_one_way_ns() const;
   std::optional<double> serial_step_ns() const;
 
+  // Adds vs_serial (ns_per_step / serial_step_ns) and vs_c2c
+  // (sync_ns_per_stage / c2c_one_way_ns) to every repetition of the rk4 and
+  // overhead entries, from the whole run's calibrations. Called once, after
+  // the run: derived at the end, the ratios do not depend on the order the
+  // entries ran in (Google Benchmark's random interleaving may run a
+  // calibration's repetitions last), and every entry divides by the same figure.
+  void derive_ratios();
+
+  // The median cost of one clock reading on this machine, measured when the
+  // run starts (platform::clock_read_cost_ns); taken off every timed sync span.
+  double clock_read_ns = 0.0;
   std::vector<skipped_combination> not_applicable;
   std::vector<std::string> notes;  // one line each, for the summary and the context
 
@@ -143,10 +159,20 @@ struct batch_record {
 // Decides for everyone whether another batch runs; the decision is published
 // by the barrier itself (completion happens-before every participant's return
 // from arrive_and_wait), so the flag needs no atomic.
+//
+// `warmed_up`, when given, runs in the completion step that ends the warm-up
+// batch: every participant has arrived (its writes happen-before the
+// completion) and none has started the first timed batch, so it may read
+// what the participants accumulated, without atomics, as the baseline of the
+// timed batches. It must not throw or block.
 class batch_clock {
  public:
-  batch_clock(unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings)
-      : wanted_(timed_batches), units_per_batch_(units_per_batch), settings_(settings) {
+  batch_clock(unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings,
+              std::function<void()> warmed_up = {})
+      : wanted_(timed_batches),
+        units_per_batch_(units_per_batch),
+        settings_(settings),
+        warmed_up_hook_(std::move(warmed_up)) {
     record_.units_per_batch = units_per_batch;
     record_.batch_ns.reserve(timed_batches);
   }
@@ -169,6 +195,7 @@ class batch_clock {
       record_.batch_ns.push_back(batch);  // capacity reserved: no allocation here
     } else {
       warmed_up_ = true;
+      if (warmed_up_hook_) warmed_up_hook_();
     }
     if (per_unit > settings_.stall_unit_ns) {
       record_.stalled = true;
@@ -190,6 +217,7 @@ class batch_clock {
   unsigned wanted_;
   std::uint64_t units_per_batch_;
   const run_settings& settings_;
+  std::function<void()> warmed_up_hook_;
   batch_record record_;
   bool started_ = false;
   bool warmed_up_ = false;

@@ -91,6 +91,25 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
 progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries)
     : book_(book), expected_(expected_entries), start_(std::chrono::steady_clock::now()) {}
 
+void derive_ratios(nlohmann::json& result, std::optional<double> c2c_one_way_ns,
+                   std::optional<double> serial_step_ns) {
+  if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
+  const auto derive = [](nlohmann::json& row, const char* counter, const char* ratio, std::optional<double> base) {
+    if (!base || !(*base > 0.0) || !row.contains(counter) || !row[counter].is_number()) return;
+    const bool coefficient_of_variation = row.value("aggregate_unit", "") == "percentage";
+    const double value = row[counter].get<double>();
+    row[ratio] = coefficient_of_variation ? value : value / *base;
+  };
+  for (nlohmann::json& row : result["benchmarks"]) {
+    if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
+    captured_entry entry;
+    entry.fields = parse_entry_name(row["run_name"].get<std::string>());
+    if (!has_derived_ratios(entry)) continue;
+    derive(row, "ns_per_step", "vs_serial", serial_step_ns);
+    derive(row, "sync_ns_per_stage", "vs_c2c", c2c_one_way_ns);
+  }
+}
+
 bool progress_reporter::ReportContext(const Context& /*context*/) { return true; }
 
 void progress_reporter::ReportRuns(const std::vector<Run>& runs) {

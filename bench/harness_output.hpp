@@ -3,8 +3,11 @@
 // run book, and the result file written atomically.
 #include <benchmark/benchmark.h>
 
+#include <nlohmann/json.hpp>
+
 #include <chrono>
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "bench/harness.hpp"
@@ -49,6 +52,15 @@ std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
 // Splits an entry name into its fields: "kind" (the first segment) and every
 // key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
 std::map<std::string, std::string> parse_entry_name(const std::string& name);
+
+// The same derivation as run_book::derive_ratios, on the result JSON Google
+// Benchmark wrote: every iteration and aggregate row of an rk4 or overhead
+// entry gets vs_serial and vs_c2c from the run's calibrations (either may be
+// absent, and so then is its ratio). Dividing by a constant scales a mean, a
+// median and a standard deviation alike; a coefficient of variation does not
+// change, so a cv row's ratio is its counter's cv.
+void derive_ratios(nlohmann::json& result, std::optional<double> c2c_one_way_ns,
+                   std::optional<double> serial_step_ns);
 
 // The result file, written atomically: Google Benchmark writes into a
 // temporary file next to the destination, and commit() renames it into place.

@@ -153,7 +153,13 @@ std::string render_summary(const run_book& book, const std::string& result_path)
 
   out += "\nIn-run calibration: ";
   out += book.c2c_one_way_ns() ? "core-to-core one-way " + format_ns(*book.c2c_one_way_ns()) : "c2c unavailable";
+  if (const captured_entry* c2c = book.find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
+      c2c != nullptr && book.c2c_one_way_ns()) {
+    if (const auto range = c2c->range("one_way_ns"))
+      out += fmt::format(" (repetitions {}..{})", format_ns(range->first), format_ns(range->second));
+  }
   out += book.serial_step_ns() ? ", serial RK4 step " + format_ns(*book.serial_step_ns()) : ", serial step unavailable";
+  out += fmt::format(", clock reading {} (taken off each timed sync)", format_ns(book.clock_read_ns));
   out += "\n";
 
   std::vector<measured> steps = measured_of(book, "rk4", "ns_per_step");

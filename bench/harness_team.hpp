@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <set>
 #include <optional>
@@ -46,11 +47,13 @@ struct alignas(platform::kCacheLine) participant_slot {
 // every participant run the same number of units (the primitive's phases must
 // match). A `migrate` plan re-pins each participant at the plan's step
 // boundaries, inside the timed region: that cost is what it prices.
+// `warmed_up` runs once, between the warm-up and the first timed batch, with
+// the whole team waiting (batch_clock says what it may do).
 template <class Team, class Work>
 call_result run_call(Team& team, std::vector<participant_slot>& slots, const platform::placement_plan& plan,
                      unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings,
-                     bool accounting, Work& work) {
-  batch_clock clock(timed_batches, units_per_batch, settings);
+                     bool accounting, Work& work, std::function<void()> warmed_up = {}) {
+  batch_clock clock(timed_batches, units_per_batch, settings, std::move(warmed_up));
   batch_gate gate(static_cast<unsigned>(slots.size()), clock);
   team.run([&](unsigned id) {
     participant_slot& slot = slots[id];
@@ -157,17 +160,16 @@ struct primitive_traits {
 
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
-// first call (8 batches of one unit); call before_timed(); run the timed
-// call; feed Google Benchmark the batch times. Returns the call's result, or
-// nothing when the entry was skipped (SkipWithError, with the reason).
-struct nothing_before_timed {
-  void operator()() const noexcept {}
-};
-template <class Team, class Work, class BeforeTimed = nothing_before_timed>
+// first call (8 batches of one unit); run the timed call, calling warmed_up()
+// between its warm-up batch and its first timed batch (the team waiting: a
+// baseline for what the timed batches accumulate); feed Google Benchmark the
+// batch times. Returns the call's result, or nothing when the entry was
+// skipped (SkipWithError, with the reason).
+template <class Team, class Work>
 std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
                                          const primitive_traits& primitive, const platform::placement_plan& plan,
                                          Team& team, std::vector<participant_slot>& slots, Work& work,
-                                         bool accounting, const char* unit, BeforeTimed before_timed = {}) {
+                                         bool accounting, const char* unit, std::function<void()> warmed_up = {}) {
   const run_settings& settings = harness.settings;
   const auto skip = [&](const std::string& reason) {
     state.SkipWithError(reason.c_str());
@@ -227,9 +229,9 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
     batch_size = harness.units_per_batch.emplace(name, units_for_batch(median_unit_ns(probe.batches), settings)).first;
   }
 
-  before_timed();
   const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
-  call_result result = run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work);
+  call_result result =
+      run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work, std::move(warmed_up));
   if (!result.failure.empty()) {
     if (measured_before) return flag_measured_entry(result, "cannot place the team: " + result.failure);
     return skip("cannot place the team: " + result.failure);

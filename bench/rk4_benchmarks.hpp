@@ -14,8 +14,10 @@
 //                               the composed step (kernels/parallel_step.hpp)
 //                               on a pinned team, batches of steps; counters
 //                               in DESIGN.md (see register_rk4_benchmarks).
-// Both calibrations are registered first, so that Google Benchmark (which runs
-// entries in registration order) has measured them when the RK4 entries need them.
+// Both calibrations are registered first (Google Benchmark runs entries in
+// registration order unless told to interleave), but no entry reads them while
+// it runs: vs_serial and vs_c2c are derived after the run from the whole run's
+// medians (run_book::derive_ratios, derive_ratios in harness_output.hpp).
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,7 +43,10 @@ std::vector<std::string> register_calibration_benchmarks(harness_state& harness)
 //   ns_per_step          batch time / steps
 //   sync_ns_per_stage    mean time a participant spent in one stage sync
 //                        (the step's sampled instrumentation: the syncs of one
-//                        step in kSyncTimingSampleSteps; absent with accounting off)
+//                        step in kSyncTimingSampleSteps; absent with accounting
+//                        off), over the timed batches (the warm-up excluded),
+//                        less one clock reading (context clock_read_ns: a timed
+//                        span holds the cost of one reading besides the sync)
 //   vs_serial            ns_per_step / this run's rk4/serial median
 //   vs_c2c               sync_ns_per_stage / this run's c2c one-way median
 //   csw_vol_per_kstep, csw_invol_per_kstep, migrations_per_kstep

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -186,6 +187,46 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
       EXPECT_GT(entry["ns_per_step"].get<double>(), 0.0);
     }
   }
+}
+
+// With the repetitions shuffled over the run, a calibration may finish after
+// the entries that divide by it: the ratios are derived after the run, so
+// every repetition and every aggregate of every rk4 entry still has them, and
+// each is its counter over the context's calibration.
+TEST(RunCli, InterleavedRunDerivesRatiosFromTheWholeRun) {
+  watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "an interleaved lockstep run did not finish");
+  scratch_directory scratch;
+  const fs::path out = scratch.path() / "interleaved.json";
+  const auto result = run_command(run_args({"--quick", "--interleave", "--sync", "futex_spin,seqlock", "--layout",
+                                            "per_thread", "--threads", "2", "--pin", "compact", "--repetitions", "3",
+                                            "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  std::ifstream file(out);
+  const nlohmann::json document = nlohmann::json::parse(file);
+  const nlohmann::json& context = document["context"];
+  EXPECT_EQ(context.value("lockstep_order", "").rfind("random interleaving", 0), 0u) << context.dump();
+  ASSERT_TRUE(context.contains("clock_read_ns"));
+  EXPECT_GT(std::stod(context["clock_read_ns"].get<std::string>()), 0.0);
+  const double serial = std::stod(context["serial_step_ns"].get<std::string>());
+  const bool have_c2c = lockstep::platform::affinity_cpu_count() >= 2;
+  std::size_t rows = 0;
+  for (const auto& entry : document["benchmarks"]) {
+    const std::string name = entry["name"];
+    if (name.rfind("rk4/sync:", 0) != 0 || entry.value("error_occurred", false)) continue;
+    ++rows;
+    const bool cv = entry.value("aggregate_unit", "") == "percentage";
+    // The context rounds the calibrations (0.1 ns, 0.01 ns): compare within 1%.
+    const auto expect_ratio = [&](const char* ratio, const char* counter, double base) {
+      ASSERT_TRUE(entry.contains(ratio)) << name << " " << entry.value("aggregate_name", "") << " lacks " << ratio;
+      const double expected = cv ? entry[counter].get<double>() : entry[counter].get<double>() / base;
+      EXPECT_NEAR(entry[ratio].get<double>(), expected, std::abs(expected) * 0.01) << name << " " << ratio;
+    };
+    expect_ratio("vs_serial", "ns_per_step", serial);
+    if (have_c2c) expect_ratio("vs_c2c", "sync_ns_per_stage", std::stod(context["c2c_one_way_ns"].get<std::string>()));
+  }
+  // Two entries, three repetitions and four aggregates (mean, median, stddev, cv) each.
+  EXPECT_EQ(rows, 14u) << result.out;
+  EXPECT_NE(result.out.find("vs_c2c"), std::string::npos) << result.out;
 }
 
 TEST(RunCli, InterruptLeavesNoResultFile) {
