@@ -11,7 +11,12 @@
 #                              2 threads pinned, with enough repetitions (REPETITIONS,
 #                              default 12) for a Mann-Whitney U test to reach
 #                              significance after Holm's correction (5 against 5
-#                              repetitions never can: the smallest p is 0.008)
+#                              repetitions never can: the smallest p is 0.008), run
+#                              with Google Benchmark's random interleaving so that each
+#                              entry's repetitions are spread over the whole run: a slow
+#                              drift of the machine during the run then lands in every
+#                              entry's spread instead of shifting the entries measured
+#                              while it lasted
 #   samples/pair-b.json        the same run again, except that the entries of one
 #                              primitive (LOSER, default std_barrier) come from a run
 #                              made while a CPU-bound process competes for the cores:
@@ -35,6 +40,8 @@ repetitions=${REPETITIONS:-12}
 # and a dataflow channel, each on its best layout family, 2 threads pinned.
 pair_syncs="futex_spin,std_barrier,pthread_barrier,seqlock"
 pair=(--layout "padded64,per_thread" --threads 2 --pin compact --repetitions "$repetitions")
+# The focused runs shuffle their repetitions (Google Benchmark's random interleaving).
+interleaving=(--interleave)
 
 fail() { echo "make_samples: $*" >&2; exit 1; }
 
@@ -47,6 +54,10 @@ else
 fi
 [ -x "$lockstep" ] || fail "no lockstep binary at $lockstep"
 [ -x /usr/bin/python3 ] || fail "/usr/bin/python3 is missing: run scripts/setup.sh"
+# A binary from before `lockstep run --interleave`: pass Google Benchmark's own flag.
+if ! "$lockstep" help run 2>/dev/null | grep -q -- "--interleave"; then
+  interleaving=(-- --benchmark_enable_random_interleaving=true)
+fi
 
 # Every command this script needs must exist in this binary (`lockstep help X`
 # fails for a command that is not registered yet).
@@ -69,15 +80,15 @@ step "lockstep run (default matrix)"
 "$lockstep" run --out "$work/run.json" || fail "lockstep run failed"
 
 step "lockstep run, the focused pair (a)"
-"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/pair-a.json" >/dev/null || fail "lockstep run (pair a) failed"
+"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/pair-a.json" "${interleaving[@]}" >/dev/null || fail "lockstep run (pair a) failed"
 
 step "lockstep run, the focused pair again (b)"
-"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/rerun.json" >/dev/null || fail "lockstep run (pair b) failed"
+"$lockstep" run --sync "$pair_syncs" "${pair[@]}" --out "$work/rerun.json" "${interleaving[@]}" >/dev/null || fail "lockstep run (pair b) failed"
 
 step "lockstep run --sync $loser with a competing CPU-bound process (the forced loser)"
 /usr/bin/python3 -c 'while True: pass' &
 hog_pid=$!
-"$lockstep" run --sync "$loser" "${pair[@]}" --out "$work/loser.json" >/dev/null ||
+"$lockstep" run --sync "$loser" "${pair[@]}" --out "$work/loser.json" "${interleaving[@]}" >/dev/null ||
   fail "lockstep run --sync $loser failed"
 kill "$hog_pid" 2>/dev/null || true
 wait "$hog_pid" 2>/dev/null || true
@@ -132,4 +143,4 @@ rm -rf "$samples/report"
 "$lockstep" report "$samples/run.json" "$samples/c2c.json" "$samples/delay.json" "$samples/verify.csv" \
   --out "$samples/report" --title "lockstep samples: $(hostname)" || fail "lockstep report failed"
 
-step "done: $samples (compare exit status $status: 1 means the forced loser was flagged beyond 10%)"
+step "done: $samples (compare exit status $status: 1 means a combination was flagged slower beyond 10%; read compare.txt: only the $loser entries should be)"

@@ -6,6 +6,26 @@ ones that are only in one file, or that errored, are listed, never dropped
 and never counted as zero. Across files, each machine is shown by its
 fingerprint and normalised by its own in-run core-to-core latency and serial
 step time, so that effects can be read side by side.
+
+Verdicts (Criterion.rs's rule, with its noise threshold): an entry is
+"slower" or "faster" only when its Mann-Whitney test is significant after
+Holm's correction AND the whole confidence interval of its ratio lies beyond
+the noise threshold (above 1 + NOISE/100, or below 1 / (1 + NOISE/100)). A
+significant shift whose interval reaches inside the threshold is "within
+noise": real in the statistical sense, too small to tell from the machine
+drifting between runs. Repetitions inside one run share that run's state of
+the machine, so the test alone calls a between-run shift of a few percent
+"significant"; the threshold is what stands for the run-to-run variance the
+repetitions cannot see.
+
+Calibrations: `rk4/serial`, `c2c/...` and the `overhead/...` pair measure the
+machine and the instrumentation, not a combination of primitive, layout and
+placement. They are compared in a block of their own (c2c by its one_way_ns
+counter: its iteration time is thread start-up plus the measurement), tested
+as a family of their own, and kept out of the geometric mean, the verdict
+counts and --fail-above. The context's in-run calibrations of the two files
+give one line saying how far the machine itself moved between the runs; the
+time comparisons are never rescaled by it.
 """
 from __future__ import annotations
 
@@ -21,10 +41,26 @@ FINGERPRINT_KEYS = (
     "cpu_model", "topology", "hypervisor", "kernel", "num_cpus", "mhz_per_cpu", "host_name",
     "compiler", "cxx_flags", "build_type", "lockstep_version", "lockstep_schema", "git_revision",
     "benchmark_version", "hwloc_version", "boost_version", "c2c_one_way_ns", "serial_step_ns",
-    "oversubscribed_note", "date",
+    "oversubscribed_note", "lockstep_order", "date",
 )
+# lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).
+BACK_TO_BACK_ORDER = "registration order"
 # Keys whose difference means "another machine" rather than "another run".
 MACHINE_KEYS = ("cpu_model", "topology", "hypervisor", "kernel", "num_cpus")
+
+# The default noise threshold, percent (see NOISE_RATIONALE).
+DEFAULT_NOISE_PERCENT = 5.0
+NOISE_RATIONALE = (
+    "between two back-to-back runs on a 2-vCPU KVM guest the machine's own calibrations and the fast "
+    "rk4 entries moved by 4-5 % with tiny p (repetitions inside a run cannot see that drift); 5 % with the "
+    "whole interval beyond it keeps such drift out of the verdicts while a change of 10 % or more still "
+    "shows; on a quiet bare-metal machine --noise 1 (Criterion.rs's default) or 2 fits")
+
+# Families that measure the machine or the instrumentation, not a combination.
+CALIBRATION_FAMILIES = ("c2c", "overhead")
+SERIAL_NAME = "rk4/serial"
+# The counter that is a c2c entry's measurement (its iteration time includes thread start-up).
+C2C_COUNTER = "one_way_ns"
 
 # Counters shown beside the time (when present), with short headings.
 COUNTERS_SHOWN = (
@@ -48,16 +84,30 @@ class Row:
     p_raw: float | None
     p_adjusted: float | None = None
     counters: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
+    measure: str = "time"  # what median_a / median_b are: "time", or a counter's name
 
     def significant(self, alpha: float) -> bool:
         return self.p_adjusted is not None and self.p_adjusted < alpha
 
-    def verdict(self, alpha: float) -> str:
+    def beyond_noise(self, noise_percent: float) -> str | None:
+        """"slower" / "faster" when the whole interval (the ratio itself when there is none) lies beyond
+        the threshold, else None."""
+        upper_limit = 1.0 + noise_percent / 100.0
+        low, high = self.interval if self.interval else (self.ratio, self.ratio)
+        if low > upper_limit:
+            return "slower"
+        if high < 1.0 / upper_limit:
+            return "faster"
+        return None
+
+    def verdict(self, alpha: float, noise_percent: float = 0.0) -> str:
+        """untested, same (not significant), within noise (significant, interval reaches inside the
+        threshold), slower or faster (significant and beyond the threshold)."""
         if self.p_adjusted is None:
             return "untested"
         if not self.significant(alpha):
             return "same"
-        return "slower" if self.ratio > 1.0 else "faster"
+        return self.beyond_noise(noise_percent) or "within noise"
 
 
 @dataclass
@@ -71,14 +121,62 @@ class Comparison:
     warnings: list[str]
     time_kind: str
     alpha: float
+    noise_percent: float = DEFAULT_NOISE_PERCENT
+    calibrations: list[Row] = field(default_factory=list)  # rk4/serial, c2c, overhead: their own family
 
     @property
     def geometric_mean(self) -> float | None:
         return statistics.geometric_mean([row.ratio for row in self.rows])
 
+    def verdict(self, row: Row) -> str:
+        return row.verdict(self.alpha, self.noise_percent)
+
+    def verdict_counts(self) -> dict[str, int]:
+        counts = {name: 0 for name in ("slower", "faster", "within noise", "same", "untested")}
+        for row in self.rows:
+            counts[self.verdict(row)] += 1
+        return counts
+
     def regressions_beyond(self, percent: float) -> list[Row]:
+        """Combinations that are "slower" (significant, whole interval beyond the noise threshold) with a
+        ratio above 1 + percent/100. Calibrations never count."""
         limit = 1.0 + percent / 100.0
-        return [row for row in self.rows if row.significant(self.alpha) and row.ratio > limit]
+        return [row for row in self.rows if self.verdict(row) == "slower" and row.ratio > limit]
+
+    def calibration_moves(self) -> list[tuple[str, str, float | None, float | None]]:
+        """(name, unit, A, B) of the context's in-run calibrations (entries' medians when the context
+        lacks them)."""
+        return [("c2c one-way", "ns", calibration(self.baseline, "c2c_one_way_ns"),
+                 calibration(self.contender, "c2c_one_way_ns")),
+                ("serial step", "ns", calibration(self.baseline, "serial_step_ns"),
+                 calibration(self.contender, "serial_step_ns"))]
+
+    def accounting_overheads(self) -> list[tuple[BenchmarkKey, float | None, float | None]]:
+        """Per overhead combination: median time with accounting on / with it off, in A and in B."""
+        result = []
+        pairs = {}
+        for run_file in (self.baseline, self.contender):
+            for key in run_file.runs:
+                if key.family == "overhead" and key.get("accounting") in ("on", "off"):
+                    pairs.setdefault(key.without("accounting"), set()).add(key)
+        for base in sorted(pairs, key=BenchmarkKey.sort_key):
+            on, off = base.replaced("accounting", "on"), base.replaced("accounting", "off")
+            ratios = []
+            for run_file in (self.baseline, self.contender):
+                time_on = run_median(run_file, on, self.time_kind)
+                time_off = run_median(run_file, off, self.time_kind)
+                ratios.append(time_on / time_off if (time_on and time_off) else None)
+            result.append((base, ratios[0], ratios[1]))
+        return result
+
+
+def is_calibration(key: BenchmarkKey) -> bool:
+    return key.family in CALIBRATION_FAMILIES or key.display == SERIAL_NAME
+
+
+def _c2c_values(run) -> list[float]:
+    return [r.counters[C2C_COUNTER] for r in run.repetitions
+            if C2C_COUNTER in r.counters and math.isfinite(r.counters[C2C_COUNTER])]
 
 
 def _sample(run, time_kind: str) -> tuple[list[float], bool]:
@@ -93,9 +191,23 @@ def _sample(run, time_kind: str) -> tuple[list[float], bool]:
     return [], False
 
 
-def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05) -> Comparison:
+def _calibration_sample(key: BenchmarkKey, run, time_kind: str) -> tuple[list[float], bool, str]:
+    """A calibration entry's values: c2c by its one_way_ns counter when every repetition has it."""
+    if key.family == "c2c":
+        values = _c2c_values(run)
+        if values and len(values) == len(run.repetitions):
+            return values, True, C2C_COUNTER
+        aggregate = run.aggregates.get("median")
+        if not run.repetitions and aggregate and math.isfinite(aggregate.counters.get(C2C_COUNTER, math.nan)):
+            return [aggregate.counters[C2C_COUNTER]], False, C2C_COUNTER
+    times, repeated = _sample(run, time_kind)
+    return times, repeated, "time"
+
+
+def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05,
+                 noise_percent: float = DEFAULT_NOISE_PERCENT) -> Comparison:
     keys_a, keys_b = set(baseline.runs), set(contender.runs)
-    rows, errored, warnings = [], [], []
+    rows, calibration_rows, errored, warnings = [], [], [], []
     untested = []
     for key in sorted(keys_a & keys_b, key=BenchmarkKey.sort_key):
         run_a, run_b = baseline.runs[key], contender.runs[key]
@@ -105,8 +217,18 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
             message = "; ".join(run_a.errors + [e for e in run_b.errors if e not in run_a.errors])
             errored.append((key, where, message))
             continue
-        times_a, reps_a = _sample(run_a, time_kind)
-        times_b, reps_b = _sample(run_b, time_kind)
+        calibrating = is_calibration(key)
+        if calibrating:
+            times_a, reps_a, measure_a = _calibration_sample(key, run_a, time_kind)
+            times_b, reps_b, measure_b = _calibration_sample(key, run_b, time_kind)
+            if measure_a != measure_b:  # one file has the counter, the other not: compare like with like
+                times_a, reps_a = _sample(run_a, time_kind)
+                times_b, reps_b = _sample(run_b, time_kind)
+                measure_a = "time"
+        else:
+            times_a, reps_a = _sample(run_a, time_kind)
+            times_b, reps_b = _sample(run_b, time_kind)
+            measure_a = "time"
         if not times_a or not times_b:
             errored.append((key, baseline.label if not times_a else contender.label, "no usable time"))
             continue
@@ -114,7 +236,7 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
         ratio = median_b / median_a if median_a > 0 else math.inf
         interval = statistics.ratio_interval(times_a, times_b, key.display) if reps_a and reps_b else None
         p_raw = statistics.mann_whitney_p(times_a, times_b) if reps_a and reps_b else None
-        if p_raw is None:
+        if p_raw is None and not calibrating:
             untested.append(key)
         counters = {}
         for counter, _ in COUNTERS_SHOWN:
@@ -122,10 +244,13 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
             if values_a or values_b:
                 counters[counter] = (statistics.median(values_a) if values_a else None,
                                      statistics.median(values_b) if values_b else None)
-        rows.append(Row(key, median_a, median_b, len(times_a) if reps_a else 0, len(times_b) if reps_b else 0,
-                        ratio, interval, p_raw, counters=counters))
-    for row, adjusted in zip(rows, statistics.holm([row.p_raw for row in rows])):
-        row.p_adjusted = adjusted
+        row = Row(key, median_a, median_b, len(times_a) if reps_a else 0, len(times_b) if reps_b else 0,
+                  ratio, interval, p_raw, counters=counters, measure=measure_a)
+        (calibration_rows if calibrating else rows).append(row)
+    # Two families, each Holm-corrected on its own: the combinations, and the calibrations.
+    for family in (rows, calibration_rows):
+        for row, adjusted in zip(family, statistics.holm([row.p_raw for row in family])):
+            row.p_adjusted = adjusted
     tested = [row for row in rows if row.p_raw is not None]
     powerless = [row for row in tested
                  if statistics.smallest_p(row.repetitions_a, row.repetitions_b) * len(tested) >= alpha]
@@ -142,6 +267,13 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     for key in sorted(keys_b - keys_a, key=BenchmarkKey.sort_key):
         if contender.runs[key].errored:
             errored.append((key, contender.label, "; ".join(contender.runs[key].errors)))
+    back_to_back = [run_file.label for run_file in (baseline, contender)
+                    if str(run_file.context.get("lockstep_order", "")).startswith(BACK_TO_BACK_ORDER)]
+    if back_to_back:
+        warnings.append(f"{' and '.join(back_to_back)} measured every entry's repetitions back to back "
+                        f"(context lockstep_order): a drift of the machine during the run shifts the entries that "
+                        f"ran at that moment, with a tiny p; `lockstep run --interleave` spreads it over every "
+                        f"entry")
     if untested:
         warnings.append(f"{len(untested)} of {len(rows)} matched entries have fewer than "
                         f"{statistics.MIN_REPETITIONS} repetitions on a side: no Mann-Whitney U test for them "
@@ -150,7 +282,8 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     return Comparison(baseline, contender, rows,
                       added=sorted(keys_b - keys_a, key=BenchmarkKey.sort_key),
                       removed=sorted(keys_a - keys_b, key=BenchmarkKey.sort_key),
-                      errored=errored, warnings=warnings, time_kind=time_kind, alpha=alpha)
+                      errored=errored, warnings=warnings, time_kind=time_kind, alpha=alpha,
+                      noise_percent=noise_percent, calibrations=calibration_rows)
 
 
 # ---------------------------------------------------------------- across machines
@@ -179,14 +312,23 @@ C2C_ENTRY = "c2c/pin:compact/threads:2"
 
 
 def calibration(run_file: RunFile, context_key: str) -> float | None:
-    """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry."""
+    """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry
+    (for c2c, of its one_way_ns counter when it has one: its iteration time includes thread start-up)."""
     value = run_file.context_number(context_key)
     if value is not None:
         return value
     from .names import parse_name
 
-    entry = SERIAL_ENTRY if context_key == "serial_step_ns" else C2C_ENTRY
-    return run_median(run_file, parse_name(entry))
+    if context_key == "serial_step_ns":
+        return run_median(run_file, parse_name(SERIAL_ENTRY))
+    key = parse_name(C2C_ENTRY)
+    run = run_file.runs.get(key)
+    if run is None or run.errored:
+        return None
+    one_way = run.counter_values(C2C_COUNTER)
+    if one_way:
+        return statistics.median(one_way)
+    return run_median(run_file, key)
 
 
 def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") -> tuple[float | None, float | None]:
@@ -307,24 +449,67 @@ def fingerprint_lines(run_files: list[RunFile]) -> list[str]:
     return _table(["context (* differs)"] + labels, rows)
 
 
+def _percent(value: float) -> str:
+    return f"{value:+.1f} %"
+
+
+def calibration_move_line(comparison: Comparison, letter: str) -> str:
+    """How far the machine itself moved between the two runs, by the context's in-run calibrations."""
+    parts, moves = [], []
+    for name, unit, before, after in comparison.calibration_moves():
+        if before and after:
+            move = (after / before - 1.0) * 100.0
+            moves.append((name, move))
+            digits = 2 if max(before, after) < 100 and name.startswith("serial") else 1
+            parts.append(f"{name} {before:.{digits}f} -> {after:.{digits}f} {unit} ({_percent(move)})")
+        else:
+            parts.append(f"{name} unavailable")
+    line = (f"calibrations moved, {letter} against A (in-run medians from each file's context, else from its "
+            f"calibration entries; the comparisons below are not rescaled by them): " + ", ".join(parts))
+    noise = comparison.noise_percent
+    limit = 1.0 + noise / 100.0
+    beyond = [name for name, move in moves if not (1.0 / limit <= 1.0 + move / 100.0 <= limit)]
+    if not moves:
+        return line + ": the machine's movement between the runs is unknown."
+    if beyond:
+        return (line + f". {' and '.join(beyond)} moved beyond the ±{noise:g} % noise threshold: the machine "
+                "itself changed between the runs (or they are different machines), so shifts of that size below "
+                "may be the machine, not the code.")
+    return line + f": inside the ±{noise:g} % noise threshold."
+
+
+def _row_cells(comparison: Comparison, row: Row) -> list[str]:
+    interval = f"[{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else "-"
+    return [format_ns(row.median_a), format_ns(row.median_b), f"{row.ratio:.3f}", interval,
+            f"{row.repetitions_a}/{row.repetitions_b}", _p(row.p_adjusted), comparison.verdict(row)]
+
+
 def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     a, b = "A", letter
+    noise = comparison.noise_percent
+    limit = 1.0 + noise / 100.0
     out = [f"== {b} ({comparison.contender.label}) against A ({comparison.baseline.label})", ""]
+    out.append(calibration_move_line(comparison, b))
+    out.append("")
     kind = "real" if comparison.time_kind == "real" else "CPU"
-    out.append(f"time: {kind} time (the ns_per_step counter where an entry has it, else per iteration), median of the repetitions; ratio {b}/A of the medians "
-               f"(> 1: {b} is slower) with a {int(statistics.CONFIDENCE * 100)}% bootstrap interval "
-               f"({statistics.BOOTSTRAP_RESAMPLES} resamples, fixed seed); p: two-sided Mann-Whitney U, "
-               f"Holm-corrected over the {sum(r.p_raw is not None for r in comparison.rows)} tests of this "
-               f"comparison; verdict at alpha {comparison.alpha:g}; counters are medians, {a} -> {b}.")
+    out.append(f"time: {kind} time (the ns_per_step counter where an entry has it, else per iteration), median of "
+               f"the repetitions; ratio {b}/A of the medians (> 1: {b} is slower) with a "
+               f"{int(statistics.CONFIDENCE * 100)}% bootstrap interval ({statistics.BOOTSTRAP_RESAMPLES} resamples, "
+               f"fixed seed); p: two-sided Mann-Whitney U, Holm-corrected over the "
+               f"{sum(r.p_raw is not None for r in comparison.rows)} tests of this comparison's combinations; "
+               f"counters are medians, {a} -> {b}.")
+    out.append(f"verdict: slower / faster = Holm p < alpha {comparison.alpha:g} and the whole interval beyond "
+               f"the noise threshold of {noise:g} % ({b}/A above {limit:.3f} or below {1.0 / limit:.3f}; "
+               f"--noise PCT); within noise = significant, but the interval reaches inside the threshold (a shift "
+               f"the size of the machine's own run-to-run drift); same = not significant; untested = too few "
+               f"repetitions.")
     out.append("")
     counters_present = [(c, h) for c, h in COUNTERS_SHOWN if any(c in row.counters for row in comparison.rows)]
     headings = ["benchmark", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps", "p (Holm)",
                 "verdict"] + [h for _, h in counters_present]
     rows = []
     for row in comparison.rows:
-        interval = f"[{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else "-"
-        cells = [row.key.display, format_ns(row.median_a), format_ns(row.median_b), f"{row.ratio:.3f}", interval,
-                 f"{row.repetitions_a}/{row.repetitions_b}", _p(row.p_adjusted), row.verdict(comparison.alpha)]
+        cells = [row.key.display] + _row_cells(comparison, row)
         for counter, _ in counters_present:
             before, after = row.counters.get(counter, (None, None))
             # Absent on both sides: the entry cannot have it (lockstep omits, e.g., the futex waits
@@ -335,11 +520,27 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     out += _table(headings, rows, right={1, 2, 3, 6})
     out.append("")
     geometric_mean = comparison.geometric_mean
-    out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs: "
-               f"{_number(geometric_mean, 3) if geometric_mean else 'unavailable'}")
-    significant = [row for row in comparison.rows if row.significant(comparison.alpha)]
-    out.append(f"significant at alpha {comparison.alpha:g} (Holm): {len(significant)} "
-               f"({sum(r.ratio > 1 for r in significant)} slower, {sum(r.ratio < 1 for r in significant)} faster)")
+    out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
+               f"calibrations apart): {_number(geometric_mean, 3) if geometric_mean else 'unavailable'}")
+    counts = comparison.verdict_counts()
+    out.append(f"verdicts at alpha {comparison.alpha:g} (Holm) and the {noise:g} % noise threshold: "
+               f"{counts['slower']} slower, {counts['faster']} faster, {counts['within noise']} within noise "
+               f"(significant, inside the threshold), {counts['same']} same, {counts['untested']} untested")
+    if comparison.calibrations:
+        out.append("")
+        out.append(f"calibrations ({len(comparison.calibrations)}): the machine and the instrumentation, not a "
+                   f"combination; c2c compared by its {C2C_COUNTER} counter (its iteration time is thread start-up "
+                   f"plus the measurement), the overhead pair and rk4/serial by their time; Holm-corrected over "
+                   f"these {sum(r.p_raw is not None for r in comparison.calibrations)} tests on their own; not in "
+                   f"the geometric mean, the counts above or --fail-above.")
+        calibration_rows = [[row.key.display, row.measure] + _row_cells(comparison, row)
+                            for row in comparison.calibrations]
+        out += _table(["calibration", "measure", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps",
+                       "p (Holm)", "verdict"], calibration_rows, right={2, 3, 4, 7})
+        for key, ratio_a, ratio_b in comparison.accounting_overheads():
+            out.append(f"accounting overhead of {key.display} (time with accounting:on / off): "
+                       f"A {_number(ratio_a, 3)}, {b} {_number(ratio_b, 3)}")
+    out.append("")
     for title, keys in ((f"only in A ({comparison.baseline.label}): removed", comparison.removed),
                         (f"only in {b} ({comparison.contender.label}): added", comparison.added)):
         out.append(f"{title}: {len(keys)}")
@@ -393,8 +594,14 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
 
 
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real") -> str:
-    out = ["lockstep compare: " + "  ".join(f"[{chr(ord('A') + i)}] {f.label}" for i, f in enumerate(run_files)),
-           ""]
+    out = ["lockstep compare: " + "  ".join(f"[{chr(ord('A') + i)}] {f.label}" for i, f in enumerate(run_files))]
+    if comparisons:
+        noise = comparisons[0].noise_percent
+        if noise == DEFAULT_NOISE_PERCENT:
+            out.append(f"noise threshold: {noise:g} % (the default, --noise PCT to change it: {NOISE_RATIONALE})")
+        else:
+            out.append(f"noise threshold: {noise:g} % (--noise; the default is {DEFAULT_NOISE_PERCENT:g} %)")
+    out.append("")
     out += fingerprint_lines(run_files)
     machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in run_files}
     out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 
 from .inputs import InputError, load_run_file, unique_labels
@@ -23,14 +24,41 @@ class OneLineParser(argparse.ArgumentParser):
         raise UsageError(f"{message} (`lockstep {self.prog.split()[-1]} --help` lists the options)")
 
 
+def percentage(text: str) -> float:
+    """A percentage of 0 or more ("5", "2.5", "5%"); anything else is a one-line usage error."""
+    stripped = text.strip()
+    if stripped.endswith("%"):
+        stripped = stripped[:-1].strip()
+    try:
+        value = float(stripped)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a percentage (give a number such as 5)") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a finite percentage of 0 or more")
+    return value
+
+
 def compare_parser() -> argparse.ArgumentParser:
+    from .compare import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
+
     parser = OneLineParser(
         prog="lockstep compare",
         description="Compare Google Benchmark JSON results of `lockstep run` across runs and machines. "
-                    "The first file is the baseline A; every other file is compared with it.")
+                    "The first file is the baseline A; every other file is compared with it. An entry is "
+                    "slower or faster only when it is significant after Holm's correction AND the whole "
+                    "confidence interval of its ratio lies beyond the noise threshold; a significant shift "
+                    "inside it is 'within noise'. rk4/serial, c2c (by its one_way_ns counter) and the overhead "
+                    "pair are compared apart, as calibrations, and the context's calibrations say how far the "
+                    "machine itself moved between the runs.")
     parser.add_argument("files", nargs="+", metavar="RESULT.json", help="two or more result files")
-    parser.add_argument("--fail-above", type=float, metavar="PCT",
-                        help="exit 1 when a matched entry is significantly slower than A by more than PCT percent")
+    parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
+                        help=f"noise threshold in percent (default {DEFAULT_NOISE_PERCENT:g}): a significant "
+                             f"entry is slower only when its whole interval of B/A lies above 1 + PCT/100, "
+                             f"faster only when below 1 / (1 + PCT/100), else within noise. Why "
+                             f"{DEFAULT_NOISE_PERCENT:g}: {NOISE_RATIONALE}".replace("%", "%%"))
+    parser.add_argument("--fail-above", type=percentage, metavar="PCT",
+                        help="exit 1 when a matched combination is slower than A (significant and beyond the "
+                             "noise threshold) by more than PCT percent")
     parser.add_argument("--alpha", type=float, default=0.05,
                         help="family-wise significance level after Holm's correction (default 0.05)")
     parser.add_argument("--time", choices=("real", "cpu"), default="real",
@@ -58,13 +86,12 @@ def run_compare(argv: list[str]) -> int:
     options = compare_parser().parse_args(argv)
     if len(options.files) < 2:
         raise UsageError("compare needs at least two result files (the first is the baseline)")
-    if options.fail_above is not None and options.fail_above < 0:
-        raise UsageError(f"--fail-above {options.fail_above:g}: give a percentage of 0 or more")
     if not 0.0 < options.alpha < 1.0:
         raise UsageError(f"--alpha {options.alpha:g}: give a level between 0 and 1")
     labels = unique_labels(options.files)
     run_files = [load_run_file(path, label) for path, label in zip(options.files, labels)]
-    comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha) for other in run_files[1:]]
+    comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha, options.noise)
+                   for other in run_files[1:]]
     sys.stdout.write(compare.render_text(run_files, comparisons, options.time))
     if options.json:
         write_comparison_json(options.json, comparisons)
@@ -72,11 +99,21 @@ def run_compare(argv: list[str]) -> int:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
         if failures:
             for comparison, row in failures:
+                interval = f", interval [{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else ""
                 sys.stderr.write(f"lockstep compare: regression beyond {options.fail_above:g}%: "
                                  f"{row.key.display} is {(row.ratio - 1) * 100:.1f}% slower in "
-                                 f"{comparison.contender.label} (Holm p {row.p_adjusted:.2g})\n")
+                                 f"{comparison.contender.label} (Holm p {row.p_adjusted:.2g}{interval}, beyond "
+                                 f"the {options.noise:g}% noise threshold)\n")
             return EXIT_REGRESSION
     return EXIT_OK
+
+
+def row_json(comparison, row) -> dict:
+    return {"name": row.key.display, "measure": row.measure, "median_a_ns": row.median_a,
+            "median_b_ns": row.median_b, "ratio": row.ratio,
+            "interval": list(row.interval) if row.interval else None,
+            "p": row.p_raw, "p_holm": row.p_adjusted, "verdict": comparison.verdict(row),
+            "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
 
 
 def write_comparison_json(path: str, comparisons) -> None:
@@ -88,12 +125,16 @@ def write_comparison_json(path: str, comparisons) -> None:
         document["comparisons"].append({
             "baseline": comparison.baseline.label, "contender": comparison.contender.label,
             "time": comparison.time_kind, "alpha": comparison.alpha, "correction": "holm",
+            "noise_pct": comparison.noise_percent,
             "geometric_mean": comparison.geometric_mean, "matched": len(comparison.rows),
-            "rows": [{"name": row.key.display, "median_a_ns": row.median_a, "median_b_ns": row.median_b,
-                      "ratio": row.ratio, "interval": list(row.interval) if row.interval else None,
-                      "p": row.p_raw, "p_holm": row.p_adjusted, "verdict": row.verdict(comparison.alpha),
-                      "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
-                     for row in comparison.rows],
+            "verdicts": comparison.verdict_counts(),
+            "rows": [row_json(comparison, row) for row in comparison.rows],
+            "calibrations": [row_json(comparison, row) for row in comparison.calibrations],
+            "calibration_moves": [{"name": name, "unit": unit, "a": before, "b": after,
+                                   "change_pct": (after / before - 1.0) * 100.0 if (before and after) else None}
+                                  for name, unit, before, after in comparison.calibration_moves()],
+            "accounting_overheads": [{"name": key.display, "a": ratio_a, "b": ratio_b}
+                                     for key, ratio_a, ratio_b in comparison.accounting_overheads()],
             "added": [key.display for key in comparison.added],
             "removed": [key.display for key in comparison.removed],
             "errored": [{"name": key.display, "in": where, "message": message}

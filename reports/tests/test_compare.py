@@ -67,7 +67,9 @@ class SameMachine(unittest.TestCase):
 
     def test_geometric_mean_counts_matched_pairs_only(self):
         comparison = compare_pair(load("machine_a.json"), load("entry_sets_differ.json"))
-        self.assertEqual(len(comparison.rows), 2 + 2 * 12)  # serial, c2c, and the two shared primitives
+        self.assertEqual(len(comparison.rows), 2 * 12)  # the two shared primitives; serial and c2c apart
+        self.assertEqual([row.key.display for row in comparison.calibrations],
+                         ["c2c/pin:compact/threads:2", "rk4/serial"])
         expected = statistics.geometric_mean([row.ratio for row in comparison.rows])
         self.assertEqual(comparison.geometric_mean, expected)
 
@@ -97,7 +99,8 @@ class SameMachine(unittest.TestCase):
 
     def test_later_schema_matches_the_older_file(self):
         comparison = compare_pair(load("machine_a.json"), load("later_schema.json"))
-        self.assertEqual(len(comparison.rows), 38)
+        self.assertEqual(len(comparison.rows), 36)
+        self.assertEqual(len(comparison.calibrations), 2)
         self.assertEqual(comparison.added, [])
         self.assertEqual(comparison.removed, [])
 
@@ -163,7 +166,7 @@ class AcrossMachines(unittest.TestCase):
         del run_file.context["serial_step_ns"]
         run_file.context["c2c_one_way_ns"] = "unavailable"
         serial = statistics.median(run_file.runs[parse_name("rk4/serial")].times_ns())
-        c2c = statistics.median(run_file.runs[parse_name("c2c/pin:compact/threads:2")].times_ns())
+        c2c = statistics.median(run_file.runs[parse_name("c2c/pin:compact/threads:2")].counter_values("one_way_ns"))
         self.assertEqual(calibration(run_file, "serial_step_ns"), serial)
         self.assertEqual(calibration(run_file, "c2c_one_way_ns"), c2c)
 
@@ -193,7 +196,9 @@ class Output(unittest.TestCase):
             second = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
         self.assertEqual(first[1], second[1])
         self.assertEqual(document["comparisons"][0]["correction"], "holm")
-        self.assertEqual(document["comparisons"][0]["matched"], 38)
+        self.assertEqual(document["comparisons"][0]["matched"], 36)
+        self.assertEqual(document["comparisons"][0]["noise_pct"], 5.0)
+        self.assertEqual(len(document["comparisons"][0]["calibrations"]), 2)
 
     def test_three_files_compare_each_with_the_first(self):
         status, out, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"),
@@ -201,6 +206,199 @@ class Output(unittest.TestCase):
         self.assertEqual(status, 0)
         self.assertIn("== B (machine_a_rerun.json) against A (machine_a.json)", out)
         self.assertIn("== C (machine_b.json) against A (machine_a.json)", out)
+
+
+# ---------------------------------------------------------------- noise threshold and calibrations
+# Derived files, written per test: a few entries with deterministic repetitions (12 a side, so that
+# complete separation gives a tiny p even after Holm's correction), the context's calibrations as given.
+
+SHIFTED = "rk4/sync:futex_spin/layout:padded64/pin:compact/threads:2"
+STEADY = "rk4/sync:seqlock/layout:per_thread/pin:compact/threads:2"
+BARRIER = "barrier/sync:std_barrier/pin:compact/threads:2"
+OVERHEAD = "overhead/sync:futex_spin/layout:padded64/pin:compact/threads:2/accounting:{}"
+C2C = "c2c/pin:compact/threads:2"
+WIGGLE = [0.000, 0.004, -0.003, 0.002, -0.001, 0.003, -0.004, 0.001, -0.002, 0.0035, -0.0025, 0.0015]
+
+
+def entries(name, median_ns, counters=None, time_ns=None):
+    """Google Benchmark 1.7 iteration entries of one benchmark: 12 repetitions within +-0.4 % of the median."""
+    result = []
+    for index, wiggle in enumerate(WIGGLE):
+        value = median_ns * (1.0 + wiggle)
+        entry = {"name": name, "run_name": name, "run_type": "iteration", "repetitions": len(WIGGLE),
+                 "repetition_index": index, "threads": 1, "iterations": 1000,
+                 "real_time": time_ns * (1.0 + wiggle) if time_ns else value, "cpu_time": value, "time_unit": "ns"}
+        if name.startswith("rk4/") or name.startswith("overhead/"):
+            entry["ns_per_step"] = value
+        for counter, counter_value in (counters or {}).items():
+            entry[counter] = counter_value * (1.0 + wiggle)
+        result.append(entry)
+    return result
+
+
+def run_document(c2c_context, serial_context, shifted, c2c_counter=25.0, c2c_time=1.5e6, barrier=200e3):
+    benchmarks = (entries("rk4/serial", 20.0) + entries(C2C, c2c_counter, {"one_way_ns": c2c_counter}, c2c_time)
+                  + entries(OVERHEAD.format("off"), 500.0) + entries(OVERHEAD.format("on"), 530.0)
+                  + entries(SHIFTED, shifted) + entries(STEADY, 290.0) + entries(BARRIER, barrier))
+    context = {"lockstep_schema": "1", "cpu_model": "AMD EPYC", "topology": "packages=1 l3=1 cores=2 pus=2",
+               "hypervisor": "kvm", "kernel": "6.1", "num_cpus": 2}
+    if c2c_context is not None:
+        context["c2c_one_way_ns"] = c2c_context
+    if serial_context is not None:
+        context["serial_step_ns"] = serial_context
+    return {"context": context, "benchmarks": benchmarks}
+
+
+class NoiseThreshold(unittest.TestCase):
+    def setUp(self):
+        self.directory = tempfile.TemporaryDirectory()
+        self.addCleanup(self.directory.cleanup)
+
+    def write(self, name, document):
+        path = os.path.join(self.directory.name, name)
+        with open(path, "w", encoding="utf-8") as stream:
+            json.dump(document, stream)
+        return path
+
+    def pair(self, shifted_b, c2c_b="25.0", serial_b="20.00", **contender):
+        a = self.write("a.json", run_document("25.0", "20.00", 560.0))
+        b = self.write("b.json", run_document(c2c_b, serial_b, shifted_b, **contender))
+        return a, b
+
+    def row(self, comparison, name):
+        return next(row for row in comparison.rows + comparison.calibrations if row.key.display == name)
+
+    def test_a_shift_inside_the_threshold_with_tiny_p_is_within_noise(self):
+        a, b = self.pair(560.0 * 1.03)  # +3 %, completely separated: tiny p
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        row = self.row(comparison, SHIFTED)
+        self.assertTrue(row.significant(comparison.alpha))
+        self.assertLess(row.p_adjusted, 0.001)
+        self.assertEqual(comparison.verdict(row), "within noise")
+        self.assertEqual(comparison.verdict(self.row(comparison, STEADY)), "same")
+        self.assertEqual(comparison.verdict_counts(),
+                         {"slower": 0, "faster": 0, "within noise": 1, "same": 2, "untested": 0})
+        status, out, err = run_tool("compare", a, b, "--fail-above", "1")
+        self.assertEqual(status, 0, err)  # within noise never fails the gate
+        self.assertIn("0 slower, 0 faster, 1 within noise", out)
+        self.assertIn("noise threshold: 5 % (the default", out)
+
+    def test_a_lower_threshold_makes_the_same_shift_slower(self):
+        a, b = self.pair(560.0 * 1.03)
+        comparison = compare_pair(load_run_file(a), load_run_file(b), noise_percent=1.0)
+        self.assertEqual(comparison.verdict(self.row(comparison, SHIFTED)), "slower")
+        status, out, err = run_tool("compare", a, b, "--noise", "1", "--fail-above", "1")
+        self.assertEqual(status, 1)
+        self.assertIn(SHIFTED, err)
+        self.assertIn("1 slower, 0 faster, 0 within noise", out)
+        self.assertIn("noise threshold: 1 %", out)
+
+    def test_a_big_shift_is_slower_and_fails_the_gate(self):
+        a, b = self.pair(560.0 * 1.40)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        row = self.row(comparison, SHIFTED)
+        self.assertEqual(comparison.verdict(row), "slower")
+        self.assertGreater(row.interval[0], 1.05)
+        self.assertEqual([r.key.display for r in comparison.regressions_beyond(10)], [SHIFTED])
+        status, _, err = run_tool("compare", a, b, "--fail-above", "10")
+        self.assertEqual(status, 1)
+        self.assertEqual(err.count("\n"), 1, err)
+        self.assertIn(SHIFTED, err)
+
+    def test_a_big_speed_up_is_faster(self):
+        a, b = self.pair(560.0 / 1.40)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertEqual(comparison.verdict(self.row(comparison, SHIFTED)), "faster")
+        self.assertEqual(run_tool("compare", a, b, "--fail-above", "0")[0], 0)
+
+    def test_bad_noise_values_are_one_line_and_exit_2(self):
+        a, b = self.pair(560.0)
+        for value in ("-1", "abc", "nan", "inf", "", "5%%"):
+            status, out, err = run_tool("compare", a, b, "--noise", value)
+            self.assertEqual(status, 2, value)
+            self.assertEqual(out, "", value)
+            self.assertEqual(err.count("\n"), 1, err)
+            self.assertIn("--noise", err)
+        self.assertEqual(run_tool("compare", a, b, "--noise")[0], 2)
+        for value in ("0", "2.5", "5%"):
+            self.assertEqual(run_tool("compare", a, b, "--noise", value)[0], 0, value)
+
+    def test_the_calibration_line_says_how_far_the_machine_moved(self):
+        a, b = self.pair(560.0, c2c_b="27.0", serial_b="20.10")
+        status, out, _ = run_tool("compare", a, b)
+        self.assertEqual(status, 0)
+        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        self.assertIn("c2c one-way 25.0 -> 27.0 ns (+8.0 %)", line)
+        self.assertIn("serial step 20.00 -> 20.10 ns (+0.5 %)", line)
+        self.assertIn("c2c one-way moved beyond the ±5 % noise threshold", line)
+        self.assertIn("not rescaled", line)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertEqual(self.row(comparison, SHIFTED).ratio, 1.0)  # the times are not rescaled by it
+
+    def test_a_calibration_line_inside_the_threshold_says_so(self):
+        a, b = self.pair(560.0, c2c_b="25.5", serial_b="19.90")
+        _, out, _ = run_tool("compare", a, b)
+        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        self.assertIn("(+2.0 %)", line)
+        self.assertIn("(-0.5 %)", line)
+        self.assertIn("inside the ±5 % noise threshold", line)
+
+    def test_missing_context_calibrations_come_from_the_entries_or_are_unavailable(self):
+        a = self.write("a.json", run_document(None, None, 560.0))
+        b = self.write("b.json", run_document("unavailable", None, 560.0, c2c_counter=26.0))
+        _, out, _ = run_tool("compare", a, b)
+        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        self.assertIn("c2c one-way 25.0 -> 26.0 ns (+4.0 %)", line)  # one_way_ns counters, not iteration times
+        self.assertRegex(line, r"serial step 20\.0\d -> 20\.0\d ns \(\+0\.0 %\)")
+        without_c2c = run_document(None, "20.00", 560.0)
+        without_c2c["benchmarks"] = [e for e in without_c2c["benchmarks"] if not e["name"].startswith("c2c/")]
+        c = self.write("c.json", without_c2c)
+        status, out, _ = run_tool("compare", a, c)
+        self.assertEqual(status, 0)
+        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        self.assertIn("c2c one-way unavailable", line)
+
+    def test_c2c_is_compared_by_its_one_way_counter_and_kept_apart(self):
+        # The c2c iteration time (thread start-up) doubles; its one-way latency does not move.
+        a, b = self.pair(560.0, c2c_time=3.0e6)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertNotIn(C2C, [row.key.display for row in comparison.rows])
+        row = self.row(comparison, C2C)
+        self.assertEqual(row.measure, "one_way_ns")
+        self.assertAlmostEqual(row.ratio, 1.0)
+        self.assertEqual(comparison.verdict(row), "same")
+        self.assertEqual(sorted(r.key.display for r in comparison.calibrations),
+                         sorted([C2C, "rk4/serial", OVERHEAD.format("off"), OVERHEAD.format("on")]))
+        self.assertEqual(len(comparison.rows), 3)
+        self.assertEqual(comparison.geometric_mean, statistics.geometric_mean([r.ratio for r in comparison.rows]))
+        (base, overhead_a, overhead_b), = comparison.accounting_overheads()
+        self.assertAlmostEqual(overhead_a, 1.06)
+        self.assertAlmostEqual(overhead_b, 1.06)
+        _, out, _ = run_tool("compare", a, b)
+        self.assertIn("calibrations (4): the machine and the instrumentation", out)
+        self.assertIn("geometric mean of B/A over the 3 matched pairs", out)
+        self.assertIn("accounting overhead of " + base.display, out)
+
+    def test_back_to_back_repetitions_are_warned_about(self):
+        first = run_document("25.0", "20.00", 560.0)
+        first["context"]["lockstep_order"] = "registration order: every entry's repetitions back to back"
+        second = run_document("25.0", "20.00", 560.0)
+        second["context"]["lockstep_order"] = "random interleaving: the repetitions of every entry shuffled"
+        a, b = self.write("a.json", first), self.write("b.json", second)
+        _, out, _ = run_tool("compare", a, b)
+        warning = next(line for line in out.splitlines() if "back to back (context lockstep_order)" in line)
+        self.assertIn("a.json measured", warning)
+        self.assertNotIn("b.json", warning)
+        self.assertIn("--interleave", warning)
+        self.assertIn("lockstep_order*", out)
+        _, out, _ = run_tool("compare", b, b)
+        self.assertNotIn("back to back (context lockstep_order)", out)
+
+    def test_a_moved_calibration_never_fails_the_gate(self):
+        a, b = self.pair(560.0, c2c_counter=40.0)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertEqual(comparison.verdict(self.row(comparison, C2C)), "slower")
+        self.assertEqual(run_tool("compare", a, b, "--fail-above", "0")[0], 0)
 
 
 if __name__ == "__main__":
