@@ -32,11 +32,14 @@ void barrier_entry(benchmark::State& state, harness_state& harness, const entry_
 
   const double episodes_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));
   state.counters["ns_per_episode"] = ns_per_unit(*result);
-  state.counters["futex_waits_per_episode"] = static_cast<double>(result->sync_totals.futex_waits) / episodes_run;
-  state.counters["futex_wakes_per_episode"] = static_cast<double>(result->sync_totals.futex_wakes) / episodes_run;
-  state.counters["yields_per_episode"] = static_cast<double>(result->sync_totals.yields) / episodes_run;
-  state.counters["spins_exhausted_per_episode"] =
-      static_cast<double>(result->sync_totals.spins_exhausted) / episodes_run;
+  // The library barriers hide their futex calls, yields and spins alike: unavailable, so omitted.
+  if constexpr (info.counts_futex_waits) {
+    state.counters["futex_waits_per_episode"] = static_cast<double>(result->sync_totals.futex_waits) / episodes_run;
+    state.counters["futex_wakes_per_episode"] = static_cast<double>(result->sync_totals.futex_wakes) / episodes_run;
+    state.counters["yields_per_episode"] = static_cast<double>(result->sync_totals.yields) / episodes_run;
+    state.counters["spins_exhausted_per_episode"] =
+        static_cast<double>(result->sync_totals.spins_exhausted) / episodes_run;
+  }
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
   state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
   set_accounting_counters(state, *result, "episode");

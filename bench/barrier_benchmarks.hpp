@@ -9,7 +9,9 @@
 //   ns_per_episode                 time of one episode (batch time / episodes)
 //   futex_waits_per_episode, futex_wakes_per_episode, yields_per_episode,
 //   spins_exhausted_per_episode    the primitive's own counters, summed over
-//                                  the team
+//                                  the team; absent for the primitives
+//                                  that cannot count them
+//                                  (sync::primitive_info::counts_futex_waits)
 //   timeouts                       waits that ended by timeout in this
 //                                  repetition (a count: lost wake-ups)
 //   oversubscribed                 1 when threads outnumber the CPUs

@@ -20,7 +20,23 @@ std::string primitive_tags(const sync::primitive_info& info) {
   std::string tags = info.kind == sync::primitive_kind::barrier ? "barrier" : "dataflow";
   if (info.pure_spin) tags += ", pure-spin";
   if (info.may_lose_wakeups) tags += ", loses wake-ups";
+  if (!info.counts_futex_waits) tags += ", futex waits unavailable";
   return tags;
+}
+
+// Which primitives' futex_waits_per_step the result JSON carries, and which
+// hide their futex calls inside a library (the counter is omitted for those).
+std::string futex_waits_note() {
+  std::string counted;
+  std::string hidden;
+  for (const auto& info : sync::all_primitive_info) {
+    std::string& list = info.counts_futex_waits ? counted : hidden;
+    list += (list.empty() ? "" : ", ") + std::string(info.name);
+  }
+  return fmt::format(
+      "  futex waits (futex_waits_per_step) counted, or 0 because it never sleeps: {}\n"
+      "  futex waits unavailable (inside the library; the counter is omitted): {}\n",
+      counted.empty() ? "none" : counted, hidden.empty() ? "none" : hidden);
 }
 
 void print_list(const std::string& what) {
@@ -28,6 +44,7 @@ void print_list(const std::string& what) {
     fmt::print("Synchronisation primitives (--sync):\n");
     for (const auto& info : sync::all_primitive_info)
       fmt::print("  {:<20} [{}] {}\n", info.name, primitive_tags(info), info.description);
+    fmt::print("{}", futex_waits_note());
   }
   if (what.empty() || what == "layout") {
     if (what.empty()) fmt::print("\n");

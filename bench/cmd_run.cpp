@@ -200,6 +200,14 @@ int execute(const run_options& options) {
   bench::add_to_benchmark_context(context);
   benchmark::AddCustomContext("lockstep_mode", options.quick ? "quick" : "default");
   benchmark::AddCustomContext("lockstep_accounting", harness.settings.accounting ? "on" : "off");
+  {
+    // The primitives whose entries omit futex_waits_per_step: their futex calls
+    // happen inside a library, out of sight (sync/registry.hpp: counts_futex_waits).
+    std::string hidden;
+    for (const auto& info : sync::all_primitive_info)
+      if (!info.counts_futex_waits) hidden += (hidden.empty() ? "" : ",") + std::string(info.name);
+    benchmark::AddCustomContext("futex_waits_unavailable", hidden.empty() ? "none" : hidden);
+  }
   benchmark::AddCustomContext("lockstep_order", options.interleave
                                                     ? "random interleaving: the repetitions of every entry "
                                                       "shuffled over the whole run"

@@ -28,9 +28,10 @@ std::string spread_of(const captured_entry& entry, const std::string& counter) {
   return fmt::format("+-{:.1f}%", (range->second - range->first) / 2.0 / *median * 100.0);
 }
 
-std::string optional_number(const captured_entry& entry, const std::string& counter, const char* format_spec) {
+std::string optional_number(const captured_entry& entry, const std::string& counter, const char* format_spec,
+                            const char* absent = "-") {
   const auto value = entry.median(counter);
-  if (!value) return "-";
+  if (!value) return absent;
   return fmt::format(fmt::runtime(format_spec), *value);
 }
 
@@ -205,7 +206,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
     for (const auto& episode : episodes)
       out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n", format_ns(episode.median),
                          spread_of(*episode.entry, "ns_per_episode"),
-                         optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}"),
+                         // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
+                         optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
                          optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
                          episode.entry->median("oversubscribed").value_or(0.0) > 0.5 ? "  [oversubscribed]" : "");
     contender(out, episodes, "futex_spin", "bare episodes", "/episode");

@@ -104,10 +104,23 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // The sync time the timed batches start from: read when the warm-up batch
   // ends (the team waiting at the harness barrier), so that the warm-up's
   // cold caches and first faults stay out of sync_ns_per_stage.
+  // The sampling period is set there too, from the probed batch size: about
+  // kSampledStepsPerBatch sampled steps per batch, never fewer than one step
+  // in kSyncTimingSampleSteps. A slow step (few per batch) is then timed often
+  // enough to be measured at all, and its clock readings (8 per sampled step)
+  // stay a tiny share of it; a fast one keeps the default period.
   kernels::stage_sync_time sync_before{};
   const primitive_traits traits{std::string(info.name), info.pure_spin, info.may_lose_wakeups};
-  const auto result = measure_entry(state, harness, spec.name(), traits, plan, team, slots, steps, kInstrumented,
-                                    "step", [&] { sync_before = step.sync_time(); });
+  const std::string name = spec.name();
+  const auto result = measure_entry(state, harness, name, traits, plan, team, slots, steps, kInstrumented, "step", [&] {
+    if constexpr (Timing == kernels::sync_timing::sampled) {
+      constexpr std::uint64_t kSampledStepsPerBatch = 8;
+      const auto batch = harness.units_per_batch.find(name);
+      const std::uint64_t units = batch == harness.units_per_batch.end() ? 1 : batch->second;
+      step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1, kernels::kSyncTimingSampleSteps));
+    }
+    sync_before = step.sync_time();
+  });
   if (!result) return;
 
   const double steps_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));
@@ -128,7 +141,8 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
     }
   }
   set_accounting_counters(state, *result, "step");
-  state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
+  if constexpr (info.counts_futex_waits)  // else unavailable: omitted, never a 0 nobody counted
+    state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
   state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
 }

@@ -54,7 +54,9 @@ std::vector<std::string> register_calibration_benchmarks(harness_state& harness)
 //                        1000 steps (warm-up batch and harness barriers
 //                        included); migrations absent when unavailable
 //   cross_core_csw_pct   the paper's Figure 5 share (absent when unavailable)
-//   futex_waits_per_step the primitive's futex sleeps, summed over the team
+//   futex_waits_per_step the primitive's futex sleeps, summed over the team;
+//                        absent for primitives that cannot count them
+//                        (sync::primitive_info::counts_futex_waits)
 //   timeouts             waits that ended by timeout in the repetition (a count)
 //   oversubscribed       1 when the threads outnumber the CPUs
 // With settings.accounting off the entries run without instrumentation and

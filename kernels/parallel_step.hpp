@@ -63,6 +63,9 @@
 //     returns the steps completed, the same on every participant.
 //   step.state()            the state after the team joined (n values)
 //   step.steps_taken()      steps completed (after the team joined)
+//   step.set_sync_sample_period(n)
+//                           with Timing = sampled: time the syncs of every
+//                           n-th step (default kSyncTimingSampleSteps).
 //   step.sync_time(p)       with Timing = on or sampled: nanoseconds participant
 //                           p spent inside the stage syncs it timed, and how
 //                           many it timed (sync_ns_per_stage = nanoseconds /
@@ -102,9 +105,10 @@ namespace lockstep::kernels {
 //   off      no clock is read on the measured path.
 //   on       every stage sync: two clock reads per stage (about 40-60 ns per
 //            stage where the clock is the vDSO's, platform/clock.hpp).
-//   sampled  every stage sync of one step in kSyncTimingSampleSteps: the same
-//            mean per stage at a sixteenth of the clock cost, for a harness
-//            that must keep the instrumentation's own cost under 2%.
+//   sampled  every stage sync of one step in a sampling period (default
+//            kSyncTimingSampleSteps, set_sync_sample_period changes it): the
+//            same mean per stage at a fraction of the clock cost, for a
+//            harness that must keep the instrumentation's own cost under 2%.
 enum class sync_timing { off, on, sampled };
 inline constexpr std::uint64_t kSyncTimingSampleSteps = 16;
 
@@ -176,9 +180,10 @@ struct sync_clock<sync_timing::on> {
 };
 template <>
 struct sync_clock<sync_timing::sampled> {
+  std::uint64_t period = kSyncTimingSampleSteps;  // >= 1
   std::int64_t started = 0;
   bool sampling = false;
-  void begin_step(std::uint64_t step) noexcept { sampling = step % kSyncTimingSampleSteps == 0; }
+  void begin_step(std::uint64_t step) noexcept { sampling = step % period == 0; }
   void start() noexcept {
     if (sampling) started = platform::now_ns();
   }
@@ -264,6 +269,15 @@ class parallel_rk4 {
     return run_steps<true>(self, steps, deadline);
   }
   static constexpr std::uint64_t kDeadlineCheckSteps = 16;
+
+  // Timing = sampled: time the syncs of steps 0, period, 2 period, ... from
+  // the next call of run / run_bounded on (each call reads it when it starts).
+  // Call it while no participant is inside run (before the team starts, or
+  // from a barrier completion that the whole team waits on: that completion
+  // happens-before every participant's next call). A slow step can afford a
+  // short period; a fast one needs a long one to keep the clock's cost small.
+  void set_sync_sample_period(std::uint64_t period) noexcept { sync_sample_period_ = std::max<std::uint64_t>(period, 1); }
+  [[nodiscard]] std::uint64_t sync_sample_period() const noexcept { return sync_sample_period_; }
   // How many steps ahead of participant 0 a stop is set (see run_steps).
   [[nodiscard]] std::uint64_t stop_margin_steps() const noexcept { return stop_margin_; }
 
@@ -296,6 +310,7 @@ class parallel_rk4 {
     const layouts::equation_block block = blocks_.block(me);
     participant_record& record = records_[me];
     detail::sync_clock<Timing> clock;
+    if constexpr (Timing == sync_timing::sampled) clock.period = sync_sample_period_;
     const std::uint64_t first_step = record.steps_taken;
     std::uint64_t end = first_step + steps;
     bool stop_requested = false;
@@ -402,6 +417,7 @@ class parallel_rk4 {
   typename detail::exchange_for<Sync, Layout>::type exchange_;
   std::vector<participant_record> records_;
   std::uint64_t stop_margin_ = 1;
+  std::uint64_t sync_sample_period_ = kSyncTimingSampleSteps;
   bool bounded_supported_ = true;
   struct alignas(platform::kPrefetchPair) stop_line {
     std::atomic<std::uint64_t> value{0};

@@ -36,6 +36,7 @@ class channel_barrier {
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = Channel::kPureSpin;
   static constexpr bool kMayLoseWakeups = Channel::kMayLoseWakeups;
+  static constexpr bool kCountsFutexWaits = Channel::kCountsFutexWaits;
 
   explicit channel_barrier(unsigned participants)
       : participants_(participants),

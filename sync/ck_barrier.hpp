@@ -15,7 +15,8 @@
 // Memory ordering: ck's barriers fence around each phase (ck_pr_fence_*):
 // writes before arrive_and_wait are visible to every participant after it.
 // Counters: none. Spinning is all they do, and the shim does not count loop
-// turns (that would change what is measured): every counter stays 0.
+// turns (that would change what is measured): every counter stays 0. That 0
+// is exact for futex waits (kCountsFutexWaits): a ck barrier never sleeps.
 // ThreadSanitizer: ck synchronises with inline assembly and plain volatile
 // accesses that TSan cannot see, so the ck barriers are left out of the TSan
 // run (tests/sync/CMakeLists.txt); asan-ubsan runs them.
@@ -33,6 +34,7 @@ class ck_barrier {
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = true;
   static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = true;
 
   explicit ck_barrier(unsigned participants) : barrier_(lockstep_ck_barrier_create(Kind, participants)) {
     if (barrier_ == nullptr) throw std::bad_alloc();

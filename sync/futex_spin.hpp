@@ -25,7 +25,7 @@
 // Counters (self.counters): spins_exhausted when the spin and yield budget ran
 // out, futex_waits per FUTEX_WAIT that slept or found the phase already over,
 // futex_wakes per FUTEX_WAKE issued, yields per sched_yield. timeouts stay 0
-// (it never times out).
+// (it never times out). Every futex wait is counted (kCountsFutexWaits).
 //
 // Budget: a waiter spins `budget` pause iterations: kDedicatedSpin when the
 // participants fit in the union of their affinity sets (learned during phase
@@ -68,6 +68,7 @@ class futex_spin {
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = true;
 
   // Pause iterations before sleeping when every participant has a CPU. A pause
   // costs about 10-45 ns (Zen 2 .. Skylake), so this is roughly 10-45 us: about

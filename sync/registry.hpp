@@ -10,7 +10,14 @@
 //                      for a timeslice per phase when participants outnumber
 //                      CPUs: bound it in time), may_lose_wakeups (a lost
 //                      wake-up ends in a timeout, counted in
-//                      participant::counters.timeouts: bound it in time);
+//                      participant::counters.timeouts: bound it in time),
+//                      counts_futex_waits (counters.futex_waits is the truth:
+//                      every futex sleep counted, or none can happen; false
+//                      for the library barriers whose futex calls are hidden
+//                      inside libstdc++, glibc or libgomp: the harness then
+//                      omits futex_waits_per_step rather than report a 0 it
+//                      never counted; their wakes, yields and spins are just
+//                      as hidden, so the bare entries omit those too);
 //   as_barrier_t<P>    P itself for barriers, channel_barrier<P> for channels
 //                      (every participant depending on all): what a bare
 //                      barrier benchmark or the conformance suite runs;
@@ -60,12 +67,13 @@ struct primitive_info {
   primitive_kind kind;
   bool pure_spin;         // may stall (a timeslice per phase) when participants outnumber CPUs
   bool may_lose_wakeups;  // a lost wake-up costs a timeout (counters.timeouts)
+  bool counts_futex_waits;  // counters.futex_waits (wakes, yields, spins) are real, not a blind 0
 };
 
 template <class Primitive>
 constexpr primitive_info info_of() noexcept {
   return {Primitive::kName, Primitive::kDescription, Primitive::kKind, Primitive::kPureSpin,
-          Primitive::kMayLoseWakeups};
+          Primitive::kMayLoseWakeups, Primitive::kCountsFutexWaits};
 }
 
 template <class Primitive, primitive_kind Kind = Primitive::kKind>

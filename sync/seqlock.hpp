@@ -46,6 +46,7 @@
 // producer (rarely) for its slowest consumer; both spin briefly then yield
 // (spin_wait.hpp), so oversubscription does not stall them.
 // Counters: spins_exhausted and yields (spin_wait.hpp), for both waits.
+// futex_waits stays 0 and that 0 is exact (kCountsFutexWaits): it never sleeps.
 // Memory ordering: receive() of (p, s) happens-after p's publish(s) ((W4) -> (R1)),
 // so what p wrote before publishing is visible after receiving. Consumer
 // acknowledgements: (B1) release store of "received up to s" pairs with the
@@ -217,6 +218,7 @@ class basic_seqlock {
   static constexpr primitive_kind kKind = primitive_kind::channel;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = true;
   static constexpr std::size_t kDepth = Depth;
   static_assert(Depth >= 2, "back-pressure needs at least two slots per producer");
 

@@ -25,7 +25,8 @@
 // release store of the write index that the consumer's pop reads with
 // acquire: what the producer wrote before publish() is visible after the
 // matching receive() returns.
-// Counters: spins_exhausted and yields (spin_wait.hpp).
+// Counters: spins_exhausted and yields (spin_wait.hpp). futex_waits stays 0
+// and that 0 is exact (kCountsFutexWaits): it never sleeps.
 #include <boost/lockfree/spsc_queue.hpp>
 
 #include <cassert>
@@ -53,6 +54,7 @@ class basic_spsc_queue {
   static constexpr primitive_kind kKind = primitive_kind::channel;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = true;
   static constexpr std::size_t kDepth = Depth;
 
   basic_spsc_queue(const dependency_graph& graph, std::size_t width)

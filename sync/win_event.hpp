@@ -21,7 +21,8 @@
 // sequenced before the set of events[p%2]; a participant released by that set
 // therefore sees the reset when it waits on events[(p+1)%2] at phase p + 1.
 // Counters: futex_wakes (one per set), futex_waits (per sleep), timeouts (per
-// expired wait; 0 unless a phase outlasts the timeout).
+// expired wait; 0 unless a phase outlasts the timeout). Every futex wait is
+// counted (kCountsFutexWaits).
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -45,6 +46,7 @@ class basic_win_event {
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = true;
   static constexpr std::chrono::milliseconds kDefaultTimeout{1000};
 
   explicit basic_win_event(unsigned participants, std::chrono::milliseconds timeout = kDefaultTimeout)

@@ -37,6 +37,7 @@
 // read-modify-write chain and the event's set -> wait.
 // Counters: futex_wakes (one per SetEvent), futex_waits (per sleep in a wait),
 // timeouts (per WaitForSingleObject that timed out: each lost wake-up).
+// Every futex wait is counted (kCountsFutexWaits).
 #include <atomic>
 #include <chrono>
 #include <string_view>
@@ -57,6 +58,7 @@ class basic_win_event_faithful {
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = true;
+  static constexpr bool kCountsFutexWaits = true;
   static constexpr std::chrono::milliseconds kPaperTimeout{1000};
 
   explicit basic_win_event_faithful(unsigned participants, std::chrono::milliseconds timeout = kPaperTimeout)

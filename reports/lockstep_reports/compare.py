@@ -512,7 +512,10 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
         cells = [row.key.display] + _row_cells(comparison, row)
         for counter, _ in counters_present:
             before, after = row.counters.get(counter, (None, None))
-            cells.append(f"{_number(before)} -> {_number(after)}")
+            # Absent on both sides: the entry cannot have it (lockstep omits, e.g., the futex waits
+            # of a primitive that hides them in a library), never a 0.
+            cells.append("unavailable" if before is None and after is None
+                         else f"{_number(before)} -> {_number(after)}")
         rows.append(cells)
     out += _table(headings, rows, right={1, 2, 3, 6})
     out.append("")

@@ -53,6 +53,18 @@ class SameMachine(unittest.TestCase):
         self.assertLess(row.interval[1], 1.5)
         self.assertIn("futex_waits_per_step", row.counters)
 
+    def test_a_counter_the_primitive_cannot_count_is_unavailable_not_zero(self):
+        comparison = compare_pair(load("machine_a.json"), load("machine_a_rerun.json"))
+        hidden = next(row for row in comparison.rows
+                      if row.key.display == "rk4/sync:std_barrier/layout:packed/pin:compact/threads:2")
+        self.assertNotIn("futex_waits_per_step", hidden.counters)
+        self.assertIn("csw_vol_per_kstep", hidden.counters)
+        status, out, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
+        self.assertEqual(status, 0)
+        line = next(line for line in out.splitlines()
+                    if line.startswith("rk4/sync:std_barrier/layout:packed/pin:compact/threads:2 "))
+        self.assertRegex(line, r"0\.00 -> 0\.00 +unavailable +0\.00 -> 0\.00$")  # migr, futex, timeouts
+
     def test_geometric_mean_counts_matched_pairs_only(self):
         comparison = compare_pair(load("machine_a.json"), load("entry_sets_differ.json"))
         self.assertEqual(len(comparison.rows), 2 * 12)  # the two shared primitives; serial and c2c apart

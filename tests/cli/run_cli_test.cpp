@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <stdexcept>
 #include <string>
 #include <thread>
 #include <vector>
@@ -49,6 +50,15 @@ class scratch_directory {
  private:
   fs::path path_;
 };
+
+// The primitive of a "kind/sync:S/..." entry, from the registry.
+const lockstep::sync::primitive_info& primitive_of(const std::string& entry_name) {
+  const std::size_t start = entry_name.find("/sync:") + 6;
+  const std::string name = entry_name.substr(start, entry_name.find('/', start) - start);
+  const lockstep::sync::primitive_info* info = lockstep::sync::find_primitive(name);
+  if (info == nullptr) throw std::runtime_error("no primitive in " + entry_name);
+  return *info;
+}
 
 std::vector<std::string> run_args(std::initializer_list<std::string> extra) {
   std::vector<std::string> args{LOCKSTEP_BINARY, "run"};
@@ -138,20 +148,30 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
   EXPECT_NE(not_applicable.find("rk4/sync:seqlock/layout:padded64/pin:compact/threads:2: "), std::string::npos)
       << not_applicable;
   const bool migrations = document["context"].value("migrations", "").rfind("available", 0) == 0;
+  // The primitives that cannot count their futex waits are named in the context.
+  EXPECT_EQ(document["context"].value("futex_waits_unavailable", ""), "std_barrier,pthread_barrier,omp_barrier");
 
   for (const auto& entry : document["benchmarks"]) {
     const std::string name = entry["name"];
     if (entry.value("run_type", "") != "iteration" || entry.value("error_occurred", false)) continue;
     if (name.rfind("barrier/", 0) == 0) {
-      for (const char* counter : {"ns_per_episode", "futex_waits_per_episode", "futex_wakes_per_episode",
-                                  "yields_per_episode", "spins_exhausted_per_episode", "timeouts", "oversubscribed"})
+      for (const char* counter : {"ns_per_episode", "timeouts", "oversubscribed"})
         EXPECT_TRUE(entry.contains(counter)) << name << " lacks " << counter;
+      // The primitive's own counters: present exactly when it can count them (never a 0 nobody counted).
+      const bool counts = primitive_of(name).counts_futex_waits;
+      for (const char* counter : {"futex_waits_per_episode", "futex_wakes_per_episode", "yields_per_episode",
+                                  "spins_exhausted_per_episode"})
+        EXPECT_EQ(entry.contains(counter), counts) << name << ": " << counter;
       EXPECT_GT(entry["ns_per_episode"].get<double>(), 0.0) << name;
     }
     if (name.rfind("rk4/sync:", 0) == 0) {
       for (const char* counter : {"ns_per_step", "sync_ns_per_stage", "vs_serial", "csw_vol_per_kstep",
-                                  "csw_invol_per_kstep", "futex_waits_per_step", "timeouts", "oversubscribed"})
+                                  "csw_invol_per_kstep", "timeouts", "oversubscribed"})
         EXPECT_TRUE(entry.contains(counter)) << name << " lacks " << counter;
+      // futex_waits_per_step: exactly for the primitives that count it (futex_spin, seqlock here), absent
+      // (unavailable) for those whose futex calls are hidden in a library (std_barrier here).
+      EXPECT_EQ(entry.contains("futex_waits_per_step"), primitive_of(name).counts_futex_waits) << name;
+      EXPECT_EQ(entry.contains("futex_waits_per_step"), name.find("/sync:std_barrier/") == std::string::npos) << name;
       if (lockstep::platform::affinity_cpu_count() >= 2) {
         EXPECT_TRUE(entry.contains("vs_c2c")) << name;
       }
@@ -263,6 +283,25 @@ TEST(ListCli, NamesEverySyncAndPlacementOnALineEach) {
     EXPECT_EQ(line_starting(std::string(info.name)), 1u) << info.name << " in:\n" << result.out;
   for (const auto& placement : lockstep::platform::placements())
     EXPECT_EQ(line_starting(std::string(placement.name)), 1u) << placement.name << " in:\n" << result.out;
+}
+
+TEST(ListCli, SaysWhichPrimitivesCountFutexWaits) {
+  watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
+  const auto result = run_command({LOCKSTEP_BINARY, "list", "sync"});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const auto line_of = [&](const std::string& name) {
+    const std::size_t start = result.out.find("  " + name + " ");
+    if (start == std::string::npos) return std::string();
+    return result.out.substr(start, result.out.find('\n', start) - start);
+  };
+  for (const auto& info : lockstep::sync::all_primitive_info) {
+    const std::string line = line_of(std::string(info.name));
+    EXPECT_EQ(line.find("futex waits unavailable") != std::string::npos, !info.counts_futex_waits) << line;
+  }
+  EXPECT_NE(result.out.find("futex waits unavailable (inside the library; the counter is omitted): "
+                            "std_barrier, pthread_barrier, omp_barrier"),
+            std::string::npos)
+      << result.out;
 }
 
 TEST(ListCli, UnknownGroupIsExitTwo) {

@@ -121,6 +121,25 @@ TEST(SyncTiming, SampledTimesOneStepInSixteen) {
                         kernels::sync_timing::sampled>(kernels::two_mass_model{}, 4, placement::none, 100);
 }
 
+// A shorter sampling period, set between two calls (as the harness sets it
+// between its warm-up and timed batches), applies from the next call on:
+// steps 0..9 at the default period time steps 0; steps 10..19 at period 3
+// time steps 12, 15, 18.
+TEST(SyncTiming, SamplePeriodAppliesFromTheNextCall) {
+  const watchdog guard(std::chrono::milliseconds(30'000 * kSlowdown), "sampled-timing team did not finish");
+  kernels::parallel_rk4<sync::futex_spin, layouts::padded64, kernels::two_mass_model, kernels::sync_timing::sampled>
+      step(kernels::two_mass_model{}, kStepSize, 2);
+  EXPECT_EQ(step.sync_sample_period(), kernels::kSyncTimingSampleSteps);
+  kernels::run_team(step, 10);
+  EXPECT_EQ(step.sync_time(0).syncs, kernels::kRk4Stages * 1);
+  step.set_sync_sample_period(3);
+  kernels::run_team(step, 10);
+  for (unsigned participant = 0; participant < 2; ++participant)
+    EXPECT_EQ(step.sync_time(participant).syncs, kernels::kRk4Stages * 4) << "participant " << participant;
+  step.set_sync_sample_period(0);  // clamped: every step
+  EXPECT_EQ(step.sync_sample_period(), 1U);
+}
+
 TEST(SyncTiming, OffReadsNoClockAndReportsZero) {
   const watchdog guard(std::chrono::milliseconds(30'000 * kSlowdown));
   kernels::parallel_rk4<sync::std_barrier, layouts::packed> step(kernels::two_mass_model{}, kStepSize, 2);

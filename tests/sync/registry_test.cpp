@@ -31,6 +31,9 @@ TEST(Registry, KindsAndRegimesAreWhatTheHarnessBoundsBy) {
     EXPECT_EQ(info.pure_spin, name.rfind("ck_", 0) == 0) << name;
     EXPECT_EQ(info.may_lose_wakeups, name == "win_event_faithful") << name;
     EXPECT_EQ(info.kind == primitive_kind::channel, name == "seqlock" || name == "spsc_queue") << name;
+    // Only the library barriers hide their futex calls; the others count every wait or never sleep.
+    EXPECT_EQ(info.counts_futex_waits,
+              name != "std_barrier" && name != "pthread_barrier" && name != "omp_barrier") << name;
   }
   ASSERT_NE(find_primitive("futex_spin"), nullptr);
   EXPECT_EQ(find_primitive("futex_spin")->name, "futex_spin");

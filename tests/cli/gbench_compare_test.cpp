@@ -1,0 +1,73 @@
+// Google Benchmark's own tools accept lockstep's result JSON: a tiny
+// `lockstep run` writes a file, and Google Benchmark's compare.py (Debian's
+// libbenchmark-tools, which scripts/setup.sh --test installs) compares it
+// with itself, exits 0 and lists the RK4 entry. Skipped, saying why, only
+// where compare.py is not installed.
+#include <stdlib.h>
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/watchdog.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using lockstep::testing::run_command;
+using lockstep::testing::watchdog;
+
+// Where Debian's libbenchmark-tools puts Google Benchmark's compare tool.
+constexpr const char* kCompareTool = "/usr/share/benchmark/compare.py";
+// Debian's interpreter: a pyenv python3 first on PATH cannot see Debian's scipy.
+constexpr const char* kPython = "/usr/bin/python3";
+
+// A fresh directory for the result file, removed afterwards.
+class scratch_directory {
+ public:
+  scratch_directory() {
+    char name[] = "/tmp/lockstep-gbench-compare-XXXXXX";
+    if (::mkdtemp(name) == nullptr) throw std::runtime_error("mkdtemp failed");
+    path_ = name;
+  }
+  ~scratch_directory() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  scratch_directory(const scratch_directory&) = delete;  // owns the directory
+  scratch_directory& operator=(const scratch_directory&) = delete;
+  const fs::path& path() const noexcept { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+TEST(GoogleBenchmarkTools, CompareAcceptsTheResultJson) {
+  if (!fs::exists(kCompareTool))
+    GTEST_SKIP() << kCompareTool << " is absent: install Debian's libbenchmark-tools (scripts/setup.sh --test)";
+  watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown),
+                 "a tiny lockstep run or Google Benchmark's compare.py did not finish");
+  scratch_directory scratch;
+  const std::string results = (scratch.path() / "tiny.json").string();
+
+  // std_barrier too: its entries omit futex_waits_per_step (unavailable), which
+  // the tools must take as well.
+  const auto run = run_command({LOCKSTEP_BINARY, "run", "--quick", "--sync", "futex_spin,std_barrier", "--layout",
+                                "padded64", "--threads", "2", "--pin", "compact", "--repetitions", "2",
+                                "--min-time", "0.001", "--out", results});
+  ASSERT_EQ(run.exit_status, 0) << run.err;
+  ASSERT_TRUE(fs::exists(results)) << run.out;
+
+  const auto compare = run_command({kPython, kCompareTool, "--no-color", "benchmarks", results, results});
+  ASSERT_EQ(compare.exit_status, 0) << "compare.py refused the result JSON:\n" << compare.out << compare.err;
+  for (const char* entry : {"rk4/sync:futex_spin/layout:padded64/pin:compact/threads:2",
+                            "rk4/sync:std_barrier/layout:padded64/pin:compact/threads:2", "rk4/serial"})
+    EXPECT_NE(compare.out.find(entry), std::string::npos) << entry << " not listed by compare.py:\n" << compare.out;
+}
+
+}  // namespace
