@@ -492,7 +492,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     out.append(calibration_move_line(comparison, b))
     out.append("")
     kind = "real" if comparison.time_kind == "real" else "CPU"
-    out.append(f"time: {kind} time (the ns_per_step counter where an entry has it, else per iteration), median of "
+    out.append(f"time: {kind} time (the ns_per_step or ns_per_episode counter where an entry has it, else per iteration), median of "
                f"the repetitions; ratio {b}/A of the medians (> 1: {b} is slower) with a "
                f"{int(statistics.CONFIDENCE * 100)}% bootstrap interval ({statistics.BOOTSTRAP_RESAMPLES} resamples, "
                f"fixed seed); p: two-sided Mann-Whitney U, Holm-corrected over the "

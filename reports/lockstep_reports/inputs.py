@@ -29,8 +29,12 @@ KNOWN_GB_JSON_SCHEMA = 1
 # lockstep's result schema (CMakeLists.txt, LOCKSTEP_RESULT_SCHEMA).
 KNOWN_LOCKSTEP_SCHEMA = 1
 
-# The per-step time counter of lockstep's rk4 entries (DESIGN.md, Measurements).
-STEP_COUNTER = "ns_per_step"
+# The per-unit time counters of lockstep's entries, in the order they are looked
+# for: ns_per_step (rk4 entries, DESIGN.md, Measurements) and ns_per_episode
+# (the bare barrier entries). Both time a batch of units per Google Benchmark
+# iteration, and the batch size comes from each run's own probe, so only the
+# per-unit counter compares across runs; the iteration time does not.
+UNIT_COUNTERS = ("ns_per_step", "ns_per_episode")
 
 TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
@@ -75,13 +79,15 @@ class Run:
         return bool(self.errors)
 
     def times_ns(self, time_kind: str = "real") -> list[float]:
-        """Per-repetition times. lockstep's rk4 entries time a batch of steps per Google Benchmark
-        iteration and report the step itself in the ns_per_step counter: the real time is that
-        counter when every repetition has it, else Google Benchmark's real_time."""
+        """Per-repetition times. lockstep's entries time a batch of units (RK4 steps, barrier
+        episodes) per Google Benchmark iteration and report the unit itself in a counter
+        (UNIT_COUNTERS): the real time is the first such counter every repetition has, else
+        Google Benchmark's real_time."""
         if time_kind == "real":
-            per_step = [r.counters.get(STEP_COUNTER) for r in self.repetitions]
-            if per_step and all(v is not None and math.isfinite(v) and v > 0 for v in per_step):
-                return per_step
+            for counter in UNIT_COUNTERS:
+                per_unit = [r.counters.get(counter) for r in self.repetitions]
+                if per_unit and all(v is not None and math.isfinite(v) and v > 0 for v in per_unit):
+                    return per_unit
             return [r.real_ns for r in self.repetitions]
         return [r.cpu_ns for r in self.repetitions]
 
@@ -90,9 +96,10 @@ class Run:
         if entry is None:
             return None
         if time_kind == "real":
-            per_step = entry.counters.get(STEP_COUNTER)
-            if per_step is not None and math.isfinite(per_step) and per_step > 0:
-                return per_step
+            for counter in UNIT_COUNTERS:
+                per_unit = entry.counters.get(counter)
+                if per_unit is not None and math.isfinite(per_unit) and per_unit > 0:
+                    return per_unit
             return entry.real_ns
         return entry.cpu_ns
 

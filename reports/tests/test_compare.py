@@ -293,6 +293,22 @@ class NoiseThreshold(unittest.TestCase):
         self.assertIn("1 slower, 0 faster, 0 within noise", out)
         self.assertIn("noise threshold: 1 %", out)
 
+    def test_a_barrier_entry_is_compared_per_episode_not_per_batch(self):
+        # Each run sizes its batches by its own probe: the same 70 ns episode in batches of
+        # 3000 (210 us per iteration) in A and of 2000 (140 us) in B is no change.
+        episode = {"ns_per_episode": 70.0}
+        b_document = run_document("25.0", "20.00", 560.0)
+        a_document = run_document("25.0", "20.00", 560.0)
+        for document, batch in ((a_document, 3000), (b_document, 2000)):
+            document["benchmarks"] = [entry for entry in document["benchmarks"] if entry["name"] != BARRIER]
+            document["benchmarks"] += entries(BARRIER, 70.0 * batch, episode)
+        a = self.write("a.json", a_document)
+        b = self.write("b.json", b_document)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        row = self.row(comparison, BARRIER)
+        self.assertEqual(comparison.verdict(row), "same")
+        self.assertAlmostEqual(row.ratio, 1.0, places=6)
+
     def test_a_big_shift_is_slower_and_fails_the_gate(self):
         a, b = self.pair(560.0 * 1.40)
         comparison = compare_pair(load_run_file(a), load_run_file(b))
