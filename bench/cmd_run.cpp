@@ -173,6 +173,9 @@ int execute(const run_options& options) {
     harness.settings.call_budget_ns = 2'000'000'000;
     harness.stalls_before_skipping_sync = 2;
   }
+  // The harness-overhead pair gets three times the repetitions (at least the
+  // run's): its on / off ratio is read to a percent or two.
+  harness.settings.overhead_repetitions = 3 * (options.repetitions > 0 ? options.repetitions : repetitions);
   if (options.repetitions > 0) repetitions = options.repetitions;
   if (options.min_time > 0) min_time = options.min_time;
   // What one clock reading costs here, taken off every timed sync span

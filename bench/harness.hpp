@@ -61,6 +61,9 @@ struct run_settings {
   // Register the harness-overhead pair (accounting off / on, same
   // combination, side by side).
   bool overhead_pair = true;
+  // Repetitions of each side of that pair (0: the run's): the ratio it is
+  // read for is a few percent, below the spread of a handful of repetitions.
+  int overhead_repetitions = 0;
   // A batch should last about this long: long enough that the harness
   // barrier and two clock reads per batch vanish, short enough that Google
   // Benchmark can fit many batches into its minimum time.

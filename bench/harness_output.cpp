@@ -66,6 +66,7 @@ std::map<std::string, std::string> parse_entry_name(const std::string& name) {
 std::string plain_name(const benchmark::BenchmarkReporter::Run& run) {
   benchmark::BenchmarkName name = run.run_name;
   name.iterations.clear();
+  name.repetitions.clear();  // "/repeats:N", on an entry with its own repetition count
   name.time_type.clear();
   return name.str();
 }
@@ -74,6 +75,7 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
   std::vector<Run> renamed = runs;
   for (Run& run : renamed) {
     run.run_name.iterations.clear();
+    run.run_name.repetitions.clear();
     run.run_name.time_type.clear();
     // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
     // Google Benchmark would write it as NaN, which is not JSON. Omitted.

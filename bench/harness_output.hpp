@@ -36,8 +36,8 @@ class progress_reporter : public benchmark::BenchmarkReporter {
 };
 
 // Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
-// Google Benchmark appends "/manual_time", "/real_time" and "/iterations:N"
-// to a name when an entry uses them; lockstep's names carry only key:value
+// Google Benchmark appends "/manual_time", "/real_time", "/iterations:N" and
+// "/repeats:N" to a name when an entry uses them; lockstep's names carry only key:value
 // segments (the timing is stated once, in the context's lockstep_timing).
 // Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
 // Google Benchmark would write NaN, which no JSON parser accepts.

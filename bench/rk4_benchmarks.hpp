@@ -64,7 +64,7 @@ std::vector<std::string> register_calibration_benchmarks(harness_state& harness)
 std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness);
 
 // The harness-overhead pair, side by side: overhead/accounting:off/... and
-// overhead/accounting:on/... on one combination (futex_spin, padded64,
+// overhead/accounting:on/... on one combination (seqlock, per_thread,
 // compact, 2 threads when selected; else the first selected that applies).
 // The summary quotes on / off.
 std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness);

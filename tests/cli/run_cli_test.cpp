@@ -137,8 +137,8 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
                            "rk4/sync:std_barrier/layout:padded64/pin:compact/threads:2",
                            "rk4/sync:futex_spin/layout:per_thread/pin:compact/threads:2",
                            "rk4/sync:seqlock/layout:per_thread/pin:compact/threads:2",
-                           "overhead/accounting:off/sync:futex_spin/layout:padded64/pin:compact/threads:2",
-                           "overhead/accounting:on/sync:futex_spin/layout:padded64/pin:compact/threads:2"})
+                           "overhead/accounting:off/sync:seqlock/layout:per_thread/pin:compact/threads:2",
+                           "overhead/accounting:on/sync:seqlock/layout:per_thread/pin:compact/threads:2"})
     EXPECT_TRUE(names.count(name)) << "missing entry " << name;
   if (lockstep::platform::affinity_cpu_count() >= 2) {
     EXPECT_TRUE(names.count("c2c/pin:compact/threads:2"));

@@ -10,6 +10,12 @@
 //    reported as a race on the layout's plain doubles: false positives.
 //  * omp_barrier: libgomp is not built with TSan, so the happens-before of
 //    `#pragma omp barrier` is invisible to it: the same false positives.
+// and one primitive whose race is real and intended:
+//  * win_event_faithful (the paper's ThreadWaiter) stops ordering the team
+//    after a lost wake-up (win_event_faithful.hpp), so TSan then reports, at
+//    random (only in a run that loses a wake-up), the race the paper's design
+//    causes. tests/sync/win_event_test.cpp drives that lost wake-up
+//    deterministically under TSan instead.
 // AddressSanitizer + UBSan run them all.
 #include "tests/matrix/matrix_cases.hpp"
 
@@ -22,7 +28,7 @@ template <class Sync>
 constexpr bool excluded_under_tsan() {
 #if defined(__SANITIZE_THREAD__)
   constexpr std::string_view name = Sync::kName;
-  return name.starts_with("ck_") || name == "omp_barrier";
+  return name.starts_with("ck_") || name == "omp_barrier" || sync::info_of<Sync>().may_lose_wakeups;
 #else
   return false;
 #endif

@@ -114,7 +114,7 @@ TEST(SyncTiming, OnCountsEveryStageSyncAndKeepsTheTrajectory) {
       kernels::two_mass_model{}, 4, placement::none, 60);
 }
 
-TEST(SyncTiming, SampledTimesOneStepInSixteen) {
+TEST(SyncTiming, SampledTimesOneStepPerPeriod) {
   expect_bitwise_serial<sync::futex_spin, layouts::packed, kernels::two_mass_model, kernels::sync_timing::sampled>(
       kernels::two_mass_model{}, 2, placement::none, 100);
   expect_bitwise_serial<sync::spsc_queue, layouts::per_thread, kernels::two_mass_model,
@@ -123,7 +123,7 @@ TEST(SyncTiming, SampledTimesOneStepInSixteen) {
 
 // A shorter sampling period, set between two calls (as the harness sets it
 // between its warm-up and timed batches), applies from the next call on:
-// steps 0..9 at the default period time steps 0; steps 10..19 at period 3
+// steps 0..9 at the default period time step 0; steps 10..19 at period 3
 // time steps 12, 15, 18.
 TEST(SyncTiming, SamplePeriodAppliesFromTheNextCall) {
   const watchdog guard(std::chrono::milliseconds(30'000 * kSlowdown), "sampled-timing team did not finish");
