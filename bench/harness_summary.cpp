@@ -7,6 +7,8 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <string>
+#include <string_view>
 #include <tuple>
 #include <vector>
 
@@ -184,16 +186,29 @@ std::string render_summary(const run_book& book, const std::string& result_path)
     migration(out, steps);
     contender(out, steps, "futex_spin", "RK4 step time, best layout each", "/step");
 
-    // The goal of issue 4: at 2 threads pinned, the best vs_c2c <= 2.
-    std::optional<std::pair<const captured_entry*, double>> best_c2c;
-    for (const auto& step : steps) {
-      if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
-      if (const auto ratio = step.entry->median("vs_c2c"); ratio && (!best_c2c || *ratio < best_c2c->second))
-        best_c2c = {step.entry, *ratio};
+    // The goal of issue 4: at 2 threads pinned, the best stage sync within 2x
+    // the one-way core-to-core latency. Read against the latency measured in
+    // the same call (vs_c2c_paired) where the entry has it, and against the
+    // run's calibration (vs_c2c) for reference.
+    bool header = false;
+    for (const char* ratio_name : {"vs_c2c_paired", "vs_c2c"}) {
+      std::optional<std::pair<const captured_entry*, double>> best_c2c;
+      for (const auto& step : steps) {
+        if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
+        if (const auto ratio = step.entry->median(ratio_name); ratio && (!best_c2c || *ratio < best_c2c->second))
+          best_c2c = {step.entry, *ratio};
+      }
+      if (!best_c2c) continue;
+      const bool paired = std::string_view(ratio_name) == "vs_c2c_paired";
+      const auto latency = best_c2c->first->median("c2c_paired_ns");
+      out += fmt::format(
+          "{}{} {:.2f} ({}; {})\n",
+          header ? "  against the run's calibration: " : "\nBest stage sync at threads:2 pin:compact: ",
+          ratio_name, best_c2c->second, best_c2c->first->name,
+          paired && latency ? fmt::format("one-way latency in the same calls {}; goal <= 2", format_ns(*latency))
+                            : (header ? "for reference" : "goal <= 2"));
+      header = true;
     }
-    if (best_c2c)
-      out += fmt::format("\nBest stage sync at threads:2 pin:compact: vs_c2c {:.2f} ({}; goal <= 2)\n",
-                         best_c2c->second, best_c2c->first->name);
   }
 
   std::vector<measured> episodes = measured_of(book, "barrier", "ns_per_episode");

@@ -175,6 +175,12 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
       if (lockstep::platform::affinity_cpu_count() >= 2) {
         EXPECT_TRUE(entry.contains("vs_c2c")) << name;
       }
+      // Two threads pinned on two CPUs: the latency between them, measured in
+      // the same call, and the stage sync against it.
+      if (lockstep::platform::affinity_cpu_count() >= 2 && name.find("/pin:compact/threads:2") != std::string::npos) {
+        EXPECT_GT(entry.value("c2c_paired_ns", 0.0), 0.0) << name;
+        EXPECT_TRUE(entry.contains("vs_c2c_paired")) << name;
+      }
       // Migrations: a counter when the machine gives them, absent (never 0 made up) when not.
       EXPECT_EQ(entry.contains("migrations_per_kstep"), migrations) << name;
     }
