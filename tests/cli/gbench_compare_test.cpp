@@ -14,12 +14,14 @@
 #include <system_error>
 
 #include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
 #include "tests/support/watchdog.hpp"
 
 namespace {
 
 namespace fs = std::filesystem;
 using lockstep::testing::run_command;
+using lockstep::testing::scratch_directory;
 using lockstep::testing::watchdog;
 
 // Where Debian's libbenchmark-tools puts Google Benchmark's compare tool.
@@ -27,32 +29,13 @@ constexpr const char* kCompareTool = "/usr/share/benchmark/compare.py";
 // Debian's interpreter: a pyenv python3 first on PATH cannot see Debian's scipy.
 constexpr const char* kPython = "/usr/bin/python3";
 
-// A fresh directory for the result file, removed afterwards.
-class scratch_directory {
- public:
-  scratch_directory() {
-    char name[] = "/tmp/lockstep-gbench-compare-XXXXXX";
-    if (::mkdtemp(name) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = name;
-  }
-  ~scratch_directory() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  scratch_directory(const scratch_directory&) = delete;  // owns the directory
-  scratch_directory& operator=(const scratch_directory&) = delete;
-  const fs::path& path() const noexcept { return path_; }
-
- private:
-  fs::path path_;
-};
 
 TEST(GoogleBenchmarkTools, CompareAcceptsTheResultJson) {
   if (!fs::exists(kCompareTool))
     GTEST_SKIP() << kCompareTool << " is absent: install Debian's libbenchmark-tools (scripts/setup.sh --test)";
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown),
                  "a tiny lockstep run or Google Benchmark's compare.py did not finish");
-  scratch_directory scratch;
+  scratch_directory scratch("lockstep-gbench-compare");
   const std::string results = (scratch.path() / "tiny.json").string();
 
   // std_barrier too: its entries omit futex_waits_per_step (unavailable), which

@@ -22,34 +22,17 @@
 #include "platform/placement.hpp"
 #include "sync/registry.hpp"
 #include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
 #include "tests/support/watchdog.hpp"
 
 namespace {
 
 using lockstep::testing::count_lines;
 using lockstep::testing::run_command;
+using lockstep::testing::scratch_directory;
 using lockstep::testing::watchdog;
 namespace fs = std::filesystem;
 
-// A fresh directory per test, removed afterwards.
-class scratch_directory {
- public:
-  scratch_directory() {
-    char name[] = "/tmp/lockstep-run-test-XXXXXX";
-    if (::mkdtemp(name) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = name;
-  }
-  ~scratch_directory() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  scratch_directory(const scratch_directory&) = delete;  // owns the directory
-  scratch_directory& operator=(const scratch_directory&) = delete;
-  const fs::path& path() const noexcept { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // The primitive of a "kind/sync:S/..." entry, from the registry.
 const lockstep::sync::primitive_info& primitive_of(const std::string& entry_name) {
@@ -102,7 +85,7 @@ TEST(RunCli, UnknownSyncListsTheValidOnes) {
 
 TEST(RunCli, TinyRunWritesAgreedJson) {
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a tiny lockstep run did not finish");
-  scratch_directory scratch;
+  scratch_directory scratch("lockstep-run-test");
   const fs::path out = scratch.path() / "nested" / "tiny.json";
   const auto result = run_command(run_args({"--quick", "--sync", "std_barrier,futex_spin,seqlock", "--layout",
                                             "padded64,per_thread", "--threads", "2", "--pin", "compact",
@@ -201,7 +184,7 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
 // each is its counter over the context's calibration.
 TEST(RunCli, InterleavedRunDerivesRatiosFromTheWholeRun) {
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "an interleaved lockstep run did not finish");
-  scratch_directory scratch;
+  scratch_directory scratch("lockstep-run-test");
   const fs::path out = scratch.path() / "interleaved.json";
   const auto result = run_command(run_args({"--quick", "--interleave", "--sync", "futex_spin,seqlock", "--layout",
                                             "per_thread", "--threads", "2", "--pin", "compact", "--repetitions", "3",
@@ -237,7 +220,7 @@ TEST(RunCli, InterleavedRunDerivesRatiosFromTheWholeRun) {
 
 TEST(RunCli, InterruptLeavesNoResultFile) {
   watchdog guard(std::chrono::seconds(120 * lockstep::testing::kSlowdown), "an interrupted run did not end");
-  scratch_directory scratch;
+  scratch_directory scratch("lockstep-run-test");
   const fs::path out = scratch.path() / "interrupted.json";
   std::vector<std::string> args = run_args({"--sync", "std_barrier", "--repetitions", "50", "--out", out.string()});
   std::vector<char*> argv;

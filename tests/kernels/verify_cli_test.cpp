@@ -14,6 +14,7 @@
 
 #include "kernels/normal_modes.hpp"
 #include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
 
 namespace {
 
@@ -26,27 +27,6 @@ command_result verify(std::vector<std::string> arguments) {
   return run_command(arguments);
 }
 
-// A fresh directory for one test's files, removed afterwards.
-class scratch_directory {
- public:
-  scratch_directory() {
-    std::string pattern = (std::filesystem::temp_directory_path() / "lockstep-verify-XXXXXX").string();
-    if (::mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~scratch_directory() { std::filesystem::remove_all(path_); }
-  scratch_directory(const scratch_directory&) = delete;  // one owner removes the directory
-  scratch_directory& operator=(const scratch_directory&) = delete;
-  [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
-  [[nodiscard]] std::vector<std::string> entries() const {
-    std::vector<std::string> names;
-    for (const auto& entry : std::filesystem::directory_iterator(path_)) names.push_back(entry.path().filename().string());
-    return names;
-  }
-
- private:
-  std::filesystem::path path_;
-};
 
 std::string slurp(const std::string& path) {
   std::ifstream input(path);
@@ -106,7 +86,7 @@ TEST(VerifyCli, ErrorsOutsideTheBoundsAreExitOne) {
 }
 
 TEST(VerifyCli, CsvHoldsTheTrajectory) {
-  const scratch_directory directory;
+  const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("trajectory.csv");
   const command_result result = verify({"--dt", "0.002", "--t-end", "0.5", "--csv", path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
@@ -140,7 +120,7 @@ TEST(VerifyCli, CsvHoldsTheTrajectory) {
 }
 
 TEST(VerifyCli, JsonHoldsTheFigures) {
-  const scratch_directory directory;
+  const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("verify.json");
   const command_result result = verify({"--json", path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
@@ -177,7 +157,7 @@ TEST(VerifyCli, JsonHoldsTheFigures) {
 }
 
 TEST(VerifyCli, OtherParametersAreUsed) {
-  const scratch_directory directory;
+  const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("verify.json");
   const command_result result =
       verify({"--m1", "0.05", "--m2", "0.01", "--c1", "3", "--c2", "70", "--dt", "0.0005", "--t-end", "0.5", "--json", path});
