@@ -86,16 +86,19 @@ std::optional<double> run_book::serial_step_ns() const {
   return entry->median("ns_per_step");
 }
 
-bool has_derived_ratios(const captured_entry& entry) {
-  const std::string kind = entry.field("kind");
-  return (kind == "rk4" && entry.field("variant") != "serial") || kind == "overhead";
+bool has_derived_ratios(const std::map<std::string, std::string>& fields) {
+  const auto field = [&](const char* key) {
+    const auto found = fields.find(key);
+    return found == fields.end() ? std::string{} : found->second;
+  };
+  return (field("kind") == "rk4" && field("variant") != "serial") || field("kind") == "overhead";
 }
 
 void run_book::derive_ratios() {
   const std::optional<double> serial = serial_step_ns();
   const std::optional<double> c2c = c2c_one_way_ns();
   for (captured_entry& entry : entries_) {
-    if (!has_derived_ratios(entry)) continue;
+    if (!has_derived_ratios(entry.fields)) continue;
     for (auto& repetition : entry.repetitions) {
       if (const auto step = repetition.find("ns_per_step"); step != repetition.end() && serial && *serial > 0.0)
         repetition["vs_serial"] = step->second / *serial;

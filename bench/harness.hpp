@@ -107,9 +107,10 @@ struct captured_entry {
   std::string field(const std::string& key) const;
 };
 
-// Whether an entry carries vs_serial and vs_c2c: the composed step's entries
-// (rk4/sync:..., overhead/...), not the calibrations.
-bool has_derived_ratios(const captured_entry& entry);
+// Whether an entry, by its name's fields (parse_entry_name), carries
+// vs_serial and vs_c2c: the composed step's entries (rk4/sync:...,
+// overhead/...), not the calibrations.
+bool has_derived_ratios(const std::map<std::string, std::string>& fields);
 
 // A combination that was not registered, and why.
 struct skipped_combination {

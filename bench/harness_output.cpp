@@ -104,9 +104,7 @@ void derive_ratios(nlohmann::json& result, std::optional<double> c2c_one_way_ns,
   };
   for (nlohmann::json& row : result["benchmarks"]) {
     if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
-    captured_entry entry;
-    entry.fields = parse_entry_name(row["run_name"].get<std::string>());
-    if (!has_derived_ratios(entry)) continue;
+    if (!has_derived_ratios(parse_entry_name(row["run_name"].get<std::string>()))) continue;
     derive(row, "ns_per_step", "vs_serial", serial_step_ns);
     derive(row, "sync_ns_per_stage", "vs_c2c", c2c_one_way_ns);
   }

@@ -88,6 +88,39 @@ void serial_entry(benchmark::State& state, harness_state& harness) {
       static_cast<double>(total_ns) / (static_cast<double>(batches) * static_cast<double>(steps));
 }
 
+// Two pinned participants on two CPUs (the vs_c2c goal's case): the one-way
+// core-to-core latency between exactly those CPUs, measured right after the
+// entry's timed batches (a few hundred microseconds), and vs_c2c_paired =
+// sync_ns_per_stage / it. A VM can change pace for seconds at a time (the
+// development VM's one-way latency moved between about 25 and 115 ns within a
+// run, its 2-thread steps with it), so the run's calibration, measured minutes
+// earlier, may belong to another pace; this one belongs to the same. vs_c2c
+// (the run's) stays, for comparing runs.
+void add_paired_c2c(benchmark::State& state, const platform::placement_plan& plan, unsigned threads) {
+  const auto pu_a = plan.pu_at(0);
+  const auto pu_b = plan.pu_at(1);
+  const auto sync_stage = state.counters.find("sync_ns_per_stage");
+  const bool fixed_pair = plan.kind == platform::placement::compact || plan.kind == platform::placement::scatter;
+  if (threads != 2 || !fixed_pair || !pu_a || !pu_b || *pu_a == *pu_b || sync_stage == state.counters.end()) return;
+  c2c::pair_request request;
+  request.cpu_a = static_cast<int>(*pu_a);
+  request.cpu_b = static_cast<int>(*pu_b);
+  request.how = c2c::method::cas;
+  request.samples = 21;
+  request.rounds_per_sample = 50;
+  request.warmup_rounds = 200;
+  try {
+    const double one_way = platform::summarize(c2c::measure_pair(request)).p50;
+    if (one_way > 0.0) {
+      state.counters["c2c_paired_ns"] = one_way;
+      state.counters["vs_c2c_paired"] = sync_stage->second.value / one_way;
+    }
+  } catch (const std::exception&) {
+    // Could not pin the pair (the affinity set changed): the counters are
+    // omitted, never made up; vs_c2c still divides by the run's figure.
+  }
+}
+
 // One call of an RK4 entry: the composed step on a pinned team.
 template <class Sync, class Layout, kernels::sync_timing Timing>
 void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
@@ -146,41 +179,7 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
   state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
 
-  // Two pinned participants on two CPUs (the vs_c2c goal's case): the
-  // one-way core-to-core latency between exactly those CPUs, measured in this
-  // call right after the timed batches (a few hundred microseconds), and
-  // vs_c2c_paired = sync_ns_per_stage / it. A VM can change pace for seconds
-  // at a time (the development VM's one-way latency moved between about 25
-  // and 115 ns within a run, its 2-thread steps with it), so the run's
-  // calibration, measured minutes earlier, may belong to another pace; this
-  // one belongs to the same. vs_c2c (the run's) stays, for comparing runs.
-  if constexpr (kInstrumented) {
-    const auto pu_a = plan.pu_at(0);
-    const auto pu_b = plan.pu_at(1);
-    const auto sync_stage = state.counters.find("sync_ns_per_stage");
-    const bool fixed_pair = plan.kind == platform::placement::compact || plan.kind == platform::placement::scatter;
-    if (spec.threads == 2 && fixed_pair && pu_a && pu_b && *pu_a != *pu_b &&
-        sync_stage != state.counters.end()) {
-      c2c::pair_request request;
-      request.cpu_a = static_cast<int>(*pu_a);
-      request.cpu_b = static_cast<int>(*pu_b);
-      request.how = c2c::method::cas;
-      request.samples = 21;
-      request.rounds_per_sample = 50;
-      request.warmup_rounds = 200;
-      try {
-        std::vector<double> samples = c2c::measure_pair(request);
-        const double one_way = platform::summarize(std::move(samples)).p50;
-        if (one_way > 0.0) {
-          state.counters["c2c_paired_ns"] = one_way;
-          state.counters["vs_c2c_paired"] = sync_stage->second.value / one_way;
-        }
-      } catch (const std::exception&) {
-        // Could not pin the pair (the affinity set changed): the counters are
-        // omitted, never made up; vs_c2c still divides by the run's figure.
-      }
-    }
-  }
+  if constexpr (kInstrumented) add_paired_c2c(state, plan, spec.threads);
 
   // The overhead pair's "on" side measures its "off" side too, in the same
   // call, right after: the same plan, batch size and batch count, on a fresh
@@ -230,9 +229,9 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
       instrumented
           ? benchmark::RegisterBenchmark(spec.name().c_str(),
                                          [&harness, spec](benchmark::State& state) {
-                                           // sampled: one step in kSyncTimingSampleSteps
-                                           // reads the clock around its syncs, so the
-                                           // instrumentation stays off most steps.
+                                           // sampled: one step per sampling period
+                                           // (rk4_entry sets it) reads the clock around
+                                           // its syncs; the other steps read none.
                                            rk4_entry<Sync, Layout, kernels::sync_timing::sampled>(state, harness,
                                                                                                   spec);
                                          })

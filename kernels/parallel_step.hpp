@@ -167,14 +167,14 @@ struct exchange_for {
 // The stage-sync clock: a policy so that the step's loop has no branch on it.
 template <sync_timing Timing>
 struct sync_clock {
-  void begin_step(std::uint64_t /*step*/) noexcept {}
+  void begin_step() noexcept {}
   void start() noexcept {}
   void stop(stage_sync_time& /*time*/) noexcept {}
 };
 template <>
 struct sync_clock<sync_timing::on> {
   std::int64_t started = 0;
-  void begin_step(std::uint64_t /*step*/) noexcept {}
+  void begin_step() noexcept {}
   void start() noexcept { started = platform::now_ns(); }
   void stop(stage_sync_time& time) noexcept {
     time.nanoseconds += static_cast<std::uint64_t>(platform::now_ns() - started);
@@ -183,10 +183,18 @@ struct sync_clock<sync_timing::on> {
 };
 template <>
 struct sync_clock<sync_timing::sampled> {
-  std::uint64_t period = kSyncTimingSampleSteps;  // >= 1
+  // Samples steps 0, period, 2 period, ...: the one division is here, once per
+  // call of run; the step loop only counts down.
+  sync_clock(std::uint64_t sample_period, std::uint64_t first_step) noexcept
+      : period(sample_period), steps_to_sample((sample_period - first_step % sample_period) % sample_period) {}
+  std::uint64_t period;           // >= 1
+  std::uint64_t steps_to_sample;  // steps before the next sampled one
   std::int64_t started = 0;
   bool sampling = false;
-  void begin_step(std::uint64_t step) noexcept { sampling = step % period == 0; }
+  void begin_step() noexcept {
+    sampling = steps_to_sample == 0;
+    steps_to_sample = sampling ? period - 1 : steps_to_sample - 1;
+  }
   void start() noexcept {
     if (sampling) started = platform::now_ns();
   }
@@ -279,7 +287,9 @@ class parallel_rk4 {
   // from a barrier completion that the whole team waits on: that completion
   // happens-before every participant's next call). A slow step can afford a
   // short period; a fast one needs a long one to keep the clock's cost small.
-  void set_sync_sample_period(std::uint64_t period) noexcept { sync_sample_period_ = std::max<std::uint64_t>(period, 1); }
+  void set_sync_sample_period(std::uint64_t period) noexcept {
+    sync_sample_period_ = std::max<std::uint64_t>(period, 1);
+  }
   [[nodiscard]] std::uint64_t sync_sample_period() const noexcept { return sync_sample_period_; }
   // How many steps ahead of participant 0 a stop is set (see run_steps).
   [[nodiscard]] std::uint64_t stop_margin_steps() const noexcept { return stop_margin_; }
@@ -312,9 +322,8 @@ class parallel_rk4 {
     const unsigned me = self.id;
     const layouts::equation_block block = blocks_.block(me);
     participant_record& record = records_[me];
-    detail::sync_clock<Timing> clock;
-    if constexpr (Timing == sync_timing::sampled) clock.period = sync_sample_period_;
     const std::uint64_t first_step = record.steps_taken;
+    detail::sync_clock<Timing> clock = make_sync_clock(first_step);
     std::uint64_t end = first_step + steps;
     bool stop_requested = false;
     for (;;) {
@@ -331,7 +340,7 @@ class parallel_rk4 {
         if (requested > first_step && requested < end) end = requested;
       }
       if (step >= end) break;
-      clock.begin_step(step);
+      clock.begin_step();
       const auto parity = static_cast<unsigned>(step & 1U);
       const auto x = exchange_.states(me, parity);
       for (unsigned stage = 0; stage < kRk4Stages; ++stage) {
@@ -397,6 +406,14 @@ class parallel_rk4 {
   };
   static_assert(sizeof(participant_record) % platform::kPrefetchPair == 0,
                 "participant records in an array must not share a line pair");
+
+  detail::sync_clock<Timing> make_sync_clock(std::uint64_t first_step) const noexcept {
+    if constexpr (Timing == sync_timing::sampled) {
+      return detail::sync_clock<Timing>(sync_sample_period_, first_step);
+    } else {
+      return {};
+    }
+  }
 
   static std::vector<participant_plan> plan(const Model& model, const layouts::partition& blocks) {
     std::vector<participant_plan> plans(blocks.participants());

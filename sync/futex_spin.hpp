@@ -37,11 +37,11 @@
 // this was tuned on, bare pthread_barrier and win_event episodes, which sleep
 // every phase, took 25-31 us; with sleeping only, futex_spin's RK4 step at 4
 // threads on 2 CPUs was 10x std::barrier's, which yields in libstdc++'s
-// atomic wait). The budget does not
-// also shrink phase by phase: a first version halved the budget whenever it
-// ran out, and one late wake-up then fed itself (the woken thread arrives
-// late, so its partner's short spin runs out and it sleeps too), settling
-// into sleeping every phase even with a core per participant.
+// atomic wait). The budget does not also shrink phase by phase: a first
+// version halved the budget whenever it ran out, and one late wake-up then
+// fed itself (the woken thread arrives late, so its partner's short spin runs
+// out and it sleeps too), settling into sleeping every phase even with a core
+// per participant.
 #include <sched.h>
 
 #include <atomic>
@@ -137,7 +137,8 @@ class futex_spin {
       if (phase_.sense.load(std::memory_order_acquire) == sense) return;
       platform::cpu_relax();
     }
-    // Yield (oversubscribed only). (4') acquire: as (4).
+    // Yield (oversubscribed only). (4') acquire: as (4), pairs with the
+    // release half of (3).
     for (std::uint32_t yield = 0; yield < mine.yields; ++yield) {
       sched_yield();
       ++self.counters.yields;
