@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "bench/harness.hpp"
-#include "bench/harness_team.hpp"
+#include "bench/harness/run_book.hpp"
+#include "bench/harness/team_driver.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 #include "sync/concepts.hpp"

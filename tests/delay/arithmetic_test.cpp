@@ -6,14 +6,16 @@
 #include <numeric>
 #include <vector>
 
-#include "bench/delay_common.hpp"
+#include "bench/cli/options.hpp"
+#include "bench/harness/result_json.hpp"
 
 namespace {
 
-namespace delay = lockstep::bench::delay;
+namespace bench = lockstep::bench;
+namespace cli = lockstep::cli;
 
 TEST(DelayJson, DistributionOfKnownSamples) {
-  const auto json = delay::distribution_json({5, 1, 4, 2, 3});
+  const auto json = bench::distribution_json({5, 1, 4, 2, 3});
   EXPECT_EQ(json["count"], 5);
   EXPECT_EQ(json["min"], 1.0);
   EXPECT_EQ(json["p50"], 3.0);
@@ -23,18 +25,18 @@ TEST(DelayJson, DistributionOfKnownSamples) {
 }
 
 TEST(DelayJson, NoSamplesIsNullNotZero) {
-  const auto json = delay::distribution_json({});
+  const auto json = bench::distribution_json({});
   EXPECT_EQ(json["count"], 0);
   for (const char* key : {"min", "p50", "p99", "p999", "max"}) EXPECT_TRUE(json[key].is_null()) << key;
 }
 
 TEST(DelayJson, HistogramHoldsEverySample) {
   const std::vector<double> samples = {3, 3.5, 4, 7, 12};
-  const auto h = delay::histogram_of(samples);
+  const auto h = bench::histogram_of(samples);
   EXPECT_EQ(h.total(), samples.size());
   EXPECT_EQ(h.below(), 0u);
   EXPECT_EQ(h.above(), 0u);
-  const auto json = delay::histogram_json(h);
+  const auto json = bench::histogram_json(h);
   EXPECT_EQ(json["bucket_ns"], 1);
   EXPECT_EQ(json["first_ns"], 3);
   ASSERT_EQ(json["counts"].size(), 10u);  // 3..12
@@ -45,11 +47,11 @@ TEST(DelayJson, HistogramHoldsEverySample) {
 }
 
 TEST(CpuList, ParsesRangesAndRejectsGarbage) {
-  EXPECT_EQ(delay::parse_cpu_list("3,0-2,2", "--cores"), (std::vector<int>{0, 1, 2, 3}));
-  EXPECT_THROW(delay::parse_cpu_list("a", "--cores"), lockstep::cli::usage_error);
-  EXPECT_THROW(delay::parse_cpu_list("3-1", "--cores"), lockstep::cli::usage_error);
-  EXPECT_THROW(delay::parse_cpu_list("", "--cores"), lockstep::cli::usage_error);
-  EXPECT_THROW(delay::parse_cpu_list("1,,2", "--cores"), lockstep::cli::usage_error);
+  EXPECT_EQ(cli::parse_cpu_list("3,0-2,2", "--cores"), (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_THROW(cli::parse_cpu_list("a", "--cores"), lockstep::cli::usage_error);
+  EXPECT_THROW(cli::parse_cpu_list("3-1", "--cores"), lockstep::cli::usage_error);
+  EXPECT_THROW(cli::parse_cpu_list("", "--cores"), lockstep::cli::usage_error);
+  EXPECT_THROW(cli::parse_cpu_list("1,,2", "--cores"), lockstep::cli::usage_error);
 }
 
 }  // namespace

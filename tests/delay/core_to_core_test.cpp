@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <thread>
 
-#include "bench/core_to_core.hpp"
+#include "bench/probes/core_to_core.hpp"
 #include "tests/support/watchdog.hpp"
 
 namespace {

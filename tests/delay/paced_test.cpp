@@ -9,25 +9,25 @@
 #include <cstdint>
 #include <thread>
 
-#include "bench/delay_paced.hpp"
+#include "bench/probes/paced.hpp"
 #include "sync/team.hpp"
 #include "tests/support/watchdog.hpp"
 
 namespace {
 
-namespace delay = lockstep::bench::delay;
+namespace probes = lockstep::bench::probes;
 
 TEST(PacedRun, RecordsEveryPeriodAndThread) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced run");
   constexpr unsigned kParticipants = 3;
-  delay::paced_settings settings;
+  probes::paced_settings settings;
   settings.period_ns = 2'000'000;
   settings.periods = 10;
   settings.lead_ns = 1'000'000;
   lockstep::sync::std_thread_team team(kParticipants);
   std::atomic<int> prepared{0};
   std::atomic<int> steps{0};
-  const auto run = delay::run_paced(
+  const auto run = probes::run_paced(
       team, kParticipants, settings, [&](unsigned) { prepared.fetch_add(1); },
       [&](unsigned, std::uint64_t) { steps.fetch_add(1); });
   EXPECT_EQ(prepared.load(), 3);
@@ -45,13 +45,13 @@ TEST(PacedRun, RecordsEveryPeriodAndThread) {
 
 TEST(PacedRun, EveryOverrunIsADeadlineMiss) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced overrun");
-  delay::paced_settings settings;
+  probes::paced_settings settings;
   settings.period_ns = 100'000;  // 0.1 ms
   settings.periods = 5;
   settings.lead_ns = 1'000'000;
   lockstep::sync::std_thread_team team(1);
   // A step that sleeps 0.5 ms cannot finish inside a 0.1 ms period.
-  const auto run = delay::run_paced(
+  const auto run = probes::run_paced(
       team, 1, settings, [](unsigned) {},
       [](unsigned, std::uint64_t) { std::this_thread::sleep_for(std::chrono::microseconds(500)); });
   EXPECT_EQ(run.deadline_misses, 5u);
@@ -60,12 +60,12 @@ TEST(PacedRun, EveryOverrunIsADeadlineMiss) {
 
 TEST(PacedRun, AFailedPinIsReportedAndTheRunCompletes) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced pin failure");
-  delay::paced_settings settings;
+  probes::paced_settings settings;
   settings.period_ns = 1'000'000;
   settings.periods = 3;
   settings.lead_ns = 1'000'000;
   lockstep::sync::std_thread_team team(2);
-  const auto run = delay::run_paced(
+  const auto run = probes::run_paced(
       team, 2, settings,
       [](unsigned id) {
         if (id == 1) throw std::runtime_error("cannot pin");

@@ -6,16 +6,17 @@
 #include <map>
 #include <string>
 
-#include "bench/delay_c2c_plan.hpp"
-#include "bench/delay_common.hpp"
+#include "bench/probes/c2c_pairs.hpp"
+#include "bench/cli/options.hpp"
 #include "platform/topology.hpp"
 
 namespace {
 
-namespace delay = lockstep::bench::delay;
+namespace probes = lockstep::bench::probes;
+namespace cli = lockstep::cli;
 using lockstep::platform::topology;
 
-std::map<std::string, int> count_relations(const delay::c2c_plan& plan) {
+std::map<std::string, int> count_relations(const probes::c2c_plan& plan) {
   std::map<std::string, int> counts;
   for (const auto& pair : plan.pairs) ++counts[pair.relation];
   return counts;
@@ -24,7 +25,7 @@ std::map<std::string, int> count_relations(const delay::c2c_plan& plan) {
 TEST(C2cPairLabels, TwoSocketsWithEveryLevel) {
   // 2 packages x 2 L3 x 2 L2 x 2 cores x 2 PUs = 32 PUs, 496 pairs.
   const auto machine = topology::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
-  const auto plan = delay::plan_c2c_pairs(machine, delay::usable_cpus(machine, true), 1000, 1);
+  const auto plan = probes::plan_c2c_pairs(machine, cli::usable_cpus(machine, true), 1000, 1);
   EXPECT_FALSE(plan.sampled);
   EXPECT_EQ(plan.all_pairs, 496u);
   const auto counts = count_relations(plan);
@@ -38,9 +39,9 @@ TEST(C2cPairLabels, TwoSocketsWithEveryLevel) {
 
 TEST(C2cPairLabels, WithoutSmtOnePuPerCore) {
   const auto machine = topology::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
-  const auto cpus = delay::usable_cpus(machine, false);
+  const auto cpus = cli::usable_cpus(machine, false);
   ASSERT_EQ(cpus.size(), 16u);
-  const auto plan = delay::plan_c2c_pairs(machine, cpus, 1000, 1);
+  const auto plan = probes::plan_c2c_pairs(machine, cpus, 1000, 1);
   const auto counts = count_relations(plan);
   EXPECT_EQ(counts.count("SMT siblings"), 0u);
   EXPECT_EQ(counts.at("shared L2"), 8);
@@ -49,7 +50,7 @@ TEST(C2cPairLabels, WithoutSmtOnePuPerCore) {
 
 TEST(C2cPairLabels, DesktopShapeIsAllSharedL3) {
   const auto machine = topology::from_synthetic("pack:1 l3:1 l2:4 core:1 pu:1");
-  const auto plan = delay::plan_c2c_pairs(machine, delay::usable_cpus(machine, false), 100, 1);
+  const auto plan = probes::plan_c2c_pairs(machine, cli::usable_cpus(machine, false), 100, 1);
   const auto counts = count_relations(plan);
   EXPECT_EQ(counts.at("shared L3"), 6);
   EXPECT_EQ(counts.size(), 1u);
@@ -57,9 +58,9 @@ TEST(C2cPairLabels, DesktopShapeIsAllSharedL3) {
 
 TEST(C2cPairLabels, SamplingIsBoundedDeterministicAndSaid) {
   const auto machine = topology::from_synthetic("pack:2 core:16 pu:2");
-  const auto cpus = delay::usable_cpus(machine, true);
-  const auto first = delay::plan_c2c_pairs(machine, cpus, 50, 7);
-  const auto again = delay::plan_c2c_pairs(machine, cpus, 50, 7);
+  const auto cpus = cli::usable_cpus(machine, true);
+  const auto first = probes::plan_c2c_pairs(machine, cpus, 50, 7);
+  const auto again = probes::plan_c2c_pairs(machine, cpus, 50, 7);
   EXPECT_TRUE(first.sampled);
   EXPECT_EQ(first.all_pairs, 64u * 63u / 2u);
   ASSERT_EQ(first.pairs.size(), 50u);
@@ -72,10 +73,10 @@ TEST(C2cPairLabels, SamplingIsBoundedDeterministicAndSaid) {
 
 TEST(C2cPairLabels, RequestedCoresMustBeUsable) {
   const auto machine = topology::from_synthetic("pack:1 core:4 pu:2");
-  const auto without_smt = delay::usable_cpus(machine, false);
-  EXPECT_EQ(delay::restrict_to(without_smt, {0, 2}, "--cores"), (std::vector<int>{0, 2}));
-  EXPECT_THROW(delay::restrict_to(without_smt, {0, 1}, "--cores"), lockstep::cli::usage_error);  // 1: SMT sibling
-  EXPECT_THROW(delay::restrict_to(without_smt, {0, 99}, "--cores"), lockstep::cli::usage_error);
+  const auto without_smt = cli::usable_cpus(machine, false);
+  EXPECT_EQ(cli::restrict_to(without_smt, {0, 2}, "--cores"), (std::vector<int>{0, 2}));
+  EXPECT_THROW(cli::restrict_to(without_smt, {0, 1}, "--cores"), lockstep::cli::usage_error);  // 1: SMT sibling
+  EXPECT_THROW(cli::restrict_to(without_smt, {0, 99}, "--cores"), lockstep::cli::usage_error);
 }
 
 }  // namespace

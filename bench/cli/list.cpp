@@ -1,0 +1,76 @@
+// lockstep list: every synchronisation primitive, layout and placement, one
+// line each, from the registries the benchmark matrix iterates (so the list
+// cannot drift from what `lockstep run` accepts).
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <memory>
+#include <string>
+
+#include "bench/cli/command.hpp"
+#include "layouts/registry.hpp"
+#include "platform/placement.hpp"
+#include "sync/registry.hpp"
+
+namespace lockstep::cli {
+
+namespace {
+
+std::string primitive_tags(const sync::primitive_info& info) {
+  std::string tags = info.kind == sync::primitive_kind::barrier ? "barrier" : "dataflow";
+  if (info.pure_spin) tags += ", pure-spin";
+  if (info.may_lose_wakeups) tags += ", loses wake-ups";
+  if (!info.counts_futex_waits) tags += ", futex waits unavailable";
+  return tags;
+}
+
+// Which primitives' futex_waits_per_step the result JSON carries, and which
+// hide their futex calls inside a library (the counter is omitted for those).
+std::string futex_waits_note() {
+  std::string counted;
+  std::string hidden;
+  for (const auto& info : sync::all_primitive_info) {
+    std::string& list = info.counts_futex_waits ? counted : hidden;
+    list += (list.empty() ? "" : ", ") + std::string(info.name);
+  }
+  return fmt::format(
+      "  futex waits (futex_waits_per_step) counted, or 0 because it never sleeps: {}\n"
+      "  futex waits unavailable (inside the library; the counter is omitted): {}\n",
+      counted.empty() ? "none" : counted, hidden.empty() ? "none" : hidden);
+}
+
+void print_list(const std::string& what) {
+  if (what.empty() || what == "sync") {
+    fmt::print("Synchronisation primitives (--sync):\n");
+    for (const auto& info : sync::all_primitive_info)
+      fmt::print("  {:<20} [{}] {}\n", info.name, primitive_tags(info), info.description);
+    fmt::print("{}", futex_waits_note());
+  }
+  if (what.empty() || what == "layout") {
+    if (what.empty()) fmt::print("\n");
+    fmt::print("Layouts (--layout):\n");
+    for (const auto& [name, description] : layouts::all_layout_info)
+      fmt::print("  {:<20} {}\n", name, description);
+  }
+  if (what.empty() || what == "placement") {
+    if (what.empty()) fmt::print("\n");
+    fmt::print("Placements (--pin):\n");
+    for (const auto& placement : platform::placements())
+      fmt::print("  {:<20} {}\n", placement.name, placement.description);
+  }
+}
+
+}  // namespace
+
+void add_list(CLI::App& app, int& result) {
+  auto what = std::make_shared<std::string>();
+  CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout and placement");
+  list->add_option("what", *what, "Only one group: sync, layout, placement")
+      ->check(CLI::IsMember({"sync", "layout", "placement"}));
+  list->callback([what, &result] {
+    print_list(*what);
+    result = kExitOk;
+  });
+}
+
+}  // namespace lockstep::cli

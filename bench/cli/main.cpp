@@ -1,0 +1,81 @@
+// lockstep: one binary, one subcommand per job (DESIGN.md, Commands).
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <exception>
+#include <string>
+
+#include "bench/cli/command.hpp"
+#include "bench/harness/build_info.hpp"
+
+namespace {
+
+// `lockstep help [COMMAND]`: the same text as `lockstep COMMAND --help`.
+void add_help(CLI::App& app, int& result) {
+  auto* help = app.add_subcommand("help", "Show the help of lockstep or of one command");
+  auto command = std::make_shared<std::string>();
+  help->add_option("command", *command, "The command to describe");
+  help->callback([&app, command, &result] {
+    if (command->empty()) {
+      fmt::print("{}", app.help());
+      result = lockstep::cli::kExitOk;
+      return;
+    }
+    CLI::App* sub = nullptr;
+    try {
+      sub = app.get_subcommand(*command);
+    } catch (const CLI::OptionNotFound&) {
+      throw lockstep::cli::usage_error("unknown command '" + *command +
+                                       "'; `lockstep --help` lists the commands");
+    }
+    fmt::print("{}", sub->help());
+    result = lockstep::cli::kExitOk;
+  });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "lockstep: the coupled-oscillator RK4 step as a benchmark of multi-core delay\n"
+      "(synchronisation primitives x data layouts x thread placements)",
+      "lockstep"};
+  app.set_version_flag("--version", fmt::format("lockstep {} (result schema {}, {})",
+                                                lockstep::build_info::kVersion,
+                                                lockstep::build_info::kResultSchema,
+                                                lockstep::build_info::kGitRevision));
+  app.require_subcommand(1);
+
+  int result = lockstep::cli::kExitOk;
+  lockstep::cli::add_run(app, result);
+  lockstep::cli::add_verify(app, result);
+  lockstep::cli::add_c2c(app, result);
+  lockstep::cli::add_delay(app, result);
+  lockstep::cli::add_falseshare(app, result);
+  lockstep::cli::add_migrate(app, result);
+  lockstep::cli::add_topology(app, result);
+  lockstep::cli::add_list(app, result);
+  lockstep::cli::add_reports(app, result);
+  add_help(app, result);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    fmt::print(stderr, "lockstep: {}\n", e.what());
+    return lockstep::cli::kExitUsage;
+  } catch (const lockstep::cli::usage_error& e) {
+    fmt::print(stderr, "lockstep: {}\n", e.what());
+    return lockstep::cli::kExitUsage;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "lockstep: internal error: {}\n", e.what());
+    return 3;
+  }
+  return result;
+}

@@ -1,0 +1,96 @@
+// lockstep compare, lockstep report: the result tools written in Python
+// (reports/, DESIGN.md "Reports"). These two subcommands only locate the
+// Python entry point and exec Debian's interpreter on it with every argument
+// passed through untouched, so that the Python tool owns its own options,
+// its own --help, and its own exit status (0 ok, 1 regression beyond
+// --fail-above, 2 bad input).
+//
+// Why /usr/bin/python3 and not `python3` from PATH: a pyenv python3 may come
+// first on PATH and cannot import Debian's numpy, scipy and matplotlib.
+//
+// Where reports/ is: the source tree this binary was configured from
+// (build_info::kSourceDir), or the directory named by LOCKSTEP_REPORTS_DIR
+// when the binary runs away from its source tree (an installed copy, a test
+// that points at another checkout). LOCKSTEP_PYTHON overrides the interpreter.
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "bench/cli/command.hpp"
+#include "bench/harness/build_info.hpp"
+
+namespace lockstep::cli {
+namespace {
+
+constexpr const char* kDefaultPython = "/usr/bin/python3";
+constexpr const char* kEntryScript = "cli.py";
+
+std::string environment_or(const char* name, const std::string& fallback) {
+  const char* value = std::getenv(name);
+  return (value != nullptr && *value != '\0') ? std::string(value) : fallback;
+}
+
+// Replaces this process with `python3 reports/cli.py <tool> <arguments...>`.
+// Returns only by throwing: exec failed, or the entry point is missing.
+[[noreturn]] void exec_python_tool(const std::string& tool, const std::vector<std::string>& arguments) {
+  const std::string reports_dir =
+      environment_or("LOCKSTEP_REPORTS_DIR", std::string(build_info::kSourceDir) + "/reports");
+  const std::string python = environment_or("LOCKSTEP_PYTHON", kDefaultPython);
+  const std::string script = reports_dir + "/" + kEntryScript;
+
+  if (::access(script.c_str(), R_OK) != 0) {
+    throw usage_error(fmt::format("cannot find the report tools at {} ({}); set LOCKSTEP_REPORTS_DIR to the "
+                                  "reports/ directory of a lockstep checkout",
+                                  script, std::strerror(errno)));
+  }
+  if (::access(python.c_str(), X_OK) != 0) {
+    throw usage_error(fmt::format("cannot run {} ({}); `scripts/setup.sh` installs python3 with numpy, scipy "
+                                  "and matplotlib",
+                                  python, std::strerror(errno)));
+  }
+
+  std::vector<std::string> words{python, script, tool};
+  words.insert(words.end(), arguments.begin(), arguments.end());
+  std::vector<char*> argv;
+  argv.reserve(words.size() + 1);
+  for (auto& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
+
+  std::fflush(stdout);
+  std::fflush(stderr);
+  ::execv(python.c_str(), argv.data());
+  throw usage_error(fmt::format("cannot run {}: {}", python, std::strerror(errno)));
+}
+
+// One pass-through subcommand: no options of its own (not even --help, which
+// the Python tool answers), everything after the name goes to Python in order.
+void add_pass_through(CLI::App& app, const std::string& name, const std::string& description) {
+  auto* command = app.add_subcommand(name, description);
+  command->set_help_flag();  // `lockstep compare --help` is the Python tool's help
+  command->allow_extras();
+  command->prefix_command();
+  command->callback([command, name] { exec_python_tool(name, command->remaining()); });
+}
+
+}  // namespace
+
+void add_reports(CLI::App& app, int& result) {
+  (void)result;  // the exec'd tool's exit status is the process's exit status
+  add_pass_through(app, "compare",
+                   "Compare result files across runs and machines: ratio of medians with a confidence "
+                   "interval, Mann-Whitney U with Holm's correction, counters, machine fingerprints "
+                   "(`lockstep compare --help` for the options)");
+  add_pass_through(app, "report",
+                   "HTML + Markdown report with figures from result files (run, c2c, delay, verify --csv) "
+                   "(`lockstep report --help` for the options)");
+}
+
+}  // namespace lockstep::cli

@@ -1,0 +1,50 @@
+#pragma once
+// The result JSON's "context": what a comparison across machines needs
+// (DESIGN.md, Measurements). Every value is a string, as Google Benchmark's
+// custom context requires.
+//
+// One producer for every command that writes a result (run, c2c, delay,
+// falseshare, migrate, verify): machine_context() is the machine and build
+// fingerprint, the same keys with the same values whichever command asks, so
+// that `lockstep compare` can tell "another machine" from "another run".
+// Commands add their own keys beside it (lockstep_mode, c2c_one_way_ns, ...),
+// never another value for a fingerprint key. `lockstep run` merges it into
+// Google Benchmark's context after the run (replacing Google Benchmark's own
+// host_name and num_cpus with the same figures from here).
+#include <nlohmann/json_fwd.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "platform/topology.hpp"
+
+namespace lockstep::bench {
+
+using context_map = std::map<std::string, std::string>;
+
+// lockstep_version, lockstep_schema, git_revision, compiler, cxx_flags,
+// build_type, sanitizer, cpu_model, hypervisor, kernel, host_name, num_cpus, topology,
+// topology_packages, topology_l3, topology_cores, topology_pus, hwloc_version,
+// benchmark_version, boost_version, clocksource, migrations (available or why
+// not). Values the machine cannot give are "unavailable".
+context_map machine_context(const platform::topology& machine);
+
+// Sets (or replaces) these keys in a result document's context.
+void merge_into_result(nlohmann::json& result, const context_map& keys);
+
+// A new result document of one kind ("c2c", "delay", "falseshare", "migrate",
+// "verify"): {"kind", "lockstep_schema", "context": machine_context(machine)}.
+nlohmann::json result_document(const std::string& kind, const platform::topology& machine);
+
+
+// "AMD EPYC" (from /proc/cpuinfo's model name), or "unavailable".
+std::string cpu_model();
+// The hypervisor's vendor from CPUID leaf 0x40000000 ("KVMKVMKVM" -> "kvm"),
+// "none" when the CPU reports no hypervisor, with the container kind appended
+// when one is detectable ("kvm (container: docker)").
+std::string hypervisor();
+// "6.1.0-13-amd64 #1 SMP PREEMPT_DYNAMIC Debian ..." (uname release + version).
+std::string kernel();
+
+}  // namespace lockstep::bench

@@ -1,0 +1,156 @@
+// Progress and the run book's feed, and the result JSON's names (reporters.hpp).
+#include "bench/harness/reporters.hpp"
+
+#include "bench/harness/derived_figures.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <fmt/core.h>
+
+#include <array>
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <stdexcept>
+
+namespace lockstep::bench {
+
+namespace {
+
+std::string format_duration(double seconds) {
+  if (seconds < 90.0) return fmt::format("{:.0f} s", seconds);
+  return fmt::format("{:.0f} min {:02.0f} s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
+}
+
+
+// The counter a user reads first for each kind of entry.
+const char* headline_counter(const std::string& kind) {
+  if (kind == "c2c") return "one_way_ns";
+  if (kind == "barrier") return "ns_per_episode";
+  return "ns_per_step";
+}
+
+}  // namespace
+
+std::map<std::string, std::string> parse_entry_name(const std::string& name) {
+  std::map<std::string, std::string> fields;
+  std::size_t start = 0;
+  bool first = true;
+  while (start <= name.size()) {
+    std::size_t end = name.find('/', start);
+    if (end == std::string::npos) end = name.size();
+    const std::string segment = name.substr(start, end - start);
+    const std::size_t colon = segment.find(':');
+    if (first) {
+      fields["kind"] = segment;
+      first = false;
+    } else if (colon == std::string::npos) {
+      fields["variant"] = segment;
+    } else {
+      fields[segment.substr(0, colon)] = segment.substr(colon + 1);
+    }
+    start = end + 1;
+  }
+  return fields;
+}
+
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run) {
+  benchmark::BenchmarkName name = run.run_name;
+  name.iterations.clear();
+  name.repetitions.clear();  // "/repeats:N", on an entry with its own repetition count
+  name.time_type.clear();
+  return name.str();
+}
+
+void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
+  std::vector<Run> renamed = runs;
+  for (Run& run : renamed) {
+    run.run_name.iterations.clear();
+    run.run_name.repetitions.clear();
+    run.run_name.time_type.clear();
+    // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
+    // Google Benchmark would write it as NaN, which is not JSON. Omitted.
+    for (auto counter = run.counters.begin(); counter != run.counters.end();) {
+      if (std::isfinite(counter->second.value)) {
+        ++counter;
+      } else {
+        counter = run.counters.erase(counter);
+      }
+    }
+  }
+  JSONReporter::ReportRuns(renamed);
+}
+
+progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries)
+    : book_(book), expected_(expected_entries), start_(std::chrono::steady_clock::now()) {}
+
+void derive_ratios(nlohmann::json& result, const calibrations& run) {
+  if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
+  for (nlohmann::json& row : result["benchmarks"]) {
+    if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
+    if (!has_derived_ratios(parse_entry_name(row["run_name"].get<std::string>()))) continue;
+    std::map<std::string, double> counters;
+    for (const auto& [key, value] : row.items())
+      if (value.is_number()) counters[key] = value.get<double>();
+    // Dividing by a constant scales a mean, a median and a standard
+    // deviation alike; a coefficient of variation does not change, so a cv
+    // row's ratio is its counter's cv.
+    const bool coefficient_of_variation = row.value("aggregate_unit", "") == "percentage";
+    for (const derived_ratio& ratio : derived_ratios(counters, run))
+      row[ratio.name] = coefficient_of_variation ? counters.at(ratio.counter) : ratio.value;
+  }
+}
+
+bool progress_reporter::ReportContext(const Context& /*context*/) { return true; }
+
+void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
+  // Google Benchmark reports an entry's repetitions, then (separately) its
+  // aggregates; the book recomputes aggregates, so only the first call counts.
+  const bool any_repetition = std::any_of(runs.begin(), runs.end(), [](const Run& run) {
+    return run.run_type == Run::RT_Iteration;
+  });
+  if (!any_repetition) return;
+  captured_entry entry;
+  // Repetitions carry their own name; aggregates are recomputed from them.
+  for (const Run& run : runs) {
+    if (run.run_type != Run::RT_Iteration) continue;
+    entry.name = plain_name(run);
+    if (run.error_occurred) {
+      entry.error = run.error_message;
+      continue;
+    }
+    std::map<std::string, double> counters;
+    for (const auto& [key, counter] : run.counters) counters[key] = counter.value;
+    entry.repetitions.push_back(std::move(counters));
+  }
+  entry.fields = parse_entry_name(entry.name);
+  // Some repetitions measured, some stopped: the entry counts as measured
+  // (its medians come from the measured ones) and the stop becomes a note.
+  if (!entry.error.empty() && !entry.repetitions.empty()) {
+    book_.notes.push_back(entry.name + ": some repetitions were flagged and left out: " + entry.error);
+    entry.error.clear();
+  }
+  ++finished_;
+
+  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  std::string what;
+  if (!entry.error.empty()) {
+    what = entry.error;
+  } else if (const auto median = entry.median(headline_counter(entry.field("kind")))) {
+    what = format_ns(*median) + (entry.field("kind") == "barrier" ? "/episode" : entry.field("kind") == "c2c" ? " one-way" : "/step");
+  }
+  const std::size_t total = std::max(expected_, finished_);
+  const double left = elapsed / static_cast<double>(finished_) * static_cast<double>(total - finished_);
+  fmt::print(stderr, "[{}/{}] {}  {}  ({} elapsed, about {} left)\n", finished_, total, entry.name, what,
+             format_duration(elapsed), format_duration(left));
+  std::fflush(stderr);
+  book_.record(std::move(entry));
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,65 @@
+#pragma once
+// Where a run's results go: the progress reporter (stderr) that also feeds the
+// run book, and the result file written atomically.
+#include <benchmark/benchmark.h>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "bench/harness/derived_figures.hpp"
+#include "bench/harness/run_book.hpp"
+
+namespace lockstep::bench {
+
+// Google Benchmark's display reporter for `lockstep run`: prints one progress
+// line per finished entry on stderr ("[i/n] name  median  elapsed, estimate"),
+// nothing on stdout (the summary goes there at the end), and records every
+// entry's repetitions in the run book, which is how later entries read the
+// in-run calibrations.
+class progress_reporter : public benchmark::BenchmarkReporter {
+ public:
+  progress_reporter(run_book& book, std::size_t expected_entries);
+
+  bool ReportContext(const Context& context) override;
+  void ReportRuns(const std::vector<Run>& runs) override;
+
+  std::size_t finished() const noexcept { return finished_; }
+
+ private:
+  run_book& book_;
+  std::size_t expected_;
+  std::size_t finished_ = 0;
+  std::chrono::steady_clock::time_point start_;
+};
+
+// Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
+// Google Benchmark appends "/manual_time", "/real_time", "/iterations:N" and
+// "/repeats:N" to a name when an entry uses them; lockstep's names carry only key:value
+// segments (the timing is stated once, in the context's lockstep_timing).
+// Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
+// Google Benchmark would write NaN, which no JSON parser accepts.
+class result_json_reporter : public benchmark::JSONReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override;
+};
+
+// The run's name without Google Benchmark's suffixes (see above).
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
+
+// Splits an entry name into its fields: "kind" (the first segment) and every
+// key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
+std::map<std::string, std::string> parse_entry_name(const std::string& name);
+
+// The same derivation as run_book::derive_ratios, on the result JSON Google
+// Benchmark wrote: every iteration and aggregate row of an rk4 or overhead
+// entry gets vs_serial and vs_c2c from the run's calibrations (either may be
+// absent, and so then is its ratio). Dividing by a constant scales a mean, a
+// median and a standard deviation alike; a coefficient of variation does not
+// change, so a cv row's ratio is its counter's cv.
+void derive_ratios(nlohmann::json& result, const calibrations& run);
+
+}  // namespace lockstep::bench

@@ -1,0 +1,66 @@
+#pragma once
+// The one way lockstep writes a result file (every command: run, c2c, delay,
+// falseshare, migrate, verify, topology): into a temporary file in the
+// destination's own directory, fsync'd, then renamed over the destination.
+// A reader sees the old file or the whole new one, never half of one; a
+// failure (or SIGINT / SIGTERM) removes the temporary file.
+//
+// Bad destinations are found before any measurement: check_result_path
+// creates and removes a probe file where the temporary file will go, so a
+// missing or read-only directory, a directory given as the file, or a place
+// where no file can be created (/proc) fails in a millisecond with one line.
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace lockstep::bench {
+
+// A destination that cannot be written; what() is one line naming the path
+// and why ("cannot write results/x.json: the directory results does not
+// exist"). Commands turn it into their bad-input exit (status 2).
+class result_path_error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// Throws result_path_error when `destination` cannot be written atomically.
+// Creates nothing that stays.
+void check_result_path(const std::string& destination);
+
+// A result file being written. The constructor checks the destination
+// (check_result_path) and creates the temporary file; a tool that writes the
+// file itself (Google Benchmark) writes temporary_path(); commit() fsyncs it
+// and renames it over the destination. Until then the destination is
+// untouched. While one exists, SIGINT, SIGTERM, SIGHUP and SIGPIPE remove
+// the temporary file and end the process (status 128 + the signal) with one
+// line on stderr.
+class atomic_result_file {
+ public:
+  explicit atomic_result_file(std::string destination);
+  ~atomic_result_file();  // removes the temporary file unless committed
+  atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path
+  atomic_result_file& operator=(const atomic_result_file&) = delete;
+
+  const std::string& temporary_path() const noexcept { return temporary_; }
+  const std::string& destination() const noexcept { return destination_; }
+  // Replaces the temporary file's content with `text`.
+  void write(std::string_view text);
+  // fsyncs the temporary file and renames it over the destination; throws
+  // std::runtime_error when that fails (the temporary file is then removed).
+  void commit();
+
+ private:
+  std::string destination_;
+  std::string temporary_;
+  bool committed_ = false;
+};
+
+// check + write + commit in one call: the whole file or nothing.
+void write_result_file(const std::string& destination, std::string_view text);
+
+// results/<host>-<UTC timestamp>.json, its directory created if missing (the
+// default destination is lockstep's to make; a destination the user names
+// must exist).
+std::string default_result_path();
+
+}  // namespace lockstep::bench

@@ -1,0 +1,25 @@
+#pragma once
+// The shapes every result JSON shares (c2c, delay, falseshare, migrate): a
+// distribution and a histogram, written the same way by every command and
+// read by reports/lockstep_reports/inputs.py.
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <vector>
+
+#include "platform/stats.hpp"
+
+namespace lockstep::bench {
+
+// {min, p50, p99, p999, max, count}; no samples: every statistic null and
+// count 0 (a missing number is said, never faked).
+nlohmann::json distribution_json(const std::vector<double>& samples);
+
+// The histogram of these samples (round bucket widths covering min..max, see
+// platform/stats.hpp), every sample added.
+platform::histogram histogram_of(const std::vector<double>& samples, std::size_t max_buckets = 50);
+
+// {bucket_ns, first_ns, counts, below, above}.
+nlohmann::json histogram_json(const platform::histogram& histogram);
+
+}  // namespace lockstep::bench

@@ -1,0 +1,329 @@
+// The RK4 entries and the in-run calibrations (rk4_benchmarks.hpp).
+#include "bench/harness/rk4_entries.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <string_view>
+#include <tuple>
+#include <exception>
+#include <vector>
+
+#include "bench/probes/core_to_core.hpp"
+#include "kernels/oscillator.hpp"
+#include "kernels/parallel_step.hpp"
+#include "kernels/rk4.hpp"
+#include "layouts/registry.hpp"
+#include "platform/clock.hpp"
+#include "platform/stats.hpp"
+#include "sync/registry.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+// One repetition of c2c: a few measure_pair calls (each starts and joins its
+// own two pinned threads), all samples pooled. Once a repetition failed, the
+// later ones fail too (harness_team.hpp, measure_entry, says why).
+void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, unsigned cpu_b) {
+  const std::string name = entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name();
+  if (const auto failed = harness.stalled.find(name); failed != harness.stalled.end()) {
+    state.SkipWithError(("an earlier repetition failed: " + failed->second).c_str());
+    return;
+  }
+  c2c::pair_request request;
+  request.cpu_a = static_cast<int>(cpu_a);
+  request.cpu_b = static_cast<int>(cpu_b);
+  request.how = c2c::method::cas;
+  // 200 samples of 100 round trips: about 4 ms per call at 100 ns one-way,
+  // enough for a stable median; the p99 shows preemptions.
+  request.samples = 200;
+  request.rounds_per_sample = 100;
+  request.warmup_rounds = 1000;
+  std::vector<double> pooled;
+  try {
+    for (auto _ : state) {
+      const std::vector<double> samples = c2c::measure_pair(request);
+      pooled.insert(pooled.end(), samples.begin(), samples.end());
+    }
+  } catch (const std::exception& error) {
+    harness.stalled[name] = error.what();
+    state.SkipWithError(error.what());
+    return;
+  }
+  const platform::distribution one_way = platform::summarize(std::move(pooled));
+  state.counters["one_way_ns"] = one_way.p50;
+  state.counters["one_way_min_ns"] = one_way.min;
+  state.counters["one_way_p99_ns"] = one_way.p99;
+}
+
+// rk4/serial: batches of steps on the benchmark thread, timed by hand so that
+// the batch loop matches the parallel entries'.
+void serial_entry(benchmark::State& state, harness_state& harness) {
+  const kernels::two_mass_model model;
+  kernels::staged_rk4<kernels::two_mass_model> rk4(model, kBenchmarkStepSeconds);
+  const std::string name = "rk4/serial";
+  auto batch_size = harness.units_per_batch.find(name);
+  if (batch_size == harness.units_per_batch.end()) {
+    constexpr std::uint64_t kProbeSteps = 1000;
+    const std::int64_t start = platform::now_ns();
+    rk4.run(kProbeSteps);
+    const double per_step = static_cast<double>(platform::now_ns() - start) / kProbeSteps;
+    batch_size = harness.units_per_batch.emplace(name, units_for_batch(per_step, harness.settings)).first;
+  }
+  const std::uint64_t steps = batch_size->second;
+  rk4.run(steps);  // warm-up batch, as the parallel entries have
+  std::int64_t total_ns = 0;
+  std::uint64_t batches = 0;
+  for (auto _ : state) {
+    const std::int64_t start = platform::now_ns();
+    rk4.run(steps);
+    const std::int64_t batch_ns = platform::now_ns() - start;
+    state.SetIterationTime(static_cast<double>(batch_ns) * 1e-9);
+    total_ns += batch_ns;
+    ++batches;
+  }
+  benchmark::DoNotOptimize(rk4.state().data());
+  state.counters["ns_per_step"] =
+      static_cast<double>(total_ns) / (static_cast<double>(batches) * static_cast<double>(steps));
+}
+
+// Two pinned participants on two CPUs (the vs_c2c goal's case): the one-way
+// core-to-core latency between exactly those CPUs, measured right after the
+// entry's timed batches (a few hundred microseconds), and vs_c2c_paired =
+// sync_ns_per_stage / it. A VM can change pace for seconds at a time (the
+// development VM's one-way latency moved between about 25 and 115 ns within a
+// run, its 2-thread steps with it), so the run's calibration, measured minutes
+// earlier, may belong to another pace; this one belongs to the same. vs_c2c
+// (the run's) stays, for comparing runs.
+void add_paired_c2c(benchmark::State& state, const platform::placement_plan& plan, unsigned threads) {
+  const auto pu_a = plan.pu_at(0);
+  const auto pu_b = plan.pu_at(1);
+  const auto sync_stage = state.counters.find("sync_ns_per_stage");
+  const bool fixed_pair = plan.kind == platform::placement::compact || plan.kind == platform::placement::scatter;
+  if (threads != 2 || !fixed_pair || !pu_a || !pu_b || *pu_a == *pu_b || sync_stage == state.counters.end()) return;
+  c2c::pair_request request;
+  request.cpu_a = static_cast<int>(*pu_a);
+  request.cpu_b = static_cast<int>(*pu_b);
+  request.how = c2c::method::cas;
+  request.samples = 21;
+  request.rounds_per_sample = 50;
+  request.warmup_rounds = 200;
+  try {
+    const double one_way = platform::summarize(c2c::measure_pair(request)).p50;
+    if (one_way > 0.0) {
+      state.counters["c2c_paired_ns"] = one_way;
+      state.counters["vs_c2c_paired"] = sync_stage->second.value / one_way;
+    }
+  } catch (const std::exception&) {
+    // Could not pin the pair (the affinity set changed): the counters are
+    // omitted, never made up; vs_c2c still divides by the run's figure.
+  }
+}
+
+// One call of an RK4 entry: the composed step on a pinned team.
+template <class Sync, class Layout, kernels::sync_timing Timing>
+void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
+  constexpr bool kInstrumented = Timing != kernels::sync_timing::off;
+  constexpr sync::primitive_info info = sync::info_of<Sync>();
+  affinity_guard restore_caller;  // omp_team runs participant 0 on the benchmark thread
+  const platform::placement_plan plan = platform::plan_placement(*harness.machine, spec.pin, spec.threads);
+  const kernels::two_mass_model model;
+  kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, Timing> step(model, kBenchmarkStepSeconds,
+                                                                            spec.threads);
+  sync::team_of_t<Sync> team(spec.threads);
+  std::vector<participant_slot> slots(spec.threads);
+  auto steps = [&step](sync::participant& self, std::uint64_t count) { step.run(self, count); };
+  // The sync time the timed batches start from: read when the warm-up batch
+  // ends (the team waiting at the harness barrier), so that the warm-up's
+  // cold caches and first faults stay out of sync_ns_per_stage.
+  // The sampling period is set there too, from the probed batch size: about
+  // kSampledStepsPerBatch sampled steps per batch, never fewer than one step
+  // in kSyncTimingSampleSteps. A slow step (few per batch) is then timed often
+  // enough to be measured at all, and its clock readings (8 per sampled step)
+  // stay a tiny share of it; a fast one keeps the default period.
+  kernels::stage_sync_time sync_before{};
+  const primitive_traits traits{std::string(info.name), info.pure_spin, info.may_lose_wakeups};
+  const std::string name = spec.name();
+  const auto result = measure_entry(state, harness, name, traits, plan, team, slots, steps, kInstrumented, "step", [&] {
+    if constexpr (Timing == kernels::sync_timing::sampled) {
+      constexpr std::uint64_t kSampledStepsPerBatch = 8;
+      const auto batch = harness.units_per_batch.find(name);
+      const std::uint64_t units = batch == harness.units_per_batch.end() ? 1 : batch->second;
+      step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1, kernels::kSyncTimingSampleSteps));
+    }
+    sync_before = step.sync_time();
+  });
+  if (!result) return;
+
+  const double steps_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));
+  const double step_ns = ns_per_unit(*result);
+  state.counters["ns_per_step"] = step_ns;  // vs_serial is derived after the run (run_book::derive_ratios)
+  if constexpr (kInstrumented) {
+    const kernels::stage_sync_time sync_after = step.sync_time();
+    const std::uint64_t syncs = sync_after.syncs - sync_before.syncs;
+    if (syncs > 0) {
+      // A timed span holds one clock reading's own cost besides the sync (the
+      // end of the first reading and the start of the second: what two
+      // back-to-back readings are apart), so the run's measured reading cost
+      // is taken off each span. vs_c2c is derived after the run
+      // (run_book::derive_ratios), from the whole run's calibration.
+      const double timed_per_stage =
+          static_cast<double>(sync_after.nanoseconds - sync_before.nanoseconds) / static_cast<double>(syncs);
+      state.counters["sync_ns_per_stage"] = timed_per_stage - harness.book->clock_read_ns;
+    }
+  }
+  set_accounting_counters(state, *result, "step");
+  if constexpr (info.counts_futex_waits)  // else unavailable: omitted, never a 0 nobody counted
+    state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
+  state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
+  state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
+
+  if constexpr (kInstrumented) add_paired_c2c(state, plan, spec.threads);
+
+  // The overhead pair's "on" side measures its "off" side too, in the same
+  // call, right after: the same plan, batch size and batch count, on a fresh
+  // step and team without instrumentation or accounting. The two times of a
+  // repetition are then a fraction of a second apart, so their ratio
+  // (overhead_ratio) survives a machine that changes pace during the run,
+  // which two entries measured one after the other do not (the development
+  // VM's 2-thread steps moved between about 280 ns and 1.1 us for seconds).
+  if constexpr (kInstrumented) {
+    if (spec.kind == entry_kind::overhead) {
+      kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, kernels::sync_timing::off> bare(
+          model, kBenchmarkStepSeconds, spec.threads);
+      sync::team_of_t<Sync> bare_team(spec.threads);
+      std::vector<participant_slot> bare_slots(spec.threads);
+      auto bare_steps = [&bare](sync::participant& self, std::uint64_t count) { bare.run(self, count); };
+      const call_result paired =
+          run_call(bare_team, bare_slots, plan, static_cast<unsigned>(result->batches.batch_ns.size()),
+                   result->batches.units_per_batch, harness.settings, false, bare_steps);
+      if (paired.failure.empty() && !paired.batches.stalled && !paired.batches.over_budget &&
+          !paired.batches.batch_ns.empty()) {
+        const double off_ns = ns_per_unit(paired);
+        state.counters["paired_off_ns_per_step"] = off_ns;
+        state.counters["overhead_ratio"] = step_ns / off_ns;
+      }
+    }
+  }
+}
+
+bool selected(const std::vector<std::string>& names, std::string_view name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+template <class Sync, class Layout>
+benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harness_state& harness,
+                                                   bool instrumented) {
+  auto* entry =
+      instrumented
+          ? benchmark::RegisterBenchmark(spec.name().c_str(),
+                                         [&harness, spec](benchmark::State& state) {
+                                           // sampled: one step per sampling period
+                                           // (rk4_entry sets it) reads the clock around
+                                           // its syncs; the other steps read none.
+                                           rk4_entry<Sync, Layout, kernels::sync_timing::sampled>(state, harness,
+                                                                                                  spec);
+                                         })
+          : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
+              rk4_entry<Sync, Layout, kernels::sync_timing::off>(state, harness, spec);
+            });
+  return entry->UseManualTime()->Unit(benchmark::kNanosecond);
+}
+
+}  // namespace
+
+std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  const std::size_t equations = kernels::two_mass_model::kEquations;
+  sync::for_each_primitive([&]<class Sync>() {
+    if (!selected(selection.syncs, Sync::kName)) return;
+    layouts::for_each_layout([&]<class Layout>() {
+      if (!selected(selection.layouts, Layout::kName)) return;
+      for (unsigned threads : selection.threads) {
+        for (platform::placement pin : selection.pins) {
+          const entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
+          const std::string reason = kernels::not_applicable_reason<Sync, Layout>(equations, threads);
+          if (!reason.empty()) {
+            harness.book->not_applicable.push_back({spec.name(), reason});
+            continue;
+          }
+          if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+            register_rk4_entry<Sync, Layout>(spec, harness, harness.settings.accounting);
+            registered.push_back(spec.name());
+          }
+        }
+      }
+    });
+  });
+  return registered;
+}
+
+std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  const std::size_t equations = kernels::two_mass_model::kEquations;
+  // The preferred combination first: the fastest and steadiest step of the
+  // matrix (seqlock on private copies, pinned, two threads: one per core
+  // here), where a fixed cost of the harness weighs most. futex_spin's 2-thread
+  // step, the first choice before, settles into one of two rhythms (about 300
+  // or 550 ns a step on the development VM) for stretches of a run, so two
+  // entries measured one after the other could land in different rhythms and
+  // their ratio said nothing about the harness.
+  const unsigned threads =
+      std::find(selection.threads.begin(), selection.threads.end(), 2u) != selection.threads.end()
+          ? 2u
+          : selection.threads.front();
+  const platform::placement pin =
+      std::find(selection.pins.begin(), selection.pins.end(), platform::placement::compact) != selection.pins.end()
+          ? platform::placement::compact
+          : selection.pins.front();
+  bool done = false;
+  const auto try_pair = [&]<class Sync, class Layout>() {
+    if (done || !selected(selection.syncs, Sync::kName) || !selected(selection.layouts, Layout::kName)) return;
+    if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+      if (!kernels::not_applicable_reason<Sync, Layout>(equations, threads).empty()) return;
+      for (bool accounting : {false, true}) {
+        const entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
+                              pin,                  threads,                 accounting};
+        auto* entry = register_rk4_entry<Sync, Layout>(spec, harness, accounting);
+        if (harness.settings.overhead_repetitions > 0) entry->Repetitions(harness.settings.overhead_repetitions);
+        registered.push_back(spec.name());
+      }
+      done = true;
+    }
+  };
+  try_pair.template operator()<sync::seqlock, layouts::per_thread>();
+  sync::for_each_primitive([&]<class Sync>() {
+    layouts::for_each_layout([&]<class Layout>() { try_pair.template operator()<Sync, Layout>(); });
+  });
+  return registered;
+}
+
+std::vector<std::string> register_calibration_benchmarks(harness_state& harness) {
+  std::vector<std::string> registered;
+  const entry_spec c2c_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2};
+  const platform::placement_plan plan = platform::plan_placement(*harness.machine, platform::placement::compact, 2);
+  const auto pu_a = plan.pu_at(0);
+  const auto pu_b = plan.pu_at(1);
+  if (pu_a && pu_b && *pu_a != *pu_b) {
+    const unsigned cpu_a = *pu_a;
+    const unsigned cpu_b = *pu_b;
+    benchmark::RegisterBenchmark(
+        c2c_spec.name().c_str(),
+        [&harness, cpu_a, cpu_b](benchmark::State& state) { c2c_entry(state, harness, cpu_a, cpu_b); })
+        ->Iterations(3)
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+    registered.push_back(c2c_spec.name());
+  } else {
+    harness.book->not_applicable.push_back(
+        {c2c_spec.name(), "needs two CPUs in the affinity set; vs_c2c is omitted in this run"});
+  }
+  benchmark::RegisterBenchmark("rk4/serial", [&harness](benchmark::State& state) { serial_entry(state, harness); })
+      ->UseManualTime()
+      ->Unit(benchmark::kNanosecond);
+  registered.push_back("rk4/serial");
+  return registered;
+}
+
+}  // namespace lockstep::bench

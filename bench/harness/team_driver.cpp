@@ -1,0 +1,69 @@
+// Stall reasons and accounting counters (harness_team.hpp).
+#include "bench/harness/team_driver.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace lockstep::bench {
+
+namespace {
+
+std::string format_ms(std::int64_t ns) { return fmt::format("{:.1f} ms", static_cast<double>(ns) / 1e6); }
+
+}  // namespace
+
+std::string stall_reason(const call_result& result, const char* unit, bool pure_spin, bool may_lose_wakeups,
+                         const platform::placement_plan& plan, const run_settings& settings) {
+  std::string why;
+  if (result.batches.stalled) {
+    why = fmt::format("stalled: one {} took {} (bound {})", unit, format_ms(result.batches.slowest_unit_ns),
+                      format_ms(settings.stall_unit_ns));
+  } else {
+    why = fmt::format("bounded: the call ran out of its {} budget after {} {}s", format_ms(settings.call_budget_ns),
+                      result.batches.units_run, unit);
+  }
+  const unsigned cpus = static_cast<unsigned>(plan.affinity.size());
+  if (result.sync_totals.timeouts > 0) {
+    why += fmt::format(": lost wake-ups ({} waits ended by timeout)", result.sync_totals.timeouts);
+  } else if (pure_spin && plan.oversubscribed) {
+    why += fmt::format(": pure-spin primitive with {} threads on {} CPUs", plan.threads, cpus);
+  } else if (may_lose_wakeups) {
+    why += ": the primitive can lose wake-ups";
+  } else if (plan.oversubscribed) {
+    why += fmt::format(": {} threads on {} CPUs", plan.threads, cpus);
+  }
+  return why;
+}
+
+double median_unit_ns(const batch_record& record) {
+  if (record.batch_ns.empty() || record.units_per_batch == 0) return 0.0;
+  std::vector<std::int64_t> sorted = record.batch_ns;
+  std::sort(sorted.begin(), sorted.end());
+  return static_cast<double>(sorted[sorted.size() / 2]) / static_cast<double>(record.units_per_batch);
+}
+
+double ns_per_unit(const call_result& result) {
+  std::int64_t total = 0;
+  for (std::int64_t batch : result.batches.batch_ns) total += batch;
+  const double units =
+      static_cast<double>(result.batches.batch_ns.size()) * static_cast<double>(result.batches.units_per_batch);
+  return units > 0.0 ? static_cast<double>(total) / units : 0.0;
+}
+
+void set_accounting_counters(benchmark::State& state, const call_result& result, const std::string& unit) {
+  if (!result.accounting || result.batches.units_run == 0) return;
+  const platform::thread_counters& total = *result.accounting;
+  const double per_k = 1000.0 / static_cast<double>(result.batches.units_run);
+  state.counters["csw_vol_per_k" + unit] = static_cast<double>(total.voluntary_switches) * per_k;
+  state.counters["csw_invol_per_k" + unit] = static_cast<double>(total.involuntary_switches) * per_k;
+  if (total.migrations) {
+    state.counters["migrations_per_k" + unit] = static_cast<double>(*total.migrations) * per_k;
+    // A percentage of no switches is no number: omitted, like unavailable ones.
+    if (const auto share = platform::cross_core_switch_percent(total); share && std::isfinite(*share))
+      state.counters["cross_core_csw_pct"] = *share;
+  }
+}
+
+}  // namespace lockstep::bench
