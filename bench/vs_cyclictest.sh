@@ -80,7 +80,7 @@ echo "vs_cyclictest: ${periods} periods of ${period_us} us on CPU ${cpu}, SCHED_
 echo "vs_cyclictest: lockstep delay (${duration_s} s) ..." >&2
 taskset -c "$cpu" "$lockstep" delay --threads 1 --pin compact --sync std_barrier --layout padded64 \
   --period "${period_us}us" --duration "${duration_s}s" --fifo "$priority" --mlock \
-  --json "$work/lockstep.json" > "$work/lockstep.txt"
+  --out "$work/lockstep.json" > "$work/lockstep.txt"
 
 echo "vs_cyclictest: cyclictest (${duration_s} s) ..." >&2
 cyclictest --threads=1 --affinity="$cpu" --priority="$priority" --interval="$period_us" --distance=0 \

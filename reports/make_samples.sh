@@ -22,8 +22,8 @@
 #                              made while a CPU-bound process competes for the cores:
 #                              real measurements, spliced so that exactly that
 #                              primitive is forced to lose (the compare acceptance check)
-#   samples/c2c.json           `lockstep c2c --json`
-#   samples/delay.json         `lockstep delay --json --compare-pinning`
+#   samples/c2c.json           `lockstep c2c --out`
+#   samples/delay.json         `lockstep delay --out --compare-pinning`
 #   samples/verify.csv         `lockstep verify --csv`
 #   samples/compare.txt        `lockstep compare pair-a.json pair-b.json`
 #   samples/report/            `lockstep report` on all of them (report.html, report.md, figures/)
@@ -114,10 +114,10 @@ json.dump(rerun, open(out_path, "w"), indent=2)
 PY
 
 step "lockstep c2c"
-"$lockstep" c2c --json "$work/c2c.json" || fail "lockstep c2c failed"
+"$lockstep" c2c --out "$work/c2c.json" || fail "lockstep c2c failed"
 
 step "lockstep delay (${delay_seconds} s, pinned and unpinned)"
-delay_arguments=(--json "$work/delay.json" --compare-pinning)
+delay_arguments=(--out "$work/delay.json" --compare-pinning)
 if "$lockstep" help delay 2>/dev/null | grep -q -- "--duration"; then
   delay_arguments+=(--duration "${delay_seconds}s")
 fi

@@ -2,8 +2,8 @@
 
 Four kinds of file reach the tools:
   run      Google Benchmark JSON (1.7 and later) written by `lockstep run --json`
-  c2c      `lockstep c2c --json`   {"kind": "c2c", ...}
-  delay    `lockstep delay --json` {"kind": "delay", ...}
+  c2c      `lockstep c2c --out`   {"kind": "c2c", ...}
+  delay    `lockstep delay --out` {"kind": "delay", ...}
   verify   `lockstep verify --csv` (header t,x1,x2)
 
 Unknown fields are ignored and NaN/Infinity are accepted (Python's json reads

@@ -42,7 +42,7 @@ TEST(GoogleBenchmarkTools, CompareAcceptsTheResultJson) {
   // the tools must take as well.
   const auto run = run_command({LOCKSTEP_BINARY, "run", "--quick", "--sync", "futex_spin,std_barrier", "--layout",
                                 "padded64", "--threads", "2", "--pin", "compact", "--repetitions", "2",
-                                "--min-time", "0.001", "--out", results});
+                                "--min-time", "1ms", "--out", results});
   ASSERT_EQ(run.exit_status, 0) << run.err;
   ASSERT_TRUE(fs::exists(results)) << run.out;
 

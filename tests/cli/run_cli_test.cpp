@@ -86,7 +86,7 @@ TEST(RunCli, UnknownSyncListsTheValidOnes) {
 TEST(RunCli, TinyRunWritesAgreedJson) {
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a tiny lockstep run did not finish");
   scratch_directory scratch("lockstep-run-test");
-  const fs::path out = scratch.path() / "nested" / "tiny.json";
+  const fs::path out = scratch.path() / "tiny.json";
   const auto result = run_command(run_args({"--quick", "--sync", "std_barrier,futex_spin,seqlock", "--layout",
                                             "padded64,per_thread", "--threads", "2", "--pin", "compact",
                                             "--repetitions", "2", "--out", out.string(), "--",

@@ -59,7 +59,7 @@ TEST(C2cCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"c2c", "--cores", "0,x"});
   expect_usage_error({"c2c", "--cores", "0"});
   expect_usage_error({"c2c", "--cores", "0,4095"});
-  expect_usage_error({"c2c", "--json", "/nonexistent-dir/c2c.json"});
+  expect_usage_error({"c2c", "--out", "/nonexistent-dir/c2c.json"});
   expect_usage_error({"c2c", "--synthetic", "pack:zero"});
 }
 
@@ -68,7 +68,7 @@ TEST(C2cCommand, WritesTheAgreedJson) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep c2c");
   const auto path = temp_json("c2c");
   const auto result =
-      run_command({LOCKSTEP_BINARY, "c2c", "--samples", "5", "--rounds", "5", "--cores", "0,1", "--json", path});
+      run_command({LOCKSTEP_BINARY, "c2c", "--samples", "5", "--rounds", "5", "--cores", "0,1", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("median one-way latency"), std::string::npos);
   const auto document = read_json(path);
@@ -98,10 +98,10 @@ TEST(FalseshareCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"falseshare", "--threads", "4096"});
   expect_usage_error({"falseshare", "--strides", "12"});
   expect_usage_error({"falseshare", "--strides", "8,x"});
-  expect_usage_error({"falseshare", "--ms", "0"});
+  expect_usage_error({"falseshare", "--window", "0"});
   expect_usage_error({"falseshare", "--repeats", "0"});
   expect_usage_error({"falseshare", "--cores", "0,4095"});
-  expect_usage_error({"falseshare", "--json", "/nonexistent-dir/f.json"});
+  expect_usage_error({"falseshare", "--out", "/nonexistent-dir/f.json"});
   expect_usage_error({"falseshare", "--bogus"});
 }
 
@@ -110,7 +110,7 @@ TEST(FalseshareCommand, WritesParseableJson) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep falseshare");
   const auto path = temp_json("falseshare");
   const auto result = run_command(
-      {LOCKSTEP_BINARY, "falseshare", "--ms", "2", "--repeats", "1", "--strides", "8,64,128", "--json", path});
+      {LOCKSTEP_BINARY, "falseshare", "--window", "2ms", "--repeats", "1", "--strides", "8,64,128", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("time per write"), std::string::npos);
   const auto document = read_json(path);
@@ -130,7 +130,7 @@ TEST(MigrateCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"migrate", "--cores", "0"});
   expect_usage_error({"migrate", "--cores", "0,1,2"});
   expect_usage_error({"migrate", "--cores", "0,4095"});
-  expect_usage_error({"migrate", "--json", "/nonexistent-dir/m.json"});
+  expect_usage_error({"migrate", "--out", "/nonexistent-dir/m.json"});
 }
 
 TEST(MigrateCommand, WritesParseableJson) {
@@ -138,7 +138,7 @@ TEST(MigrateCommand, WritesParseableJson) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep migrate");
   const auto path = temp_json("migrate");
   const auto result =
-      run_command({LOCKSTEP_BINARY, "migrate", "--repeats", "5", "--bytes", "65536", "--json", path});
+      run_command({LOCKSTEP_BINARY, "migrate", "--repeats", "5", "--bytes", "65536", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("refill"), std::string::npos);
   const auto document = read_json(path);
@@ -166,7 +166,7 @@ TEST(DelayCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"delay", "--fifo", "0"});
   expect_usage_error({"delay", "--fifo", "100"});
   expect_usage_error({"delay", "--compare-pinning", "--pin", "none"});
-  expect_usage_error({"delay", "--json", "/nonexistent-dir/d.json"});
+  expect_usage_error({"delay", "--out", "/nonexistent-dir/d.json"});
 }
 
 void expect_delay_json(const nlohmann::json& document, int periods, int threads) {
@@ -203,7 +203,7 @@ TEST(DelayCommand, PacedRunWritesTheAgreedJson) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep delay");
   const auto path = temp_json("delay");
   const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration",
-                                   "20ms", "--sync", "futex_spin", "--json", path});
+                                   "20ms", "--sync", "futex_spin", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("wake-up latency"), std::string::npos);
   EXPECT_NE(result.out.find("Figure 5"), std::string::npos);
@@ -218,7 +218,7 @@ TEST(DelayCommand, ComparePinningAddsTheUnpinnedTable) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --compare-pinning");
   const auto path = temp_json("delay-compare");
   const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--duration", "10ms", "--layout",
-                                   "per_thread", "--sync", "seqlock", "--compare-pinning", "--json", path});
+                                   "per_thread", "--sync", "seqlock", "--compare-pinning", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("unpinned"), std::string::npos);
   const auto document = read_json(path);
@@ -279,7 +279,7 @@ TEST(DelayCommand, FifoAndMlockWhenPermitted) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --fifo --mlock");
   const auto path = temp_json("delay-fifo");
   const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--fifo", "10",
-                                   "--mlock", "--json", path});
+                                   "--mlock", "--out", path});
   if (result.exit_status == 2) GTEST_SKIP() << "not permitted here: " << result.err;
   ASSERT_EQ(result.exit_status, 0) << result.err;
   const auto document = read_json(path);

@@ -71,7 +71,7 @@ TEST(VerifyCli, BadInputIsExitTwoWithOneLine) {
 }
 
 TEST(VerifyCli, UnwritableOutputIsExitTwo) {
-  for (const char* flag : {"--csv", "--json"}) {
+  for (const char* flag : {"--csv", "--out"}) {
     const command_result result = verify({flag, "/nonexistent-lockstep-dir/out"});
     EXPECT_EQ(result.exit_status, 2) << flag;
     EXPECT_EQ(count_lines(result.err), 1) << result.err;
@@ -80,7 +80,7 @@ TEST(VerifyCli, UnwritableOutputIsExitTwo) {
 }
 
 TEST(VerifyCli, ErrorsOutsideTheBoundsAreExitOne) {
-  const command_result result = verify({"--dt", "0.05"});  // w_fast h = 2.6: RK4 far from fourth order
+  const command_result result = verify({"--dt", "50ms"});  // w_fast h = 2.6: RK4 far from fourth order
   EXPECT_EQ(result.exit_status, 1) << result.out << result.err;
   EXPECT_NE(result.out.find("FAIL"), std::string::npos);
 }
@@ -88,7 +88,7 @@ TEST(VerifyCli, ErrorsOutsideTheBoundsAreExitOne) {
 TEST(VerifyCli, CsvHoldsTheTrajectory) {
   const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("trajectory.csv");
-  const command_result result = verify({"--dt", "0.002", "--t-end", "0.5", "--csv", path});
+  const command_result result = verify({"--dt", "2ms", "--t-end", "500ms", "--csv", path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
   std::istringstream csv(slurp(path));
   std::string line;
@@ -122,7 +122,7 @@ TEST(VerifyCli, CsvHoldsTheTrajectory) {
 TEST(VerifyCli, JsonHoldsTheFigures) {
   const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("verify.json");
-  const command_result result = verify({"--json", path});
+  const command_result result = verify({"--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
   const nlohmann::json json = nlohmann::json::parse(slurp(path));
   EXPECT_EQ(json.at("kind"), "verify");
@@ -160,7 +160,7 @@ TEST(VerifyCli, OtherParametersAreUsed) {
   const lockstep::testing::scratch_directory directory("lockstep-verify");
   const std::string path = directory.file("verify.json");
   const command_result result =
-      verify({"--m1", "0.05", "--m2", "0.01", "--c1", "3", "--c2", "70", "--dt", "0.0005", "--t-end", "0.5", "--json", path});
+      verify({"--m1", "0.05", "--m2", "0.01", "--c1", "3", "--c2", "70", "--dt", "500us", "--t-end", "500ms", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
   EXPECT_NE(result.out.find("not the paper's case"), std::string::npos);
   const nlohmann::json json = nlohmann::json::parse(slurp(path));
@@ -174,7 +174,7 @@ TEST(VerifyCli, OtherParametersAreUsed) {
 TEST(VerifyCli, HelpNamesTheFlags) {
   const command_result result = run_command({LOCKSTEP_BINARY, "help", "verify"});
   EXPECT_EQ(result.exit_status, 0);
-  for (const char* flag : {"--m1", "--m2", "--c1", "--c2", "--dt", "--t-end", "--csv", "--json"}) {
+  for (const char* flag : {"--m1", "--m2", "--c1", "--c2", "--dt", "--t-end", "--csv", "--out"}) {
     EXPECT_NE(result.out.find(flag), std::string::npos) << flag;
   }
 }

@@ -41,7 +41,7 @@ TEST(TopologyCli, JsonFileHasTheAgreedKeys) {
   ASSERT_GE(fd, 0);
   ::close(fd);
   const auto result =
-      run_command({LOCKSTEP_BINARY, "topology", "--synthetic", "package:1 l3:1 core:2 pu:1", "--json", path});
+      run_command({LOCKSTEP_BINARY, "topology", "--synthetic", "package:1 l3:1 core:2 pu:1", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   std::ifstream file(path);
   const auto json = nlohmann::json::parse(file);
@@ -67,7 +67,7 @@ TEST(TopologyCli, BadInputIsOneLineAndExitTwo) {
            {LOCKSTEP_BINARY, "topology", "--synthetic", "bogus:7"},
            {LOCKSTEP_BINARY, "topology", "--xml", "/nonexistent/machine.xml"},
            {LOCKSTEP_BINARY, "topology", "--synthetic", "package:1 core:2 pu:1", "--xml", "/tmp/x.xml"},
-           {LOCKSTEP_BINARY, "topology", "--json", "/nonexistent/dir/out.json"},
+           {LOCKSTEP_BINARY, "topology", "--out", "/nonexistent/dir/out.json"},
            {LOCKSTEP_BINARY, "topology", "--frobnicate"},
        }) {
     const auto result = run_command(arguments);

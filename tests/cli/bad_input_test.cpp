@@ -1,0 +1,96 @@
+// One command-line grammar (bench/cli/options.hpp): every bad input of every
+// command ends in exit status 2 with one line on stderr, before anything is
+// measured (nothing on stdout, no progress line), and leaves no file behind.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
+
+namespace {
+
+using lockstep::testing::command_result;
+using lockstep::testing::run_command;
+using lockstep::testing::scratch_directory;
+
+std::size_t count_lines(const std::string& text) {
+  std::size_t lines = 0;
+  for (char c : text) lines += c == '\n' ? 1 : 0;
+  return lines;
+}
+
+struct bad_input {
+  std::vector<std::string> arguments;  // after the binary; "@" stands for the scratch directory
+  std::string names;                   // the message must mention this
+};
+
+class BadInput : public ::testing::TestWithParam<bad_input> {};
+
+TEST_P(BadInput, ExitTwoOneLineNothingMeasuredNothingLeft) {
+  scratch_directory scratch("lockstep-bad-input");
+  std::vector<std::string> argv{LOCKSTEP_BINARY};
+  std::string shown;
+  for (std::string argument : GetParam().arguments) {
+    if (const auto at = argument.find('@'); at != std::string::npos) argument.replace(at, 1, scratch.path().string());
+    shown += argument + " ";
+    argv.push_back(argument);
+  }
+  const command_result result = run_command(argv);
+  EXPECT_EQ(result.exit_status, 2) << shown << "\n" << result.err;
+  EXPECT_EQ(count_lines(result.err), 1u) << shown << "\n" << result.err;
+  EXPECT_NE(result.err.find(GetParam().names), std::string::npos) << shown << "\n" << result.err;
+  EXPECT_EQ(result.out, "") << shown;  // no summary, no table: nothing was measured
+  EXPECT_TRUE(scratch.entries().empty()) << shown << ": left " << scratch.entries().front();
+}
+
+const bad_input kBadInputs[] = {
+    // --out: a directory that is missing, a place where no file can be made,
+    // a directory given as the file.
+    {{"run", "--out", "@/missing/x.json"}, "--out"},
+    {{"run", "--out", "/proc/lockstep-x.json"}, "--out"},
+    {{"run", "--out", "@"}, "--out"},
+    {{"c2c", "--out", "@/missing/c2c.json"}, "--out"},
+    {{"c2c", "--out", "/proc/lockstep-c2c.json"}, "--out"},
+    {{"delay", "--out", "/proc/lockstep-delay.json"}, "--out"},
+    {{"delay", "--out", "@/missing/d.json"}, "--out"},
+    {{"falseshare", "--out", "/proc/lockstep-f.json"}, "--out"},
+    {{"migrate", "--out", "/proc/lockstep-m.json"}, "--out"},
+    {{"verify", "--out", "/proc/lockstep-v.json"}, "--out"},
+    {{"verify", "--csv", "@/missing/v.csv"}, "--csv"},
+    {{"topology", "--out", "/proc/lockstep-t.json"}, "--out"},
+    // Counts: zero, negative, not a number.
+    {{"run", "--repetitions", "0", "--out", "@/r.json"}, "--repetitions"},
+    {{"run", "--repetitions", "-3", "--out", "@/r.json"}, "--repetitions"},
+    {{"run", "--repetitions", "many", "--out", "@/r.json"}, "--repetitions"},
+    {{"c2c", "--samples", "0"}, "--samples"},
+    {{"falseshare", "--repeats", "0"}, "--repeats"},
+    {{"migrate", "--repeats", "-1"}, "--repeats"},
+    // Durations: zero, no unit, not a time.
+    {{"run", "--min-time", "0", "--out", "@/r.json"}, "--min-time"},
+    {{"run", "--min-time", "0ms", "--out", "@/r.json"}, "--min-time"},
+    {{"run", "--min-time", "0.04", "--out", "@/r.json"}, "--min-time"},
+    {{"delay", "--period", "1000"}, "--period"},
+    {{"delay", "--duration", "soon"}, "--duration"},
+    {{"falseshare", "--window", "100"}, "--window"},
+    {{"verify", "--dt", "0.001"}, "--dt"},
+    // Thread counts the model cannot split, and empty lists.
+    {{"run", "--threads", "8", "--out", "@/r.json"}, "--threads"},
+    {{"run", "--threads", "0", "--out", "@/r.json"}, "--threads"},
+    {{"run", "--threads", ",", "--out", "@/r.json"}, "--threads"},
+    {{"run", "--sync", "", "--out", "@/r.json"}, "--sync"},
+    {{"run", "--sync", "futex_spin,,seqlock", "--out", "@/r.json"}, "--sync"},
+    {{"run", "--layout", "", "--out", "@/r.json"}, "--layout"},
+    {{"run", "--pin", "compact,", "--out", "@/r.json"}, "--pin"},
+    {{"run", "--sync", "nope", "--out", "@/r.json"}, "nope"},
+    {{"falseshare", "--strides", ""}, "--strides"},
+    {{"falseshare", "--strides", "12"}, "--strides"},
+    {{"delay", "--sync", "nope"}, "nope"},
+    {{"delay", "--layout", "nope"}, "nope"},
+    {{"delay", "--threads", "0"}, "--threads"},
+};
+
+INSTANTIATE_TEST_SUITE_P(EveryCommand, BadInput, ::testing::ValuesIn(kBadInputs));
+
+}  // namespace
