@@ -49,8 +49,7 @@ void print_list(const std::string& what) {
   if (what.empty() || what == "layout") {
     if (what.empty()) fmt::print("\n");
     fmt::print("Layouts (--layout):\n");
-    for (const auto& [name, description] : layouts::all_layout_info)
-      fmt::print("  {:<20} {}\n", name, description);
+    for (const auto& info : layouts::all_layout_info) fmt::print("  {:<20} {}\n", info.name, info.description);
   }
   if (what.empty() || what == "placement") {
     if (what.empty()) fmt::print("\n");

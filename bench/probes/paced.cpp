@@ -52,8 +52,11 @@ std::string with_combination(const std::string& sync_name, const std::string& la
     for (const auto& info : sync::all_primitive_info) names += (names.empty() ? "" : ", ") + std::string(info.name);
     return "unknown primitive '" + sync_name + "' (valid: " + names + ")";
   }
-  if (layouts::find_layout(layout_name) == nullptr)
-    return "unknown layout '" + layout_name + "' (valid: " + layouts::layout_names() + ")";
+  if (layouts::find_layout(layout_name) == nullptr) {
+    std::string names;
+    for (const auto& info : layouts::all_layout_info) names += (names.empty() ? "" : ", ") + std::string(info.name);
+    return "unknown layout '" + layout_name + "' (valid: " + names + ")";
+  }
   std::string problem;
   sync::for_each_primitive([&]<class Sync>() {
     if (Sync::kName != sync_name) return;
