@@ -31,6 +31,7 @@ class packed {
   static constexpr std::string_view kDescription =
       "state and stage values of every thread side by side in as few cache lines as possible (false sharing)";
   static constexpr layout_kind kKind = layout_kind::shared;
+  static constexpr std::size_t kWriterIsolation = 0;  // writers share lines: what it measures
 
   explicit packed(const partition& blocks)
       : equations_(blocks.equations()), slots_(kSharedSlots * equations_, platform::kCacheLine) {}

@@ -64,6 +64,7 @@ class padded {
           ? "what each thread writes on cache lines of its own (64-byte blocks)"
           : "what each thread writes on 128-byte line pairs of its own (adjacent-line prefetch)";
   static constexpr layout_kind kKind = layout_kind::shared;
+  static constexpr std::size_t kWriterIsolation = Pad;  // proved below (padded_proof)
 
   explicit padded(const partition& blocks)
       : slots_(padded_region_offset(blocks.equations(), blocks.participants(), Pad, blocks.participants()) /

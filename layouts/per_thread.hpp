@@ -58,6 +58,8 @@ class per_thread {
       "each thread computes from a private copy of the whole state and copies in what others published "
       "(the paper's X1 = GX1)";
   static constexpr layout_kind kKind = layout_kind::private_copy;
+  // Board regions and private copies are whole lines of one writer (per_thread_proof).
+  static constexpr std::size_t kWriterIsolation = platform::kCacheLine;
 
   explicit per_thread(const partition& blocks)
       : equations_(blocks.equations()),

@@ -37,6 +37,8 @@ class channel_barrier {
   static constexpr bool kPureSpin = Channel::kPureSpin;
   static constexpr bool kMayLoseWakeups = Channel::kMayLoseWakeups;
   static constexpr bool kCountsFutexWaits = Channel::kCountsFutexWaits;
+  static constexpr bool kSpinsLong = Channel::kSpinsLong;
+  static constexpr bool kVisibleToTsan = Channel::kVisibleToTsan;
 
   explicit channel_barrier(unsigned participants)
       : participants_(participants),

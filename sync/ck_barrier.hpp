@@ -35,6 +35,8 @@ class ck_barrier {
   static constexpr bool kPureSpin = true;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = true;  // pure spin: a waiter keeps its CPU until the phase ends
+  static constexpr bool kVisibleToTsan = false;  // inline assembly (ck_pr) and volatile accesses
 
   explicit ck_barrier(unsigned participants) : barrier_(lockstep_ck_barrier_create(Kind, participants)) {
     if (barrier_ == nullptr) throw std::bad_alloc();

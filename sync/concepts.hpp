@@ -28,6 +28,11 @@
 //    channel_barrier (channel_barrier.hpp), which is how the conformance suite
 //    checks it.
 //
+// Traits: every primitive declares, as static constexpr members, the facts
+// that the harness and the tests act on (registered_primitive below; the
+// registry, sync/registry.hpp, copies them into primitive_info). Nothing
+// anywhere recovers a fact from a primitive's name.
+//
 // Teams: a primitive runs its participants on a team. Most use plain threads
 // (std_thread_team); OpenMP's barrier only works inside an OpenMP parallel
 // region, so omp_barrier names its own team. team_of<S> picks the right one.
@@ -127,5 +132,78 @@ concept stage_channel = requires(C& channel, participant& self, unsigned produce
 // producer publishes per stage: what channel_barrier and the RK4 step construct.
 template <class C>
 concept graph_channel = stage_channel<C> && std::constructible_from<C, const dependency_graph&, std::size_t>;
+
+// ---- The traits every registered primitive declares ------------------------
+// One concept per trait, each named after it, so that a primitive lacking one
+// fails with "required for the satisfaction of 'declares_visible_to_tsan<P>'
+// ... the required expression 'P::kVisibleToTsan' is invalid" (and a trait of
+// the wrong type with "does not satisfy return-type-requirement").
+
+// kName: DESIGN.md's name, unique in the registry; benchmark names carry it.
+template <class P>
+concept declares_name = requires {
+  { P::kName } -> std::convertible_to<std::string_view>;
+};
+// kDescription: one line for `lockstep list`.
+template <class P>
+concept declares_description = requires {
+  { P::kDescription } -> std::convertible_to<std::string_view>;
+};
+// kKind: barrier (phase_barrier) or channel (graph_channel, dataflow).
+template <class P>
+concept declares_kind = requires {
+  { P::kKind } -> std::same_as<const primitive_kind&>;
+};
+// kPureSpin: its waiters never yield or sleep; with more participants than
+// CPUs a phase completes only when the scheduler preempts a spinner.
+template <class P>
+concept declares_pure_spin = requires {
+  { P::kPureSpin } -> std::same_as<const bool&>;
+};
+// kSpinsLong: a waiter may keep its CPU for a scheduler timeslice or more
+// before it yields or sleeps (pure spin, or a spin count in the milliseconds
+// such as libgomp's GOMP_SPINCOUNT), so a phase can last a timeslice whenever
+// a participant it waits for is not running: bound such runs in steps.
+template <class P>
+concept declares_spins_long = requires {
+  { P::kSpinsLong } -> std::same_as<const bool&>;
+};
+// kMayLoseWakeups: a wake-up can be lost; each loss ends in a timeout,
+// counted in counters.timeouts, and after one the primitive may no longer
+// order its participants (the paper's ThreadWaiter).
+template <class P>
+concept declares_may_lose_wakeups = requires {
+  { P::kMayLoseWakeups } -> std::same_as<const bool&>;
+};
+// kCountsFutexWaits: counters.futex_waits (and wakes, yields, spins) is the
+// truth: every sleep counted, or none can happen. False when the futex calls
+// are hidden inside a library (libstdc++, glibc, libgomp).
+template <class P>
+concept declares_counts_futex_waits = requires {
+  { P::kCountsFutexWaits } -> std::same_as<const bool&>;
+};
+// kVisibleToTsan: ThreadSanitizer sees the primitive's synchronisation (C++
+// atomics, or library calls it intercepts or instruments). False for inline
+// assembly and volatile accesses (ck) and uninstrumented libraries (libgomp):
+// TSan would report races on the data the primitive does order.
+template <class P>
+concept declares_visible_to_tsan = requires {
+  { P::kVisibleToTsan } -> std::same_as<const bool&>;
+};
+
+// What kKind says is what the type is.
+template <class P>
+concept shape_matches_kind = (P::kKind == primitive_kind::barrier && phase_barrier<P>) ||
+                             (P::kKind == primitive_kind::channel && graph_channel<P>);
+// A waiter that never yields keeps its CPU for as long as it waits.
+template <class P>
+concept pure_spin_spins_long = !P::kPureSpin || P::kSpinsLong;
+
+// What sync/registry.hpp requires of every primitive it lists.
+template <class P>
+concept registered_primitive = declares_name<P> && declares_description<P> && declares_kind<P> &&
+                               declares_pure_spin<P> && declares_spins_long<P> && declares_may_lose_wakeups<P> &&
+                               declares_counts_futex_waits<P> && declares_visible_to_tsan<P> &&
+                               shape_matches_kind<P> && pure_spin_spins_long<P>;
 
 }  // namespace lockstep::sync

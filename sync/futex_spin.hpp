@@ -69,6 +69,8 @@ class futex_spin {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = false;  // at most kDedicatedSpin pauses (~10-45 us), then yield or sleep
+  static constexpr bool kVisibleToTsan = true;  // C++ atomics
 
   // Pause iterations before sleeping when every participant has a CPU. A pause
   // costs about 10-45 ns (Zen 2 .. Skylake), so this is roughly 10-45 us: about

@@ -33,6 +33,8 @@ class omp_barrier {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = false;
+  static constexpr bool kSpinsLong = true;  // libgomp spins GOMP_SPINCOUNT (300000 by default) before sleeping
+  static constexpr bool kVisibleToTsan = false;  // libgomp is not built with TSan instrumentation
 
   explicit omp_barrier(unsigned participants) : participants_(participants) {}
   omp_barrier(const omp_barrier&) = delete;  // one per region, by address

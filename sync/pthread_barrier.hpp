@@ -33,6 +33,8 @@ class pthread_barrier {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = false;
+  static constexpr bool kSpinsLong = false;  // glibc sleeps at once
+  static constexpr bool kVisibleToTsan = true;  // TSan intercepts pthread_barrier_wait
 
   explicit pthread_barrier(unsigned participants) {
     if (const int status = pthread_barrier_init(&barrier_, nullptr, participants); status != 0)

@@ -4,11 +4,19 @@
 // matrix and the conformance tests all iterate the same list: a new primitive
 // joins everything by joining all_primitives.
 //
+// Every listed primitive satisfies registered_primitive (sync/concepts.hpp):
+// it declares each trait below as a static constexpr member, and a primitive
+// that lacks one fails to compile here with the trait's name.
+//
 // For each primitive P:
 //   info_of<P>()       name (DESIGN.md's), one-line description, kind
 //                      (barrier or dataflow channel), pure_spin (may stall
 //                      for a timeslice per phase when participants outnumber
-//                      CPUs: bound it in time), may_lose_wakeups (a lost
+//                      CPUs: bound it in time), spins_long (a waiter may keep
+//                      its CPU for a timeslice or more before it yields or
+//                      sleeps: pure spin, or libgomp's spin count; bound it in
+//                      steps), visible_to_tsan (ThreadSanitizer sees its
+//                      synchronisation), may_lose_wakeups (a lost
 //                      wake-up ends in a timeout, counted in
 //                      participant::counters.timeouts: bound it in time),
 //                      counts_futex_waits (counters.futex_waits is the truth:
@@ -22,6 +30,10 @@
 //                      (every participant depending on all): what a bare
 //                      barrier benchmark or the conformance suite runs;
 //   team_of_t<as_barrier_t<P>>  the team its participants run on (team.hpp).
+//   checked_by_tsan(info)  whether a ThreadSanitizer run can check P: it sees
+//                      P's synchronisation and P orders its participants in
+//                      every run (no lost wake-up). The TSan subsets of the
+//                      tests are exactly the primitives for which it is true.
 // Bounding a stalled run: phase_run.hpp (phase_stop: the same stop phase for
 // every participant; run_phases: max phases + a time budget).
 //
@@ -68,12 +80,26 @@ struct primitive_info {
   bool pure_spin;         // may stall (a timeslice per phase) when participants outnumber CPUs
   bool may_lose_wakeups;  // a lost wake-up costs a timeout (counters.timeouts)
   bool counts_futex_waits;  // counters.futex_waits (wakes, yields, spins) are real, not a blind 0
+  bool spins_long;          // a waiter may keep its CPU a timeslice or more before yielding or sleeping
+  bool visible_to_tsan;     // ThreadSanitizer sees its synchronisation
 };
 
-template <class Primitive>
+// The traits are declared by the primitive and checked by registered_primitive
+// (sync/concepts.hpp): a missing one is named in the compiler's message.
+template <registered_primitive Primitive>
 constexpr primitive_info info_of() noexcept {
-  return {Primitive::kName, Primitive::kDescription, Primitive::kKind, Primitive::kPureSpin,
-          Primitive::kMayLoseWakeups, Primitive::kCountsFutexWaits};
+  return {Primitive::kName,           Primitive::kDescription,     Primitive::kKind,
+          Primitive::kPureSpin,       Primitive::kMayLoseWakeups, Primitive::kCountsFutexWaits,
+          Primitive::kSpinsLong,      Primitive::kVisibleToTsan};
+}
+
+// A ThreadSanitizer run checks a primitive when TSan sees its synchronisation
+// (otherwise it reports races on data the primitive does order: false
+// positives) and the primitive orders its participants in every run (one that
+// may lose wake-ups stops ordering them after a loss: the race TSan would then
+// report is real and intended, and appears only in a run that loses one).
+constexpr bool checked_by_tsan(const primitive_info& info) noexcept {
+  return info.visible_to_tsan && !info.may_lose_wakeups;
 }
 
 template <class Primitive, primitive_kind Kind = Primitive::kKind>

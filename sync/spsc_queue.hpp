@@ -55,6 +55,8 @@ class basic_spsc_queue {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = false;  // spin briefly, then yield (spin_wait.hpp)
+  static constexpr bool kVisibleToTsan = true;  // Boost.Lockfree: C++ atomics
   static constexpr std::size_t kDepth = Depth;
 
   basic_spsc_queue(const dependency_graph& graph, std::size_t width)

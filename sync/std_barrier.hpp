@@ -32,6 +32,8 @@ class std_barrier {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = false;
+  static constexpr bool kSpinsLong = false;  // a short spin, then yields and a futex
+  static constexpr bool kVisibleToTsan = true;  // libstdc++ templates, instrumented in the caller
 
   explicit std_barrier(unsigned participants) : barrier_(static_cast<std::ptrdiff_t>(participants)) {}
 

@@ -47,6 +47,8 @@ class basic_win_event {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = false;  // sleeps on the event (futex)
+  static constexpr bool kVisibleToTsan = true;  // C++ atomics and futex
   static constexpr std::chrono::milliseconds kDefaultTimeout{1000};
 
   explicit basic_win_event(unsigned participants, std::chrono::milliseconds timeout = kDefaultTimeout)

@@ -59,6 +59,8 @@ class basic_win_event_faithful {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = true;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = false;  // sleeps on the event (futex)
+  static constexpr bool kVisibleToTsan = true;  // C++ atomics and futex
   static constexpr std::chrono::milliseconds kPaperTimeout{1000};
 
   explicit basic_win_event_faithful(unsigned participants, std::chrono::milliseconds timeout = kPaperTimeout)

@@ -1,13 +1,20 @@
 // The layouts at run time: every slot has its own address, the blocks the
 // static_asserts promise hold for the sizes the matrix runs (not only the
-// paper's case), and owners never share a block where a layout says so.
+// paper's case), and owners never share a block where a layout says so
+// (kWriterIsolation). The per-layout checks run over every layout of the
+// registry (layouts/registry.hpp), chosen by the layout's kind: a new layout
+// is checked by joining the registry.
 #include <cstdint>
+#include <functional>
 #include <set>
+#include <string>
+#include <string_view>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 
-#include "layouts/layouts.hpp"
+#include "layouts/registry.hpp"
 
 namespace lockstep::layouts {
 namespace {
@@ -90,34 +97,47 @@ TEST(Packed, EverySlotDistinctAndContiguous) {
   }
 }
 
+
+// A shared layout: every slot distinct; the buffer starts on a line boundary
+// (and on a kWriterIsolation boundary); with kWriterIsolation > 0 no two
+// writers share a block of that size, with 0 some line holds two writers'
+// values (the false sharing such a layout is there to measure).
 template <class Layout>
-void expect_isolated_blocks() {
+void expect_shared_slots_as_declared() {
+  constexpr std::size_t isolation = Layout::kWriterIsolation;
+  constexpr std::size_t alignment = isolation > platform::kCacheLine ? isolation : platform::kCacheLine;
   for (const shape& each : kShapes) {
     const partition blocks(each.equations, each.participants);
     Layout layout(blocks);
     const auto slots = shared_slots_of(layout, blocks);
     EXPECT_EQ(distinct(slots), kSharedSlots * each.equations);
-    EXPECT_FALSE(owners_share(slots, Layout::kPad))
-        << Layout::kName << ": two writers share a " << Layout::kPad << "-byte block with " << each.equations
-        << " equations on " << each.participants << " threads";
-    EXPECT_EQ(address(layout.state(0, 0)) % Layout::kPad, 0U);
+    EXPECT_EQ(address(layout.state(0, 0)) % alignment, 0U) << Layout::kName << " starts on a block boundary";
+    if constexpr (isolation > 0) {
+      EXPECT_FALSE(owners_share(slots, isolation))
+          << Layout::kName << ": two writers share a " << isolation << "-byte block with " << each.equations
+          << " equations on " << each.participants << " threads";
+    } else if (each.participants > 1) {
+      EXPECT_TRUE(owners_share(slots, platform::kCacheLine))
+          << Layout::kName << " declares writers side by side, but none share a line with " << each.equations
+          << " equations on " << each.participants << " threads";
+    }
   }
 }
 
-TEST(Padded64, NoLineHoldsTwoWriters) { expect_isolated_blocks<padded64>(); }
-TEST(Padded128, NoLinePairHoldsTwoWriters) { expect_isolated_blocks<padded128>(); }
-
-TEST(PerThread, PrivateCopiesAndBoardAreSeparate) {
+// A private_copy layout: the board and every participant's copy of x and
+// k_0..k_3 are distinct; board regions and copies are each one writer's
+// blocks of kWriterIsolation bytes; no copy shares a line with the board.
+template <class Layout>
+void expect_private_copies_as_declared() {
+  constexpr std::size_t isolation = Layout::kWriterIsolation;
   for (const shape& each : kShapes) {
     const partition blocks(each.equations, each.participants);
-    per_thread layout(blocks);
+    Layout layout(blocks);
     std::vector<placed> board;
     for (std::size_t equation = 0; equation < each.equations; ++equation)
       for (std::size_t slot = 0; slot < kBoardSlots; ++slot)
         board.push_back({address(layout.board(slot, equation)), blocks.owner(equation)});
     EXPECT_EQ(distinct(board), kBoardSlots * each.equations);
-    EXPECT_FALSE(owners_share(board, platform::kCacheLine)) << "board lines are one writer's each";
-    // Private copies: each participant's x and k_0..k_3 on lines no one else has.
     std::vector<placed> copies;
     for (unsigned participant = 0; participant < each.participants; ++participant) {
       for (std::size_t equation = 0; equation < each.equations; ++equation) {
@@ -127,13 +147,98 @@ TEST(PerThread, PrivateCopiesAndBoardAreSeparate) {
       }
     }
     EXPECT_EQ(distinct(copies), (1 + kPrivateStageValues) * each.equations * each.participants);
-    EXPECT_FALSE(owners_share(copies, platform::kCacheLine)) << "private copies never share a line";
+    if constexpr (isolation > 0) {
+      EXPECT_FALSE(owners_share(board, isolation)) << Layout::kName << ": board blocks are one writer's each";
+      EXPECT_FALSE(owners_share(copies, isolation)) << Layout::kName << ": private copies never share a block";
+    }
     for (const placed& copy : copies)
       for (const placed& slot : board)
         EXPECT_NE(copy.address / platform::kCacheLine, slot.address / platform::kCacheLine)
-            << "a private copy shares a line with the board";
+            << Layout::kName << ": a private copy shares a line with the board";
   }
 }
+
+// A test whose body is a closure, registered per layout of the registry.
+class layout_test : public ::testing::Test {
+ public:
+  explicit layout_test(std::function<void()> body) : body_(std::move(body)) {}
+  void TestBody() override { body_(); }
+
+ private:
+  std::function<void()> body_;
+};
+
+// SharedLayout.<name> or PrivateCopyLayout.<name>, by the layout's kind.
+const bool registered = [] {
+  for_each_layout([]<class Layout>() {
+    std::function<void()> body;
+    const char* suite = nullptr;
+    if constexpr (Layout::kKind == layout_kind::shared) {
+      suite = "SharedLayout";
+      body = expect_shared_slots_as_declared<Layout>;
+    } else {
+      suite = "PrivateCopyLayout";
+      body = expect_private_copies_as_declared<Layout>;
+    }
+    ::testing::RegisterTest(suite, std::string(Layout::kName).c_str(), nullptr, nullptr, __FILE__, __LINE__,
+                            [body]() -> ::testing::Test* { return new layout_test(body); });
+  });
+  return true;
+}();
+
+// The registry holds DESIGN.md's layouts with the facts the design states.
+TEST(LayoutRegistry, ListsEveryLayoutOfTheDesignWithItsFacts) {
+  struct design_facts {
+    std::string_view name;
+    layout_kind kind;
+    std::size_t writer_isolation;
+  };
+  constexpr design_facts kDesign[] = {
+      {"packed", layout_kind::shared, 0},
+      {"padded64", layout_kind::shared, 64},
+      {"padded128", layout_kind::shared, 128},
+      {"per_thread", layout_kind::private_copy, 64},
+  };
+  for (const design_facts& design : kDesign) {
+    const layout_info* info = find_layout(design.name);
+    ASSERT_NE(info, nullptr) << design.name << " is in DESIGN.md but not in the registry";
+    EXPECT_EQ(info->kind, design.kind) << design.name;
+    EXPECT_EQ(info->writer_isolation, design.writer_isolation) << design.name;
+  }
+  EXPECT_EQ(find_layout("no_such_layout"), nullptr);
+}
+
+TEST(LayoutRegistry, NamesOnceAndOneLineDescriptions) {
+  std::size_t visited = 0;
+  for_each_layout([&]<class Layout>() {
+    static_assert(registered_layout<Layout>);
+    EXPECT_EQ(info_of<Layout>().name, all_layout_info[visited].name) << "for_each_layout follows all_layout_info";
+    ++visited;
+  });
+  EXPECT_EQ(visited, all_layout_info.size());
+  std::set<std::string_view> listed;
+  for (const layout_info& info : all_layout_info) {
+    EXPECT_TRUE(listed.insert(info.name).second) << info.name << " listed twice";
+    EXPECT_FALSE(info.name.empty());
+    EXPECT_FALSE(info.description.empty()) << info.name;
+    EXPECT_EQ(info.description.find('\n'), std::string_view::npos) << info.name << ": one line";
+  }
+}
+
+// A layout lacking one trait is not a registered_layout (the registry then
+// fails to compile, naming the trait).
+struct lacks_writer_isolation {
+  static constexpr std::string_view kName = "lacks_writer_isolation";
+  static constexpr std::string_view kDescription = "a shared layout that forgot one trait";
+  static constexpr layout_kind kKind = layout_kind::shared;
+  explicit lacks_writer_isolation(const partition& /*blocks*/) {}
+  double& state(unsigned /*parity*/, std::size_t /*equation*/) noexcept { return value; }
+  double& stage(unsigned /*stage*/, std::size_t /*equation*/) noexcept { return value; }
+  double value = 0;
+};
+static_assert(shared_slots_layout<lacks_writer_isolation> &&
+              !layout_declares_writer_isolation<lacks_writer_isolation> &&
+              !registered_layout<lacks_writer_isolation>);
 
 }  // namespace
 }  // namespace lockstep::layouts

@@ -7,7 +7,9 @@
 // Registration is dynamic (::testing::RegisterTest), one CTest test per
 // combination, named Matrix.<sync>/<layout>/threads<T>/pin_<placement>,
 // so that a failure names its combination and a filter can pick one.
+#include <array>
 #include <chrono>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -15,9 +17,11 @@
 #include <functional>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -25,7 +29,7 @@
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
 #include "kernels/rk4.hpp"
-#include "layouts/layouts.hpp"
+#include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 #include "sync/registry.hpp"
@@ -82,16 +86,18 @@ inline std::string first_difference(const std::vector<double>& parallel, std::sp
 
 // Steps for a combination: a few hundred, fewer where a primitive is slow by
 // design in this regime, fewer still under a sanitizer:
-//  * spinners: the pure-spin ck barriers, and omp_barrier, whose libgomp
-//    waiters spin up to GOMP_SPINCOUNT (300000 by default) before sleeping.
-//    On a loaded 2-core machine a phase can last a timeslice whenever the
-//    thread they wait for is not running, which is always the case with more
-//    threads than CPUs (measured here: 40-250 ms per phase with 4 threads on
-//    2 busy CPUs): 10 steps, and 3 (12 phases) when oversubscribed;
-//  * lost wake-ups (win_event_faithful) cost a timeout each: a fifth.
+//  * primitives whose waiters spin long (kSpinsLong: the pure-spin ck
+//    barriers, and omp_barrier, whose libgomp waiters spin up to
+//    GOMP_SPINCOUNT, 300000 by default, before sleeping). On a loaded 2-core
+//    machine a phase can last a timeslice whenever the thread they wait for
+//    is not running, which is always the case with more threads than CPUs
+//    (measured here: 40-250 ms per phase with 4 threads on 2 busy CPUs): 10
+//    steps, and 3 (12 phases) when oversubscribed;
+//  * lost wake-ups (kMayLoseWakeups: win_event_faithful) cost a timeout
+//    each: a fifth.
 template <class Sync>
 constexpr bool spins_long() {
-  return sync::info_of<Sync>().pure_spin || Sync::kName == std::string_view("omp_barrier");
+  return sync::info_of<Sync>().spins_long;
 }
 
 template <class Sync>
@@ -167,12 +173,70 @@ std::string combination_name(unsigned threads, placement pin) {
          "/pin_" + std::string(platform::to_string(pin));
 }
 
-// Calls visit.template operator()<Layout>() for every layout.
-template <class Visitor>
-void for_each_layout(Visitor&& visit) {
-  std::apply([&](auto... layouts) { (visit.template operator()<typename decltype(layouts)::type>(), ...); },
-             std::tuple<std::type_identity<layouts::packed>, std::type_identity<layouts::padded64>,
-                        std::type_identity<layouts::padded128>, std::type_identity<layouts::per_thread>>{});
+// The layouts a primitive runs with in the subsets that cannot afford every
+// sync x layout pair (the sanitize and stress matrices): each primitive takes
+// the applicable layout used least so far (registry order breaks ties), so
+// that the layouts rotate through the primitives of the subset; cover() then
+// names, for a layout no primitive took, the first primitive of the subset it
+// applies to. Every primitive and every layout of the registries appears at
+// least once, and no name is involved.
+class layout_rotation {
+ public:
+  // The index (in layouts::all_layouts) of the layout for Sync; counts it.
+  template <class Sync>
+  std::size_t next() {
+    std::size_t chosen = kNone;
+    std::size_t index = 0;
+    layouts::for_each_layout([&]<class Layout>() {
+      if (kernels::applicable<Sync, Layout>().applicable && (chosen == kNone || uses_[index] < uses_[chosen]))
+        chosen = index;
+      ++index;
+    });
+    // Every primitive is a phase_barrier or a graph_channel, and per_thread
+    // applies to both: no applicable layout is a broken registry, not a skip.
+    if (chosen == kNone) throw std::logic_error(std::string(Sync::kName) + ": no layout of the registry applies");
+    ++uses_[chosen];
+    return chosen;
+  }
+  bool used(std::size_t layout) const noexcept { return uses_[layout] > 0; }
+  void count(std::size_t layout) noexcept { ++uses_[layout]; }
+
+  static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+
+ private:
+  std::array<unsigned, std::tuple_size_v<layouts::all_layouts>> uses_{};
+};
+
+// Calls visit.template operator()<Layout>() for the layout at `index` of
+// layouts::all_layouts (instantiating it only for the layouts Sync applies to).
+template <class Sync, class Visitor>
+void with_layout(std::size_t index, Visitor&& visit) {
+  std::size_t position = 0;
+  layouts::for_each_layout([&]<class Layout>() {
+    if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+      if (position == index) visit.template operator()<Layout>();
+    }
+    ++position;
+  });
+}
+
+// After a rotation over the primitives of a subset (in_subset<Sync>()): calls
+// visit.template operator()<Sync, Layout>() for every layout the rotation did
+// not use, with the first primitive of the subset it applies to.
+template <class InSubset, class Visitor>
+void cover_unused_layouts(layout_rotation& rotation, InSubset in_subset, Visitor&& visit) {
+  std::size_t index = 0;
+  layouts::for_each_layout([&]<class Layout>() {
+    const std::size_t layout = index++;
+    sync::for_each_primitive([&]<class Sync>() {
+      if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+        if (!rotation.used(layout) && in_subset.template operator()<Sync>()) {
+          rotation.count(layout);
+          visit.template operator()<Sync, Layout>();
+        }
+      }
+    });
+  });
 }
 
 }  // namespace lockstep::testing::matrix

@@ -13,9 +13,11 @@
 //    barrier's memory ordering too: without its happens-before edge the read
 //    is a data race (ThreadSanitizer reports it) and may see an old value.
 //
-// Type lists: the suite runs over sync::all_primitives, split by whether
-// ThreadSanitizer can see the primitive's synchronisation (see
-// tests/sync/CMakeLists.txt for why ck and OpenMP are left out of TSan).
+// Type lists: the suite runs over sync::all_primitives, split by whether a
+// ThreadSanitizer run can check the primitive (sync::checked_by_tsan: TSan
+// sees its synchronisation, and it loses no wake-up; tests/sync/CMakeLists.txt
+// says which half the tsan preset runs). A new primitive lands in its half by
+// its traits alone.
 #include <pthread.h>
 #include <sched.h>
 
@@ -32,7 +34,6 @@
 
 #include "platform/cache_line.hpp"
 #include "platform/cpu_relax.hpp"
-#include "sync/ck_barrier.hpp"
 #include "sync/phase_run.hpp"
 #include "sync/registry.hpp"
 #include "tests/support/watchdog.hpp"
@@ -41,21 +42,19 @@ namespace lockstep::sync::testing {
 
 // ---- type lists -----------------------------------------------------------
 
-// Left out of the TSan run (the "_opaque" half, tests/sync/CMakeLists.txt):
-//  * what synchronises where ThreadSanitizer cannot see it: ck (inline
-//    assembly and volatile accesses) and OpenMP (libgomp is not instrumented);
-//  * a primitive that may lose wake-ups (win_event_faithful, the paper's
-//    ThreadWaiter): after a lost wake-up it no longer orders its participants
-//    (its header says why), so TSan reports a real race, reproduced on
-//    purpose, in whichever run happens to lose a wake-up. win_event_test.cpp
-//    drives the lost wake-up deterministically, and TSan runs it.
+// Left out of the TSan run (the "_opaque" half, tests/sync/CMakeLists.txt),
+// by sync::checked_by_tsan:
+//  * what synchronises where ThreadSanitizer cannot see it (kVisibleToTsan
+//    false: ck's inline assembly and volatile accesses, uninstrumented
+//    libgomp): TSan would report races on data the primitive does order;
+//  * a primitive that may lose wake-ups (kMayLoseWakeups: win_event_faithful,
+//    the paper's ThreadWaiter): after a lost wake-up it no longer orders its
+//    participants (its header says why), so TSan reports a real race,
+//    reproduced on purpose, in whichever run happens to lose a wake-up.
+//    win_event_test.cpp drives the lost wake-up deterministically, and TSan
+//    runs it.
 template <class Primitive>
-inline constexpr bool kOpaqueToTsan = Primitive::kMayLoseWakeups || std::is_same_v<Primitive, omp_barrier> ||
-                                      std::is_base_of_v<ck_barrier<LOCKSTEP_CK_CENTRALIZED>, Primitive> ||
-                                      std::is_base_of_v<ck_barrier<LOCKSTEP_CK_DISSEMINATION>, Primitive> ||
-                                      std::is_base_of_v<ck_barrier<LOCKSTEP_CK_TOURNAMENT>, Primitive> ||
-                                      std::is_base_of_v<ck_barrier<LOCKSTEP_CK_MCS>, Primitive> ||
-                                      std::is_base_of_v<ck_barrier<LOCKSTEP_CK_COMBINING>, Primitive>;
+inline constexpr bool kOpaqueToTsan = !checked_by_tsan(info_of<Primitive>());
 
 template <bool Opaque, class Collected, class... Rest>
 struct select_primitives;

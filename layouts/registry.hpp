@@ -1,0 +1,89 @@
+#pragma once
+// Every data layout of lockstep, as one compile-time list, so that `lockstep
+// list`, the `rk4/...` matrix, `delay`, the bitwise oracle and the layout
+// tests all iterate the same list: a new layout joins everything by joining
+// all_layouts (its header plus one line here).
+//
+// Every listed layout satisfies registered_layout (layouts/concepts.hpp): it
+// declares each trait below as a static constexpr member, and a layout that
+// lacks one fails to compile here with the trait's name.
+//
+// For each layout L:
+//   info_of<L>()   name (DESIGN.md's), one-line description, kind (shared or
+//                  private_copy), writer_isolation (bytes of the blocks in
+//                  which every value has one writer; 0 = writers share lines
+//                  on purpose).
+//
+// Usage:
+//   for_each_layout([]<class L>() { ... info_of<L>() ... });
+//   for (const layout_info& info : all_layout_info) ...
+//   find_layout("padded64")  (nullptr when no layout has that name)
+#include <array>
+#include <cstddef>
+#include <string_view>
+#include <tuple>
+
+#include "layouts/concepts.hpp"
+#include "layouts/packed.hpp"
+#include "layouts/padded.hpp"
+#include "layouts/per_thread.hpp"
+
+namespace lockstep::layouts {
+
+// DESIGN.md's table order. A std::tuple of the layout types (never
+// instantiated: only its element types are used).
+using all_layouts = std::tuple<packed, padded64, padded128, per_thread>;
+
+struct layout_info {
+  std::string_view name;
+  std::string_view description;
+  layout_kind kind;
+  std::size_t writer_isolation;  // bytes; 0 = different writers' values share lines on purpose
+};
+
+template <registered_layout Layout>
+constexpr layout_info info_of() noexcept {
+  return {Layout::kName, Layout::kDescription, Layout::kKind, Layout::kWriterIsolation};
+}
+
+// Calls visit.template operator()<L>() for every L in the list, in order.
+template <class List>
+struct for_each_layout_in;
+template <class... Layouts>
+struct for_each_layout_in<std::tuple<Layouts...>> {
+  template <class Visitor>
+  static constexpr void apply(Visitor&& visit) {
+    (visit.template operator()<Layouts>(), ...);
+  }
+};
+template <class List = all_layouts, class Visitor>
+constexpr void for_each_layout(Visitor&& visit) {
+  for_each_layout_in<List>::apply(visit);
+}
+
+template <class List>
+struct layout_info_table;
+template <class... Layouts>
+struct layout_info_table<std::tuple<Layouts...>> {
+  static constexpr std::array<layout_info, sizeof...(Layouts)> value{info_of<Layouts>()...};
+};
+inline constexpr auto all_layout_info = layout_info_table<all_layouts>::value;
+
+// nullptr when no layout has that name (for --layout filters and `list`).
+constexpr const layout_info* find_layout(std::string_view name) noexcept {
+  for (const auto& info : all_layout_info)
+    if (info.name == name) return &info;
+  return nullptr;
+}
+
+namespace detail {
+constexpr bool layout_names_unique() {
+  for (std::size_t first = 0; first < all_layout_info.size(); ++first)
+    for (std::size_t second = first + 1; second < all_layout_info.size(); ++second)
+      if (all_layout_info[first].name == all_layout_info[second].name) return false;
+  return true;
+}
+}  // namespace detail
+static_assert(detail::layout_names_unique(), "every layout needs its own name (the benchmark names use it)");
+
+}  // namespace lockstep::layouts
