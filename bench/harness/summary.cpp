@@ -2,6 +2,7 @@
 #include "bench/harness/summary.hpp"
 
 #include "bench/harness/derived_figures.hpp"
+#include "layouts/registry.hpp"
 
 #include <fmt/core.h>
 
@@ -49,7 +50,17 @@ std::vector<measured> measured_of(const run_book& book, const std::string& kind,
   return found;
 }
 
-bool is_padded(const std::string& layout) { return layout.rfind("padded", 0) == 0; }
+// From the layout registry: a shared layout whose writers share lines (the
+// false-sharing case), and a shared layout that gives each writer its own
+// aligned block (the padded cases).
+bool writers_share_lines(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation == 0;
+}
+bool writers_isolated(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation > 0;
+}
 
 void false_sharing(std::string& out, const std::vector<measured>& steps) {
   // (sync, pin, threads) -> layout -> median
@@ -57,19 +68,24 @@ void false_sharing(std::string& out, const std::vector<measured>& steps) {
   for (const auto& step : steps)
     groups[{step.entry->field("sync"), step.entry->field("pin"), step.entry->field("threads")}]
           [step.entry->field("layout")] = step.median;
-  out += "\nBest and worst layout per primitive (false-sharing penalty = packed / best padded):\n";
+  out += "\nBest and worst layout per primitive (false-sharing penalty = a layout whose writers share lines / the "
+         "best one that isolates them):\n";
   for (const auto& [key, layouts] : groups) {
     const auto& [sync, pin, threads] = key;
     const auto best = std::min_element(layouts.begin(), layouts.end(),
                                        [](const auto& a, const auto& b) { return a.second < b.second; });
     const auto worst = std::max_element(layouts.begin(), layouts.end(),
                                         [](const auto& a, const auto& b) { return a.second < b.second; });
-    std::optional<std::pair<std::string, double>> best_padded;
-    for (const auto& [layout, median] : layouts)
-      if (is_padded(layout) && (!best_padded || median < best_padded->second)) best_padded = {layout, median};
-    std::string penalty = "packed/padded: -";
-    if (const auto packed = layouts.find("packed"); packed != layouts.end() && best_padded)
-      penalty = fmt::format("packed/{}: {:.2f}x", best_padded->first, packed->second / best_padded->second);
+    std::optional<std::pair<std::string, double>> best_isolated;
+    std::optional<std::pair<std::string, double>> sharing;
+    for (const auto& [layout, median] : layouts) {
+      if (writers_isolated(layout) && (!best_isolated || median < best_isolated->second)) best_isolated = {layout, median};
+      if (writers_share_lines(layout) && !sharing) sharing = {layout, median};
+    }
+    std::string penalty = "false-sharing penalty: -";
+    if (sharing && best_isolated)
+      penalty = fmt::format("{}/{}: {:.2f}x", sharing->first, best_isolated->first,
+                            sharing->second / best_isolated->second);
     out += fmt::format("  {:<20} pin:{:<8} threads:{:<3} best {} {}, worst {} {}, {}\n", sync, pin, threads,
                        best->first, format_ns(best->second), worst->first, format_ns(worst->second), penalty);
   }
