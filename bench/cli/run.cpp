@@ -281,7 +281,7 @@ void add_run(CLI::App& app, int& result) {
   run->add_option("--layout", options->layouts, "Layouts, a comma list (default: all)");
   run->add_option("--pin", options->pins, "Placements, a comma list (default: none,compact)");
   run->add_option("--threads", options->threads,
-                  "Thread counts, a comma list (default: 4 and this machine's core count)");
+                  "Thread counts, a comma list, each at most the model's 4 equations (default: 4, and this machine's core count when fewer)");
   run->add_option("--repetitions", options->repetitions,
                   fmt::format("Repetitions per entry (default {}; --quick {})", kDefaultRepetitions, kQuickRepetitions))
       ->check(CLI::Range(1, 1000));

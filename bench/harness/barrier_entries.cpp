@@ -25,8 +25,7 @@ void barrier_entry(benchmark::State& state, harness_state& harness, const entry_
   auto episodes = [&barrier](sync::participant& self, std::uint64_t count) {
     for (std::uint64_t episode = 0; episode < count; ++episode) barrier.arrive_and_wait(self);
   };
-  const primitive_traits traits{std::string(info.name), info.pure_spin, info.may_lose_wakeups};
-  const auto result = measure_entry(state, harness, spec.name(), traits, plan, team, slots, episodes,
+  const auto result = measure_entry(state, harness, spec.name(), sync::find_primitive(info.name), plan, team, slots, episodes,
                                     harness.settings.accounting, "episode");
   if (!result) return;
 

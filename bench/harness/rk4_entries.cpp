@@ -143,9 +143,8 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // enough to be measured at all, and its clock readings (8 per sampled step)
   // stay a tiny share of it; a fast one keeps the default period.
   kernels::stage_sync_time sync_before{};
-  const primitive_traits traits{std::string(info.name), info.pure_spin, info.may_lose_wakeups};
   const std::string name = spec.name();
-  const auto result = measure_entry(state, harness, name, traits, plan, team, slots, steps, kInstrumented, "step", [&] {
+  const auto result = measure_entry(state, harness, name, sync::find_primitive(info.name), plan, team, slots, steps, kInstrumented, "step", [&] {
     if constexpr (Timing == kernels::sync_timing::sampled) {
       constexpr std::uint64_t kSampledStepsPerBatch = 8;
       const auto batch = harness.units_per_batch.find(name);

@@ -19,6 +19,7 @@
 
 #include "bench/harness/run_book.hpp"
 #include "platform/placement.hpp"
+#include "sync/registry.hpp"
 #include "platform/thread_accounting.hpp"
 #include "sync/concepts.hpp"
 
@@ -151,23 +152,18 @@ std::string stall_reason(const call_result& result, const char* unit, bool pure_
 // The time per unit of the median batch (probe calls).
 double median_unit_ns(const batch_record& record);
 
-// What a primitive is, for the stall reasons.
-struct primitive_traits {
-  std::string name;
-  bool pure_spin = false;
-  bool may_lose_wakeups = false;
-};
-
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
 // first call (8 batches of one unit); run the timed call, calling warmed_up()
 // between its warm-up batch and its first timed batch (the team waiting: a
 // baseline for what the timed batches accumulate); feed Google Benchmark the
 // batch times. Returns the call's result, or nothing when the entry was
-// skipped (SkipWithError, with the reason).
+// skipped (SkipWithError, with the reason). `primitive`: the registry's facts
+// about the entry's primitive (sync/registry.hpp), for the stall reasons and
+// the per-primitive stall count; nullptr for an entry of no primitive.
 template <class Team, class Work>
 std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
-                                         const primitive_traits& primitive, const platform::placement_plan& plan,
+                                         const sync::primitive_info* primitive, const platform::placement_plan& plan,
                                          Team& team, std::vector<participant_slot>& slots, Work& work,
                                          bool accounting, const char* unit, std::function<void()> warmed_up = {}) {
   const run_settings& settings = harness.settings;
@@ -208,12 +204,13 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
     return std::optional<call_result>{};
   };
 
-  const std::string stall_key = primitive.name + " threads:" + std::to_string(plan.threads);
+  const std::string stall_key =
+      (primitive != nullptr ? std::string(primitive->name) : name) + " threads:" + std::to_string(plan.threads);
   if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) {
     if (measured_before) return flag_measured_entry(call_result{}, "an earlier call stopped: " + known->second);
     return skip(known->second);
   }
-  if (!measured_before && !primitive.name.empty()) {
+  if (!measured_before && primitive != nullptr) {
     const unsigned stalls = harness.stalls_of_sync[stall_key];
     if (stalls >= harness.stalls_before_skipping_sync) {
       const std::string reason =
@@ -225,10 +222,11 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   // A stall (one unit beyond the bound) says something about the primitive;
   // running out of the call's budget only about this call.
   const auto record_stop = [&](const call_result& result) {
-    std::string reason = stall_reason(result, unit, primitive.pure_spin, primitive.may_lose_wakeups, plan, settings);
+    std::string reason = stall_reason(result, unit, primitive != nullptr && primitive->pure_spin,
+                                      primitive != nullptr && primitive->may_lose_wakeups, plan, settings);
     harness.stalled[name] = reason;
     if (measured_before) return flag_measured_entry(result, reason);
-    if (result.batches.stalled && !primitive.name.empty()) ++harness.stalls_of_sync[stall_key];
+    if (result.batches.stalled && primitive != nullptr) ++harness.stalls_of_sync[stall_key];
     return skip(reason);
   };
   const auto record_placement_failure = [&](const call_result& result) {

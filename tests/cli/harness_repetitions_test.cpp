@@ -87,7 +87,7 @@ TEST(HarnessRepetitions, ACallStoppedWhileSizingTheFirstRepetitionStopsEveryLate
                                    for (std::uint64_t unit = 0; unit < units; ++unit)
                                      benchmark::DoNotOptimize(sink += unit);
                                  };
-                                 (void)bench::measure_entry(state, harness, name, bench::primitive_traits{}, plan,
+                                 (void)bench::measure_entry(state, harness, name, nullptr, plan,
                                                             team, slots, work, false, "unit");
                                  harness.settings.call_budget_ns = normal_budget;
                                })
