@@ -3,7 +3,8 @@
 #
 #   scripts/setup.sh          what building and running lockstep needs
 #   scripts/setup.sh --test   that, and what the tests need too (rt-tests, chromium,
-#                             libbenchmark-tools: Google Benchmark's compare.py)
+#                             libbenchmark-tools: Google Benchmark's compare.py,
+#                             spin: the Promela models in tests/spin, compiled with gcc)
 #
 # Idempotent: when everything is present it checks and returns in well under a
 # second. Runs apt-get as root, or through sudo; says plainly what it installs.
@@ -16,7 +17,7 @@ build_packages=(
   libboost-dev libck-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2
 )
-test_packages=(rt-tests chromium libbenchmark-tools)
+test_packages=(rt-tests chromium libbenchmark-tools spin)
 
 packages=("${build_packages[@]}")
 case "${1:-}" in
