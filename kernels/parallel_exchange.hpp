@@ -8,12 +8,14 @@
 //                                       (packed, padded64, padded128): operands
 //                                       read in place, results written in place,
 //                                       every participant arrives at every stage.
-//   barrier_copy_in<Barrier>            a phase_barrier and per_thread: results go
+//   barrier_copy_in<Barrier, Layout>    a phase_barrier and a private_copy layout
+//                                       (per_thread): results go
 //                                       to the private copy and the board; after
 //                                       each stage's barrier a participant copies
 //                                       its dependencies in from the board.
-//   channel_copy_in<Channel>            a dataflow channel (seqlock, spsc_queue)
-//                                       and per_thread: the owner publishes its
+//   channel_copy_in<Channel, Layout>    a dataflow channel (seqlock, spsc_queue)
+//                                       and a private_copy layout (per_thread):
+//                                       the owner publishes its
 //                                       block from its private copy; a consumer
 //                                       receives from the producers its block
 //                                       depends on, straight into its private copy.
@@ -41,7 +43,7 @@
 
 #include "layouts/aligned_buffer.hpp"
 #include "layouts/partition.hpp"
-#include "layouts/per_thread.hpp"
+#include "layouts/per_thread.hpp"  // the board's slot numbering (kBoardNextState) every private_copy layout shares
 #include "layouts/shared_slots.hpp"
 #include "platform/cache_line.hpp"
 #include "sync/concepts.hpp"
@@ -116,7 +118,7 @@ class barrier_in_place {
 };
 
 // ---------------------------------------------------------------------------
-template <class Barrier>
+template <class Barrier, class Layout>
 class barrier_copy_in {
  public:
   using sync_type = Barrier;
@@ -171,13 +173,13 @@ class barrier_copy_in {
 
  private:
   layouts::partition blocks_;
-  layouts::per_thread layout_;
+  Layout layout_;  // a private_copy layout: the private copies and the board
   Barrier barrier_;
   const std::vector<participant_plan>* plans_;
 };
 
 // ---------------------------------------------------------------------------
-template <class Channel>
+template <class Channel, class Layout>
 class channel_copy_in {
  public:
   using sync_type = Channel;
@@ -264,7 +266,7 @@ class channel_copy_in {
   }
 
   layouts::partition blocks_;
-  layouts::per_thread layout_;  // only the private copies are used: the channel is the board
+  Layout layout_;  // a private_copy layout; only its private copies are used: the channel is the board
   std::size_t width_;           // doubles per message: the largest block (the channel's contract)
   Channel channel_;
   const std::vector<participant_plan>* plans_;

@@ -160,8 +160,8 @@ struct exchange_for {
   using type = std::conditional_t<
       sync::phase_barrier<Sync>,
       std::conditional_t<Layout::kKind == layouts::layout_kind::shared, barrier_in_place<Sync, Layout>,
-                         barrier_copy_in<Sync>>,
-      channel_copy_in<Sync>>;
+                         barrier_copy_in<Sync, Layout>>,
+      channel_copy_in<Sync, Layout>>;
 };
 
 // The stage-sync clock: a policy so that the step's loop has no branch on it.
