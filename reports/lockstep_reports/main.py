@@ -11,7 +11,7 @@ import os
 import sys
 
 from .inputs import InputError, load_run_file, unique_labels
-from .output import OutputError, check_file_target, write_file
+from .output import OutputError, check_directory_target, check_file_target, write_file
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
 
@@ -161,7 +161,8 @@ def comparison_json(comparisons) -> str:
 
 def run_report(argv: list[str]) -> int:
     options = report_parser().parse_args(argv)
-    from . import report  # matplotlib and jinja2: only once the command line is sound
+    check_directory_target(options.out)
+    from . import report  # matplotlib and jinja2: a second or more, so only once the output can be written
 
     written = report.write_report(options.files, options.out, options.title)
     for path in written:

@@ -83,7 +83,29 @@ def check_file_target(path: str) -> None:
     _probe(path, directory)
 
 
-def check_directory_target(path: str, foreign_entries: Callable[[str], list[str]]) -> None:
+# ---------------------------------------------------------------- a report directory
+
+# What `lockstep report` writes into its directory: the two pages and the figures they show (report.py and
+# its templates take these names).
+HTML_PAGE, MARKDOWN_PAGE = "report.html", "report.md"
+PAGES = (HTML_PAGE, MARKDOWN_PAGE)
+FIGURES_DIRECTORY = "figures"
+
+
+def foreign_entries(directory: str) -> list[str]:
+    """What a directory holds besides a report's pages and figures (a report replaces only a report)."""
+    foreign = []
+    for name in os.listdir(directory):
+        path = os.path.join(directory, name)
+        if name == FIGURES_DIRECTORY and os.path.isdir(path) and not os.path.islink(path):
+            foreign += [os.path.join(name, figure) for figure in os.listdir(path)
+                        if not (figure.endswith(".svg") and os.path.isfile(os.path.join(path, figure)))]
+        elif not (name in PAGES and os.path.isfile(path)):
+            foreign.append(name)
+    return foreign
+
+
+def check_directory_target(path: str, foreign_entries: Callable[[str], list[str]] = foreign_entries) -> None:
     """A directory can be put at path: its parent exists and takes a new entry, and path is absent, empty,
     or holds only what foreign_entries(path) does not list (an earlier report, which is replaced)."""
     target = os.path.realpath(path)

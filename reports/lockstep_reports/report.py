@@ -26,12 +26,7 @@ from .compare import calibration, fingerprint, layout_effects, rank_tables
 from .fields import DELAY_SETTINGS, FINGERPRINT_KEYS, SERIAL_CONTEXT, UNAVAILABLE
 from .formatting import format_ns, format_number
 from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, load_any, unique_labels
-from .output import check_directory_target, write_directory
-
-# What a report directory holds: the two pages and the figures they show (the templates take the names).
-HTML_PAGE, MARKDOWN_PAGE = "report.html", "report.md"
-PAGES = (HTML_PAGE, MARKDOWN_PAGE)
-FIGURES_DIRECTORY = "figures"
+from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
 
@@ -308,23 +303,9 @@ def render_markdown(title: str, sections: list[Section]) -> str:
     return text.rstrip("\n") + "\n"
 
 
-def foreign_entries(directory: str) -> list[str]:
-    """What a directory holds besides a report's pages and figures (a report replaces only a report)."""
-    foreign = []
-    for name in os.listdir(directory):
-        path = os.path.join(directory, name)
-        if name == FIGURES_DIRECTORY and os.path.isdir(path) and not os.path.islink(path):
-            foreign += [os.path.join(name, figure) for figure in os.listdir(path)
-                        if not (figure.endswith(".svg") and os.path.isfile(os.path.join(path, figure)))]
-        elif not (name in PAGES and os.path.isfile(path)):
-            foreign.append(name)
-    return foreign
-
-
 def write_report(paths: list[str], out_dir: str, title: str = "lockstep report") -> list[str]:
-    """Checks that out_dir can take the report (before any work), reads every input, and writes the
-    report directory whole. Returns the pages written."""
-    check_directory_target(out_dir, foreign_entries)
+    """Reads every input and writes the report directory whole (the command line has checked out_dir
+    with output.check_directory_target first). Returns the pages written."""
     labels = unique_labels(paths)
     loaded = [load_any(path, label) for path, label in zip(paths, labels)]
     sections = build_sections(loaded)

@@ -20,7 +20,6 @@ import math
 import zlib
 
 import numpy as np
-from scipy import stats
 
 BOOTSTRAP_RESAMPLES = 2000
 CONFIDENCE = 0.95
@@ -62,6 +61,8 @@ def mann_whitney_p(a, b) -> float | None:
     """Two-sided Mann-Whitney U p-value, or None when a side has fewer than MIN_REPETITIONS values."""
     if len(a) < MIN_REPETITIONS or len(b) < MIN_REPETITIONS:
         return None
+    from scipy import stats  # here, not at the top: importing scipy.stats takes half a second
+
     a = np.asarray(a, dtype=float)
     b = np.asarray(b, dtype=float)
     if np.all(a == a[0]) and np.all(b == a[0]):
