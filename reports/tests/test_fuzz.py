@@ -24,8 +24,9 @@ must give "same"; a cut, non-UTF-8 bytes and another tool's file must give "reje
 a hang (each run has a 20 s alarm), a warning from numpy or matplotlib, or NaN / Infinity / None / an
 absurd run of digits in an output.
 
-LOCKSTEP_FUZZ_CASES sets the number of cases (default 1200), LOCKSTEP_FUZZ_KEEP=DIR keeps the files of
-failing cases there.
+LOCKSTEP_FUZZ_CASES sets the number of cases (default 1200), LOCKSTEP_FUZZ_SEED the seed,
+LOCKSTEP_FUZZ_RENDER_EVERY how often the figures are drawn, LOCKSTEP_FUZZ_KEEP=DIR keeps the files of
+failing cases there, LOCKSTEP_FUZZ_LOG=FILE writes one line per run (case, mutation, place, outcome).
 """
 import contextlib
 import copy
@@ -237,6 +238,15 @@ class Sites:
         return json.loads(self.text)
 
 
+def pick(rng, paths):
+    """A place chosen region by region: first a top-level key (context, benchmarks, histogram, ...), then a
+    place under it, so that the context's few fields are hit as often as the benchmarks' thousands."""
+    regions = {}
+    for path in paths:
+        regions.setdefault(path[0] if path else "", []).append(path)
+    return rng.choice(regions[rng.choice(sorted(regions))])
+
+
 def node_at(document, path):
     node = document
     for key in path:
@@ -260,19 +270,19 @@ def mutate_json(rng, kind, base):
     mutated = document
     raw_token = None
     if kind == "wrong type":
-        path = rng.choice(base.every)
+        path = pick(rng, base.every)
         value = node_at(mutated, path)
         choices = [v for v in WRONG_VALUES if json_kind(v) != json_kind(value)
                    and not (value is None and json_kind(v) == "a number")]  # null -> a number may be valid
         parent_of(mutated, path)[path[-1]] = copy.deepcopy(rng.choice(choices))
     elif kind == "missing key":
-        path = rng.choice(base.filled_objects)
+        path = pick(rng, base.filled_objects)
         value = node_at(mutated, path)
         key = rng.choice(sorted(value))
         del value[key]
         path = path + (key,)
     elif kind == "extra key":
-        path = rng.choice(base.objects)
+        path = pick(rng, base.objects)
         value = node_at(mutated, path)
         key = f"fuzz_extra_{rng.randrange(1000)}"
         value[key] = copy.deepcopy(rng.choice(WRONG_VALUES + (math.nan, 1e300, -5)))
@@ -285,7 +295,7 @@ def mutate_json(rng, kind, base):
         context[key] = copy.deepcopy(rng.choice(WRONG_VALUES + (math.nan, "4.5")))
         path = ("context", key)
     elif kind in ("NaN or infinity", "huge number", "negative number"):
-        path = rng.choice(base.numbers)
+        path = pick(rng, base.numbers)
         value = node_at(mutated, path)
         parent = parent_of(mutated, path)
         if kind == "NaN or infinity":
@@ -296,10 +306,10 @@ def mutate_json(rng, kind, base):
         else:
             parent[path[-1]] = -abs(value) - rng.choice((1, 0.5, 1000))
     elif kind == "empty list":
-        path = rng.choice(base.lists)
+        path = pick(rng, base.lists)
         node_at(mutated, path).clear()
     elif kind == "duplicated entry":
-        path = rng.choice(base.lists)
+        path = pick(rng, base.lists)
         value = node_at(mutated, path)
         index = rng.randrange(len(value))
         value.insert(rng.randrange(len(value) + 1), copy.deepcopy(value[index]))
@@ -313,7 +323,7 @@ def mutate_json(rng, kind, base):
                 rng.shuffle(entries)
             path = (key,)
         else:
-            path = rng.choice([p for p in base.filled_objects if len(node_at(mutated, p)) > 1])
+            path = pick(rng, [p for p in base.filled_objects if len(node_at(mutated, p)) > 1])
             value = node_at(mutated, path)
             items = list(value.items())
             rng.shuffle(items)
@@ -586,6 +596,9 @@ class Fuzz(unittest.TestCase):
         self.addCleanup(shutil.rmtree, scratch, ignore_errors=True)
         bench = Bench(scratch)
         keep = os.environ.get("LOCKSTEP_FUZZ_KEEP")
+        log = open(os.environ["LOCKSTEP_FUZZ_LOG"], "w", encoding="utf-8") if "LOCKSTEP_FUZZ_LOG" in os.environ else None
+        if log:
+            self.addCleanup(log.close)
 
         base_sites = {name: Sites(base) for name, kind, base, _ in bases if kind == "json"}
         expected = {}  # base name -> the unmutated file's results
@@ -641,6 +654,9 @@ class Fuzz(unittest.TestCase):
                                   found.files, found.failure)
                 outcome, problem = judge(result, leftovers, wrote, unmutated_result, mutation, path)
                 outcomes[tool][outcome] += 1
+                if log:
+                    log.write(f"{case}\t{mutation.kind}\t{mutation.where}\t{name}\t{label}\t{outcome}\t"
+                              f"{result.err.splitlines()[0] if result.status == 2 else ''}\n")
                 if problem:
                     failures.append(f"case {case} ({mutation.kind} at {mutation.where} of {name}), {label}: {problem}")
                     if keep:
