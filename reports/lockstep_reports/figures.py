@@ -259,7 +259,7 @@ def delay_histogram(delay) -> str:
     axes.set_yscale("log")
     axes.set_ylim(bottom=0.8)
     for name, style in (("p50", "-"), ("p99", "--"), ("p999", ":")):
-        value = delay.wakeup.statistics.get(name)
+        value = delay.pinned.wakeup.statistics.get(name)
         if value is not None:  # the axis is in us
             axes.axvline(value / 1e3, color="black", ls=style, lw=0.9, label=f"{name} {format_ns(value)}")
     axes.set_xlabel("wake-up latency (us)")

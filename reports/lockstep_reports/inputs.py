@@ -495,17 +495,24 @@ class Figure5Row:
     pct: float | None
 
 
+@dataclass(frozen=True)
+class PacedRun:
+    """One paced run of a delay file: the pinned one, or the unpinned one of `--compare-pinning`."""
+
+    wakeup: Distribution
+    completion: Distribution | None
+    deadline_misses: int | None
+    figure5: list[Figure5Row]
+
+
 @dataclass
 class DelayFile:
     path: str
     label: str
     settings: dict  # fields.DELAY_SETTINGS present in the file, checked
-    wakeup: Distribution
-    completion: Distribution | None
-    deadline_misses: int | None
-    histogram: Histogram
-    figure5: list[Figure5Row] | None
-    figure5_unpinned: list[Figure5Row] | None
+    pinned: PacedRun
+    unpinned: PacedRun | None
+    histogram: Histogram  # of the pinned run's wake-ups
 
 
 def _distribution(owner: _Object, key: str, required: bool, statistics=fields.DISTRIBUTION_STATISTICS,
@@ -552,11 +559,9 @@ def _read_c2c(path: str, label: str, document: _Object) -> C2cFile:
     return C2cFile(path=path, label=label, pairs=pairs, sampled=document.flag("sampled"))
 
 
-def _figure5(owner: _Object, key: str) -> list[Figure5Row] | None:
-    raw_rows = owner.array(key, required=False)
-    if raw_rows is None:
-        return None
+def _figure5(owner: _Object, key: str) -> list[Figure5Row]:
     rows, threads = [], {}
+    raw_rows = owner.array(key)
     for index, raw in enumerate(raw_rows):
         row = _Object(owner.path, raw, f"{key} row {index}")
         thread = row.text("thread", empty=False)
@@ -597,8 +602,21 @@ def _settings(document: _Object) -> dict:
     return values
 
 
+def _paced_run(summaries: _Object, document: _Object, figure5_key: str) -> PacedRun:
+    return PacedRun(wakeup=_distribution(summaries, "wakeup_latency_ns", required=True),
+                    completion=_distribution(summaries, "completion_ns", required=False),
+                    deadline_misses=summaries.integer("deadline_misses", required=False),
+                    figure5=_figure5(document, figure5_key))
+
+
 def _read_delay(path: str, label: str, document: _Object) -> DelayFile:
-    wakeup = _distribution(document, "wakeup_latency_ns", required=True)
+    pinned = _paced_run(document, document, "figure5")
+    # `lockstep delay --compare-pinning` writes both, without it neither: one alone is a damaged file.
+    unpinned = document.object("unpinned", required=False)
+    if (unpinned is None) != ("figure5_unpinned" not in document.value):
+        document.fail("unpinned", "and figure5_unpinned come together (`lockstep delay --compare-pinning` writes "
+                                  "both), but the file has one of them only")
+    wakeup = pinned.wakeup
     histogram = document.object("histogram")
     counts = histogram.array("counts")
     for index, count in enumerate(counts):
@@ -620,12 +638,9 @@ def _read_delay(path: str, label: str, document: _Object) -> DelayFile:
             histogram.fail("counts", f"has {len(counts)} buckets of {bucket:g} ns from {first:g} ns, which do not "
                                      f"span the wake-ups from {shortest} to {longest} ns bucket for bucket: a "
                                      "damaged file")
-    return DelayFile(
-        path=path, label=label, settings=_settings(document), wakeup=wakeup,
-        completion=_distribution(document, "completion_ns", required=False),
-        deadline_misses=document.integer("deadline_misses", required=False),
-        histogram=Histogram(bucket, first, counts),
-        figure5=_figure5(document, "figure5"), figure5_unpinned=_figure5(document, "figure5_unpinned"))
+    return DelayFile(path=path, label=label, settings=_settings(document), pinned=pinned,
+                     unpinned=_paced_run(unpinned, document, "figure5_unpinned") if unpinned else None,
+                     histogram=Histogram(bucket, first, counts))
 
 
 # ---------------------------------------------------------------- verify trajectories

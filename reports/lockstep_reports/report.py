@@ -23,7 +23,7 @@ import markupsafe
 
 from . import figures, paper
 from .compare import calibration, fingerprint, layout_effects, rank_tables
-from .fields import DELAY_SETTINGS, FINGERPRINT_KEYS, SERIAL_CONTEXT, UNAVAILABLE
+from .fields import DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, SERIAL_CONTEXT, UNAVAILABLE
 from .formatting import format_ns, format_number
 from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, load_any, unique_labels
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
@@ -183,23 +183,26 @@ def _setting(settings: dict, key: str) -> str:
 
 
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
+    runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
     summary_rows = []
-    for name, summary in (("wake-up latency", item.wakeup), ("completion", item.completion)):
-        statistics = summary.statistics if summary else {}
-        count = summary.count if summary else None
-        summary_rows.append([name] + [format_ns(statistics.get(q)) for q in ("min", "p50", "p99", "p999", "max")]
-                            + [format_number(count)])
+    for which, run in runs:
+        for name, summary in (("wake-up latency", run.wakeup), ("completion", run.completion)):
+            statistics = summary.statistics if summary else {}
+            count = summary.count if summary else None
+            summary_rows.append([name + which] + [format_ns(statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
+                                + [format_number(count)])
+    misses = [f"{format_number(run.deadline_misses)}{which}" for which, run in runs]
     paragraphs = [
         "Settings: " + ", ".join(f"{key} {_setting(item.settings, key)}" for key, _ in sorted(DELAY_SETTINGS)) + ".",
-        f"Deadline misses: {format_number(item.deadline_misses)}.",
+        f"Deadline misses: {', '.join(misses)}.",
         "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
         f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
         "per-thread accounting.",
     ]
     tables = [Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"], summary_rows),
-              figure5_table(item.figure5, "Figure 5: this machine (pinned) beside the paper")]
-    if item.figure5_unpinned:
-        tables.append(figure5_table(item.figure5_unpinned,
+              figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper")]
+    if item.unpinned:
+        tables.append(figure5_table(item.unpinned.figure5,
                                     "Figure 5: this machine unpinned (the paper's OpenMP case) beside the paper"))
     figure = Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(item))
     counter[0] += 1
