@@ -29,24 +29,14 @@ time comparisons are never rescaled by it.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 from . import statistics
+from .fields import (BACK_TO_BACK_ORDER, C2C_CONTEXT, C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS,
+                     SERIAL_CONTEXT, SYNC_COUNTER, UNAVAILABLE, VS_C2C_COUNTER, VS_SERIAL_COUNTER)
+from .formatting import format_ns, format_number
 from .inputs import RunFile
-from .names import BenchmarkKey
-
-# Context keys that identify a machine and a build, in the order shown.
-FINGERPRINT_KEYS = (
-    "cpu_model", "topology", "hypervisor", "kernel", "num_cpus", "mhz_per_cpu", "host_name",
-    "compiler", "cxx_flags", "build_type", "lockstep_version", "lockstep_schema", "git_revision",
-    "benchmark_version", "hwloc_version", "boost_version", "c2c_one_way_ns", "serial_step_ns",
-    "oversubscribed_note", "lockstep_order", "date",
-)
-# lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).
-BACK_TO_BACK_ORDER = "registration order"
-# Keys whose difference means "another machine" rather than "another run".
-MACHINE_KEYS = ("cpu_model", "topology", "hypervisor", "kernel", "num_cpus")
+from .names import BenchmarkKey, parse_name
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
 DEFAULT_NOISE_PERCENT = 5.0
@@ -58,18 +48,9 @@ NOISE_RATIONALE = (
 
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")
-SERIAL_NAME = "rk4/serial"
-# The counter that is a c2c entry's measurement (its iteration time includes thread start-up).
-C2C_COUNTER = "one_way_ns"
-
-# Counters shown beside the time (when present), with short headings.
-COUNTERS_SHOWN = (
-    ("csw_vol_per_kstep", "csw vol/kstep"),
-    ("csw_invol_per_kstep", "csw invol/kstep"),
-    ("migrations_per_kstep", "migr/kstep"),
-    ("futex_waits_per_step", "futex/step"),
-    ("timeouts", "timeouts"),
-)
+# The in-run calibration entries: compared apart, and read when the context lacks the value.
+SERIAL_ENTRY = "rk4/serial"
+C2C_ENTRY = "c2c/pin:compact/threads:2"
 
 
 @dataclass
@@ -143,13 +124,15 @@ class Comparison:
         limit = 1.0 + percent / 100.0
         return [row for row in self.rows if self.verdict(row) == "slower" and row.ratio > limit]
 
-    def calibration_moves(self) -> list[tuple[str, str, float | None, float | None]]:
-        """(name, unit, A, B) of the context's in-run calibrations (entries' medians when the context
-        lacks them)."""
-        return [("c2c one-way", "ns", calibration(self.baseline, "c2c_one_way_ns"),
-                 calibration(self.contender, "c2c_one_way_ns")),
-                ("serial step", "ns", calibration(self.baseline, "serial_step_ns"),
-                 calibration(self.contender, "serial_step_ns"))]
+    def calibration_moves(self) -> list[tuple[str, str, float | None, float | None, float | None]]:
+        """(name, unit, A, B, change B/A - 1 in percent) of the context's in-run calibrations (the entries'
+        medians when the context lacks them); the change is None when either side is unavailable."""
+        moves = []
+        for name, context_key in (("c2c one-way", C2C_CONTEXT), ("serial step", SERIAL_CONTEXT)):
+            before, after = calibration(self.baseline, context_key), calibration(self.contender, context_key)
+            change = (after / before - 1.0) * 100.0 if (before and after) else None
+            moves.append((name, "ns", before, after, change))
+        return moves
 
     def accounting_overheads(self) -> list[tuple[BenchmarkKey, float | None, float | None]]:
         """Per overhead combination: median time with accounting on / with it off, in A and in B."""
@@ -171,15 +154,10 @@ class Comparison:
 
 
 def is_calibration(key: BenchmarkKey) -> bool:
-    return key.family in CALIBRATION_FAMILIES or key.display == SERIAL_NAME
+    return key.family in CALIBRATION_FAMILIES or key.display == SERIAL_ENTRY
 
 
-def _c2c_values(run) -> list[float]:
-    return [r.counters[C2C_COUNTER] for r in run.repetitions
-            if C2C_COUNTER in r.counters and math.isfinite(r.counters[C2C_COUNTER])]
-
-
-def _sample(run, time_kind: str) -> tuple[list[float], bool]:
+def sample(run, time_kind: str = "real") -> tuple[list[float], bool]:
     """The repetition times of a run, or its median aggregate alone (False: no repetitions)."""
     times = run.times_ns(time_kind)
     if times:
@@ -194,13 +172,13 @@ def _sample(run, time_kind: str) -> tuple[list[float], bool]:
 def _calibration_sample(key: BenchmarkKey, run, time_kind: str) -> tuple[list[float], bool, str]:
     """A calibration entry's values: c2c by its one_way_ns counter when every repetition has it."""
     if key.family == "c2c":
-        values = _c2c_values(run)
+        values = [r.counters[C2C_COUNTER] for r in run.repetitions if C2C_COUNTER in r.counters]
         if values and len(values) == len(run.repetitions):
             return values, True, C2C_COUNTER
         aggregate = run.aggregates.get("median")
-        if not run.repetitions and aggregate and math.isfinite(aggregate.counters.get(C2C_COUNTER, math.nan)):
+        if not run.repetitions and aggregate and C2C_COUNTER in aggregate.counters:
             return [aggregate.counters[C2C_COUNTER]], False, C2C_COUNTER
-    times, repeated = _sample(run, time_kind)
+    times, repeated = sample(run, time_kind)
     return times, repeated, "time"
 
 
@@ -222,18 +200,18 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
             times_a, reps_a, measure_a = _calibration_sample(key, run_a, time_kind)
             times_b, reps_b, measure_b = _calibration_sample(key, run_b, time_kind)
             if measure_a != measure_b:  # one file has the counter, the other not: compare like with like
-                times_a, reps_a = _sample(run_a, time_kind)
-                times_b, reps_b = _sample(run_b, time_kind)
+                times_a, reps_a = sample(run_a, time_kind)
+                times_b, reps_b = sample(run_b, time_kind)
                 measure_a = "time"
         else:
-            times_a, reps_a = _sample(run_a, time_kind)
-            times_b, reps_b = _sample(run_b, time_kind)
+            times_a, reps_a = sample(run_a, time_kind)
+            times_b, reps_b = sample(run_b, time_kind)
             measure_a = "time"
         if not times_a or not times_b:
             errored.append((key, baseline.label if not times_a else contender.label, "no usable time"))
             continue
         median_a, median_b = statistics.median(times_a), statistics.median(times_b)
-        ratio = median_b / median_a if median_a > 0 else math.inf
+        ratio = median_b / median_a  # inputs.py keeps every time within [SHORTEST_NS, LONGEST_NS]
         interval = statistics.ratio_interval(times_a, times_b, key.display) if reps_a and reps_b else None
         p_raw = statistics.mann_whitney_p(times_a, times_b) if reps_a and reps_b else None
         if p_raw is None and not calibrating:
@@ -302,13 +280,8 @@ def run_median(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     run = run_file.runs.get(key)
     if run is None or run.errored:
         return None
-    times, _ = _sample(run, time_kind)
+    times, _ = sample(run, time_kind)
     return statistics.median(times) if times else None
-
-
-# The in-run calibration entries, used when the context lacks the value.
-SERIAL_ENTRY = "rk4/serial"
-C2C_ENTRY = "c2c/pin:compact/threads:2"
 
 
 def calibration(run_file: RunFile, context_key: str) -> float | None:
@@ -317,9 +290,7 @@ def calibration(run_file: RunFile, context_key: str) -> float | None:
     value = run_file.context_number(context_key)
     if value is not None:
         return value
-    from .names import parse_name
-
-    if context_key == "serial_step_ns":
+    if context_key == SERIAL_CONTEXT:
         return run_median(run_file, parse_name(SERIAL_ENTRY))
     key = parse_name(C2C_ENTRY)
     run = run_file.runs.get(key)
@@ -340,15 +311,15 @@ def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     if run is None or run.errored:
         return None, None
     step = run_median(run_file, key, time_kind)
-    serial = calibration(run_file, "serial_step_ns")
-    c2c = calibration(run_file, "c2c_one_way_ns")
+    serial = calibration(run_file, SERIAL_CONTEXT)
+    c2c = calibration(run_file, C2C_CONTEXT)
     vs_serial = step / serial if (step is not None and serial) else None
-    if vs_serial is None and run.counter_values("vs_serial"):
-        vs_serial = statistics.median(run.counter_values("vs_serial"))
-    sync = run.counter_values("sync_ns_per_stage")
+    if vs_serial is None and run.counter_values(VS_SERIAL_COUNTER):
+        vs_serial = statistics.median(run.counter_values(VS_SERIAL_COUNTER))
+    sync = run.counter_values(SYNC_COUNTER)
     vs_c2c = statistics.median(sync) / c2c if (sync and c2c) else None
-    if vs_c2c is None and run.counter_values("vs_c2c"):
-        vs_c2c = statistics.median(run.counter_values("vs_c2c"))
+    if vs_c2c is None and run.counter_values(VS_C2C_COUNTER):
+        vs_c2c = statistics.median(run.counter_values(VS_C2C_COUNTER))
     return vs_serial, vs_c2c
 
 
@@ -393,7 +364,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
                 step = run_median(run_file, key, time_kind)
                 if step is None:
                     continue
-                serial = calibration(run_file, "serial_step_ns")
+                serial = calibration(run_file, SERIAL_CONTEXT)
                 entries.append((f"{key.get('sync')}/{key.get('layout')}", step, step / serial if serial else None))
             entries.sort(key=lambda entry: (entry[1], entry[0]))
             per_file.append(entries[:top])
@@ -403,20 +374,14 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
 
 # ---------------------------------------------------------------- text output
 
-def format_ns(value: float | None) -> str:
-    if value is None or not math.isfinite(value):
-        return "unavailable"
-    if value >= 1e6:
-        return f"{value / 1e6:.3f} ms"
-    if value >= 1e3:
-        return f"{value / 1e3:.3f} us"
-    return f"{value:.1f} ns"
-
-
 def _number(value: float | None, digits: int = 2) -> str:
-    if value is None or not math.isfinite(value):
-        return "-"
-    return f"{value:.{digits}f}"
+    """A cell of a numeric column: "-" where there is nothing to show."""
+    return format_number(value, digits, missing="-")
+
+
+def file_letter(index: int) -> str:
+    """The letter of the index-th file: A is the baseline."""
+    return chr(ord("A") + index)
 
 
 def _p(value: float | None) -> str:
@@ -439,11 +404,11 @@ def _table(headings: list[str], rows: list[list[str]], right: set[int] | None = 
 
 
 def fingerprint_lines(run_files: list[RunFile]) -> list[str]:
-    labels = [f"[{chr(ord('A') + i)}] {f.label}" for i, f in enumerate(run_files)]
+    labels = [f"[{file_letter(i)}] {f.label}" for i, f in enumerate(run_files)]
     prints = [fingerprint(f) for f in run_files]
     rows = []
     for key in FINGERPRINT_KEYS:
-        values = [p[key] or "unavailable" for p in prints]
+        values = [p[key] or UNAVAILABLE for p in prints]
         mark = "*" if len(set(values)) > 1 else ""
         rows.append([key + mark] + values)
     return _table(["context (* differs)"] + labels, rows)
@@ -456,14 +421,13 @@ def _percent(value: float) -> str:
 def calibration_move_line(comparison: Comparison, letter: str) -> str:
     """How far the machine itself moved between the two runs, by the context's in-run calibrations."""
     parts, moves = [], []
-    for name, unit, before, after in comparison.calibration_moves():
-        if before and after:
-            move = (after / before - 1.0) * 100.0
+    for name, unit, before, after, move in comparison.calibration_moves():
+        if move is not None:
             moves.append((name, move))
             digits = 2 if max(before, after) < 100 and name.startswith("serial") else 1
             parts.append(f"{name} {before:.{digits}f} -> {after:.{digits}f} {unit} ({_percent(move)})")
         else:
-            parts.append(f"{name} unavailable")
+            parts.append(f"{name} {UNAVAILABLE}")
     line = (f"calibrations moved, {letter} against A (in-run medians from each file's context, else from its "
             f"calibration entries; the comparisons below are not rescaled by them): " + ", ".join(parts))
     noise = comparison.noise_percent
@@ -514,14 +478,14 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
             before, after = row.counters.get(counter, (None, None))
             # Absent on both sides: the entry cannot have it (lockstep omits, e.g., the futex waits
             # of a primitive that hides them in a library), never a 0.
-            cells.append("unavailable" if before is None and after is None
-                         else f"{_number(before)} -> {_number(after)}")
+            cells.append(UNAVAILABLE if before is None and after is None
+                         else f"{format_number(before)} -> {format_number(after)}")
         rows.append(cells)
     out += _table(headings, rows, right={1, 2, 3, 6})
     out.append("")
     geometric_mean = comparison.geometric_mean
     out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
-               f"calibrations apart): {_number(geometric_mean, 3) if geometric_mean else 'unavailable'}")
+               f"calibrations apart): {format_number(geometric_mean, 3)}")
     counts = comparison.verdict_counts()
     out.append(f"verdicts at alpha {comparison.alpha:g} (Holm) and the {noise:g} % noise threshold: "
                f"{counts['slower']} slower, {counts['faster']} faster, {counts['within noise']} within noise "
@@ -553,7 +517,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
 
 
 def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> list[str]:
-    letters = [chr(ord("A") + i) for i in range(len(run_files))]
+    letters = [file_letter(i) for i in range(len(run_files))]
     out = ["== Across machines: each file normalised by its own machine", ""]
     out.append("x serial: step time / that run's serial RK4 step (context serial_step_ns); "
                "x c2c: stage sync time / that run's one-way core-to-core latency (context c2c_one_way_ns).")
@@ -594,7 +558,7 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
 
 
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real") -> str:
-    out = ["lockstep compare: " + "  ".join(f"[{chr(ord('A') + i)}] {f.label}" for i, f in enumerate(run_files))]
+    out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(run_files))]
     if comparisons:
         noise = comparisons[0].noise_percent
         if noise == DEFAULT_NOISE_PERCENT:
@@ -608,7 +572,7 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
     out.append("")
     warnings = [w for f in run_files for w in f.warnings]
     for index, comparison in enumerate(comparisons, start=1):
-        out += comparison_lines(comparison, chr(ord("A") + index))
+        out += comparison_lines(comparison, file_letter(index))
         out.append("")
     out += across_machines_lines(run_files, time_kind)
     if warnings:

@@ -19,7 +19,8 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
 from . import paper, statistics  # noqa: E402
-from .compare import run_median  # noqa: E402
+from .compare import run_median, sample  # noqa: E402
+from .formatting import format_ns  # noqa: E402
 from .names import BenchmarkKey  # noqa: E402
 
 matplotlib.rcParams.update({
@@ -35,6 +36,18 @@ LAYOUT_ORDER = ("packed", "padded64", "padded128", "per_thread")
 PIN_ORDER = ("compact", "scatter", "none", "migrate")
 RELATION_RANK = {"same core": 0, "shared L2": 1, "shared L3": 2, "same package": 3, "same NUMA node": 4,
                  "cross package": 5, "other package": 5}
+UNKNOWN_RELATION_RANK = 6
+# Digits of a value written inside a figure's cell.
+CELL_DIGITS = 3
+
+
+def relation_rank(relation: str) -> int:
+    return RELATION_RANK.get(relation, UNKNOWN_RELATION_RANK)
+
+
+def relation_order(relation: str) -> tuple[int, str]:
+    """Closest relation first, then by name."""
+    return relation_rank(relation), relation
 
 
 def ordered(values, preferred):
@@ -56,16 +69,6 @@ def inline_svg(svg: str, prefix: str) -> str:
     svg = re.sub(r'(xlink:href|href)="#([^"]+)"', lambda m: f'{m.group(1)}="#{prefix}-{m.group(2)}"', svg)
     svg = re.sub(r"url\(#([^)]+)\)", lambda m: f"url(#{prefix}-{m.group(1)})", svg)
     return svg.strip()
-
-
-def _format_ns(value: float) -> str:
-    if value >= 1e6:
-        return f"{value / 1e6:.2f}ms"
-    if value >= 1e4:
-        return f"{value / 1e3:.1f}us"
-    if value >= 1e3:
-        return f"{value / 1e3:.2f}us"
-    return f"{value:.0f}ns"
 
 
 def rk4_groups(run_file) -> list[tuple[str, int]]:
@@ -105,7 +108,7 @@ def heatmap(run_file, pin: str, threads: int) -> str:
     for row in range(len(syncs)):
         for column in range(len(layouts)):
             value = grid[row, column]
-            text = _format_ns(value) if math.isfinite(value) else "n/a"
+            text = format_ns(value, CELL_DIGITS) if math.isfinite(value) else "n/a"
             axes.text(column, row, text, ha="center", va="center", fontsize=8,
                       color="white" if math.isfinite(value) and norm and norm(value) > 0.55 else "black")
     axes.set_title(f"step time (median), pin:{pin} threads:{threads}")
@@ -125,8 +128,7 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
             run = run_file.runs.get(_rk4_key(sync, layout, pin, threads))
             if run is None or run.errored:
                 continue
-            median_only = run.aggregate_time_ns("median")
-            times = run.times_ns() or ([median_only] if median_only is not None else [])
+            times, _ = sample(run)
             if not times:
                 continue
             x = row + (column - (len(layouts) - 1) / 2) * width
@@ -145,10 +147,9 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
     return to_svg(figure)
 
 
-def penalties(run_file) -> tuple[str, list[tuple]] | None:
-    """False sharing (packed / padded) and migration (migrate or none / compact), per primitive.
-
-    Returns the SVG and the rows it plots: (kind, sync, threads, ratio)."""
+def penalty_rows(run_file) -> list[tuple[str, str, int, float]]:
+    """False sharing (packed / padded) and migration (migrate or none / compact), per primitive:
+    (kind, sync, threads, time ratio)."""
     syncs, layouts = _syncs_layouts(run_file)
     padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
     groups = rk4_groups(run_file)
@@ -168,8 +169,13 @@ def penalties(run_file) -> tuple[str, list[tuple]] | None:
                 if compact and other:
                     rows.append((f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
                                  other / compact))
-    if not rows:
-        return None
+    return rows
+
+
+def penalties(rows: list[tuple[str, str, int, float]]) -> str:
+    """The penalty_rows as bars: one panel per kind, one bar per primitive and thread count."""
+    syncs = sorted({row[1] for row in rows})
+    threads_list = sorted({row[2] for row in rows})
     kinds = sorted({row[0] for row in rows})
     figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.2 * len(kinds), 3.2), squeeze=False)
     colors = plt.get_cmap("tab10")
@@ -188,14 +194,14 @@ def penalties(run_file) -> tuple[str, list[tuple]] | None:
         axes.set_ylabel("time ratio (> 1: penalty)")
         axes.set_title(kind, fontsize=9)
         axes.legend(fontsize=7, loc="lower right")
-    return to_svg(figure), rows
+    return to_svg(figure)
 
 
 def topology_order(pairs) -> list[int]:
     """CPUs ordered so that those sharing closer caches sit together: group by each relation level,
-    farthest first, keyed by the smallest CPU id of each group."""
-    cpus = sorted({pair["a"] for pair in pairs} | {pair["b"] for pair in pairs})
-    ranks = sorted({RELATION_RANK.get(pair.get("relation", ""), 6) for pair in pairs}, reverse=True)
+    farthest first, keyed by the smallest CPU id of each group (inputs.C2cPair)."""
+    cpus = sorted({pair.a for pair in pairs} | {pair.b for pair in pairs})
+    ranks = sorted({relation_rank(pair.relation) for pair in pairs}, reverse=True)
     keys = {cpu: [] for cpu in cpus}
     for level in ranks:
         parent = {cpu: cpu for cpu in cpus}
@@ -207,8 +213,8 @@ def topology_order(pairs) -> list[int]:
             return cpu
 
         for pair in pairs:
-            if RELATION_RANK.get(pair.get("relation", ""), 6) < level:
-                first, second = find(pair["a"]), find(pair["b"])
+            if relation_rank(pair.relation) < level:
+                first, second = find(pair.a), find(pair.b)
                 if first != second:
                     parent[max(first, second)] = min(first, second)
         for cpu in cpus:
@@ -216,23 +222,15 @@ def topology_order(pairs) -> list[int]:
     return sorted(cpus, key=lambda cpu: (keys[cpu], cpu))
 
 
-def c2c_methods(document) -> list[str]:
-    """The measuring methods present (`lockstep c2c --method both` writes cas and store_load pairs)."""
-    return sorted({str(pair.get("method", "unknown")) for pair in document["pairs"]})
-
-
-def c2c_heatmap(document, label: str, method: str | None = None) -> str:
-    order = topology_order(document["pairs"])
-    pairs = [pair for pair in document["pairs"] if method is None or str(pair.get("method", "unknown")) == method]
+def c2c_heatmap(c2c_file, method: str | None = None) -> str:
+    """The p50 one-way latency of every pair of one method (inputs.C2cFile), CPUs in topology order."""
+    order = topology_order(c2c_file.pairs)
     index = {cpu: i for i, cpu in enumerate(order)}
     grid = np.full((len(order), len(order)), np.nan)
-    relation = {}
-    for pair in pairs:
-        value = pair["one_way_ns"].get("p50")
-        if isinstance(value, (int, float)) and math.isfinite(value):
-            grid[index[pair["a"]], index[pair["b"]]] = value
-            grid[index[pair["b"]], index[pair["a"]]] = value
-        relation[(pair["a"], pair["b"])] = pair.get("relation", "")
+    for pair in c2c_file.pairs:
+        if (method is None or pair.method == method) and pair.p50_ns is not None:
+            grid[index[pair.a], index[pair.b]] = pair.p50_ns
+            grid[index[pair.b], index[pair.a]] = pair.p50_ns
     size = max(3.2, 0.38 * len(order) + 1.8)
     figure, axes = plt.subplots(figsize=(size + 1.0, size))
     image = axes.imshow(np.ma.masked_invalid(grid), cmap="magma_r", aspect="equal")
@@ -246,41 +244,45 @@ def c2c_heatmap(document, label: str, method: str | None = None) -> str:
                               color="white" if grid[i, j] > np.nanmean(grid) else "black")
     axes.set_xlabel("CPU (ordered by topology)")
     axes.set_ylabel("CPU")
-    axes.set_title(f"core-to-core one-way latency, p50 ({label}{', ' + method if method else ''})")
+    axes.set_title(f"core-to-core one-way latency, p50 ({c2c_file.label}{', ' + method if method else ''})")
     figure.colorbar(image, ax=axes, label="ns")
     return to_svg(figure)
 
 
-def delay_histogram(document, label: str) -> str:
-    histogram = document["histogram"]
-    counts = np.asarray(histogram["counts"], dtype=float)
-    bucket = float(histogram["bucket_ns"])
-    first = float(histogram.get("first_ns", 0.0))
-    edges_us = (first + bucket * np.arange(counts.size + 1)) / 1e3
+def delay_histogram(delay) -> str:
+    """The wake-up latency histogram of a paced run (inputs.DelayFile), its p50, p99 and p99.9 marked."""
+    histogram = delay.histogram
+    counts = np.asarray(histogram.counts, dtype=float)
+    edges_us = (histogram.first_ns + histogram.bucket_ns * np.arange(counts.size + 1)) / 1e3
     figure, axes = plt.subplots(figsize=(6.4, 3.2))
     axes.stairs(counts, edges_us, fill=True, color="#4c72b0")
     axes.set_yscale("log")
     axes.set_ylim(bottom=0.8)
-    summary = document.get("wakeup_latency_ns", {})
     for name, style in (("p50", "-"), ("p99", "--"), ("p999", ":")):
-        value = summary.get(name)
-        if isinstance(value, (int, float)) and math.isfinite(value):
-            axes.axvline(value / 1e3, color="black", ls=style, lw=0.9, label=f"{name} {value / 1e3:.1f} us")
+        value = delay.pinned.wakeup.statistics.get(name)
+        if value is not None:  # the axis is in us
+            axes.axvline(value / 1e3, color="black", ls=style, lw=0.9, label=f"{name} {format_ns(value)}")
     axes.set_xlabel("wake-up latency (us)")
     axes.set_ylabel("periods")
-    settings = document.get("settings", {})
-    axes.set_title(f"paced wake-up latency ({label}; period {settings.get('period_ns', '?')} ns)")
-    axes.legend(fontsize=7)
+    axes.set_title(f"paced wake-up latency ({delay.label}; period {format_ns(delay.settings.get('period_ns'))})")
+    if axes.get_legend_handles_labels()[0]:
+        axes.legend(fontsize=7)
     return to_svg(figure)
 
 
-def trajectory(verify, label: str) -> tuple[str, float]:
-    """The paper's Figure 2: x1 and x2 against time, with the analytic solution; returns the largest
-    deviation from it."""
+def trajectory_deviation(verify) -> float:
+    """The largest deviation of a trajectory (inputs.VerifyFile) from the analytic solution."""
+    reference_x1, reference_x2 = paper.analytic_trajectory(verify.t)
+    return float(max(np.max(np.abs(np.asarray(verify.x1) - reference_x1)),
+                     np.max(np.abs(np.asarray(verify.x2) - reference_x2))))
+
+
+def trajectory(verify, deviation: float) -> str:
+    """The paper's Figure 2: x1 and x2 against time, with the analytic solution dashed."""
     t = np.asarray(verify.t)
     x1, x2 = np.asarray(verify.x1), np.asarray(verify.x2)
     reference_x1, reference_x2 = paper.analytic_trajectory(t)
-    deviation = float(max(np.max(np.abs(x1 - reference_x1)), np.max(np.abs(x2 - reference_x2))))
+    label = verify.label
     figure, axes = plt.subplots(figsize=(6.8, 3.2))
     axes.plot(t, x1, lw=1.0, label="x1 (lockstep)")
     axes.plot(t, x2, lw=1.0, label="x2 (lockstep)")
@@ -290,4 +292,4 @@ def trajectory(verify, label: str) -> tuple[str, float]:
     axes.set_ylabel("displacement")
     axes.set_title(f"trajectory (the paper's Figure 2), {label}; max |lockstep - analytic| = {deviation:.2e}")
     axes.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.18))
-    return to_svg(figure), deviation
+    return to_svg(figure)

@@ -1,4 +1,4 @@
-"""Reading lockstep's result files: what each holds, and one clear line when a file is unusable.
+"""Reading lockstep's result files: every field the tools use is checked here, once.
 
 Four kinds of file reach the tools:
   run      Google Benchmark JSON (1.7 and later) written by `lockstep run --json`
@@ -6,11 +6,21 @@ Four kinds of file reach the tools:
   delay    `lockstep delay --out` {"kind": "delay", ...}
   verify   `lockstep verify --csv` (header t,x1,x2)
 
-Unknown fields are ignored and NaN/Infinity are accepted (Python's json reads
-them; a NaN time makes that repetition unavailable, never zero). A file that
-is unreadable, truncated, or not one of these kinds raises InputError, whose
-text is one line naming the file and the problem; the command line turns it
-into exit status 2.
+Each field the tools read (fields.py) is checked for its type and its range
+as it is read: a time is a positive number of ns below about eleven days, a
+count is a whole number of 0 or more, a name is text, an entry appears once,
+the repetitions of one benchmark carry the same counters. The tools read
+nothing else, and a field they do not read is ignored whatever it holds.
+
+NaN and Infinity: Google Benchmark writes them for a value it could not
+compute, so in a benchmark entry's time or counter they make that one value
+unavailable (never zero, never a number in a table) and the file's warnings
+count what was left out. Anywhere else a value that is not a finite number
+is a damaged file.
+
+A file that is unreadable, truncated, of another kind, or holds a value that
+cannot be right raises InputError, whose text is one line naming the file,
+the place in it and the problem; the command line turns it into exit status 2.
 """
 from __future__ import annotations
 
@@ -19,148 +29,160 @@ import io
 import json
 import math
 import os
+from collections import Counter
 from dataclasses import dataclass, field
 
+from . import fields
 from .names import BenchmarkKey, parse_name
-
-# Google Benchmark's JSON schema versions this reader was written against
-# (1.7 writes none; 1.8 and later write "json_schema_version": 1).
-KNOWN_GB_JSON_SCHEMA = 1
-# lockstep's result schema (CMakeLists.txt, LOCKSTEP_RESULT_SCHEMA).
-KNOWN_LOCKSTEP_SCHEMA = 1
-
-# The per-unit time counters of lockstep's entries, in the order they are looked
-# for: ns_per_step (rk4 entries, DESIGN.md, Measurements) and ns_per_episode
-# (the bare barrier entries). Both time a batch of units per Google Benchmark
-# iteration, and the batch size comes from each run's own probe, so only the
-# per-unit counter compares across runs; the iteration time does not.
-UNIT_COUNTERS = ("ns_per_step", "ns_per_episode")
-
-TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
-
-# Fields of a Google Benchmark entry that are not user counters.
-GB_ENTRY_FIELDS = {
-    "name", "family_index", "per_family_instance_index", "run_name", "run_type", "repetitions",
-    "repetition_index", "threads", "iterations", "real_time", "cpu_time", "time_unit",
-    "aggregate_name", "aggregate_unit", "error_occurred", "error_message", "skipped",
-    "skip_message", "label", "big_o", "rms", "complexity",
-}
 
 
 class InputError(Exception):
     """A file the tools cannot use. str() is one line: '<file>: <problem>'."""
 
     def __init__(self, path: str, problem: str):
-        super().__init__(f"{path}: {problem}")
+        super().__init__(f"{path}: {' '.join(problem.split())}")
         self.path = path
         self.problem = problem
 
 
-@dataclass
-class Repetition:
-    real_ns: float
-    cpu_ns: float
-    counters: dict[str, float]
+# ---------------------------------------------------------------- one JSON object, field by field
+
+def json_kind(value) -> str:
+    """A JSON value's type, as an error message names it."""
+    if value is None:
+        return "null"
+    if isinstance(value, bool):
+        return "true/false"
+    if isinstance(value, (int, float)):
+        return "a number"
+    if isinstance(value, str):
+        return "text"
+    if isinstance(value, list):
+        return "a list"
+    return "an object"
 
 
-@dataclass
-class Run:
-    """Everything one file says about one benchmark (all its repetitions and aggregates)."""
+def _shown(value) -> str:
+    """A value as an error message quotes it: short, one line, numbers as JSON spells them."""
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "NaN"
+        if math.isinf(value):
+            return "Infinity" if value > 0 else "-Infinity"
+        return f"{value:g}"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return str(value) if abs(value) < 10 ** 30 else "a number of more than 30 digits"
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
-    key: BenchmarkKey
-    names: list[str] = field(default_factory=list)  # names as written in the file
-    repetitions: list[Repetition] = field(default_factory=list)
-    aggregates: dict[str, Repetition] = field(default_factory=dict)  # mean, median, stddev, cv, ...
-    errors: list[str] = field(default_factory=list)
-    unavailable: int = 0  # repetitions whose time was NaN or infinite
 
-    @property
-    def errored(self) -> bool:
-        return bool(self.errors)
+class _Object:
+    """One JSON object of a file, read field by field. `where` names it in an error ("benchmark entry 3
+    ('rk4/serial')"); every reader checks the type and the range of what it returns."""
 
-    def times_ns(self, time_kind: str = "real") -> list[float]:
-        """Per-repetition times. lockstep's entries time a batch of units (RK4 steps, barrier
-        episodes) per Google Benchmark iteration and report the unit itself in a counter
-        (UNIT_COUNTERS): the real time is the first such counter every repetition has, else
-        Google Benchmark's real_time."""
-        if time_kind == "real":
-            for counter in UNIT_COUNTERS:
-                per_unit = [r.counters.get(counter) for r in self.repetitions]
-                if per_unit and all(v is not None and math.isfinite(v) and v > 0 for v in per_unit):
-                    return per_unit
-            return [r.real_ns for r in self.repetitions]
-        return [r.cpu_ns for r in self.repetitions]
+    def __init__(self, path: str, value, where: str):
+        if not isinstance(value, dict):
+            raise InputError(path, f"{where} is {json_kind(value)}, not an object")
+        self.path, self.value, self.where = path, value, where
 
-    def aggregate_time_ns(self, aggregate: str, time_kind: str = "real") -> float | None:
-        entry = self.aggregates.get(aggregate)
-        if entry is None:
+    def fail(self, key: str, problem: str):
+        raise InputError(self.path, f"{self.where}: {key} {problem}" if self.where else f"{key} {problem}")
+
+    def _get(self, key: str, required: bool, nullable: bool = False):
+        if key not in self.value:
+            if required:
+                self.fail(key, "is missing")
             return None
-        if time_kind == "real":
-            for counter in UNIT_COUNTERS:
-                per_unit = entry.counters.get(counter)
-                if per_unit is not None and math.isfinite(per_unit) and per_unit > 0:
-                    return per_unit
-            return entry.real_ns
-        return entry.cpu_ns
+        value = self.value[key]
+        if value is None and not nullable:
+            self.fail(key, "is null")
+        return value
 
-    def counter_values(self, counter: str) -> list[float]:
-        values = [r.counters[counter] for r in self.repetitions if counter in r.counters]
-        values = [v for v in values if math.isfinite(v)]
-        if not values and "median" in self.aggregates:
-            value = self.aggregates["median"].counters.get(counter)
-            if value is not None and math.isfinite(value):
-                values = [value]
-        return values
-
-    def counters(self) -> set[str]:
-        names: set[str] = set()
-        for repetition in self.repetitions:
-            names.update(repetition.counters)
-        for aggregate in self.aggregates.values():
-            names.update(aggregate.counters)
-        return names
-
-
-@dataclass
-class RunFile:
-    path: str
-    label: str
-    context: dict
-    runs: dict[BenchmarkKey, Run]
-    warnings: list[str] = field(default_factory=list)
-
-    def context_number(self, key: str) -> float | None:
-        """A numeric context value (lockstep writes them as strings), or None when unavailable."""
-        value = self.context.get(key)
-        try:
-            number = float(value)
-        except (TypeError, ValueError):
+    def text(self, key: str, required: bool = True, empty: bool = True) -> str | None:
+        value = self._get(key, required)
+        if value is None:
             return None
-        return number if math.isfinite(number) and number > 0 else None
+        if not isinstance(value, str):
+            self.fail(key, f"is {json_kind(value)}, not text")
+        if not empty and not value.strip():
+            self.fail(key, "is empty")
+        return value
+
+    def choice(self, key: str, choices) -> str:
+        value = self.text(key)
+        if value not in choices:
+            self.fail(key, f"is {_shown(value)}, not one of {', '.join(choices)}")
+        return value
+
+    def flag(self, key: str) -> bool:
+        """true/false; absent is false."""
+        value = self._get(key, required=False)
+        if value is not None and not isinstance(value, bool):
+            self.fail(key, f"is {json_kind(value)}, not true/false")
+        return bool(value)
+
+    def integer(self, key: str, required: bool = True, nullable: bool = False, low: int = 0,
+                high: float = fields.LARGEST_AMOUNT) -> int | None:
+        value = self._get(key, required, nullable)
+        if value is None:
+            return None
+        if isinstance(value, bool) or not isinstance(value, int):
+            if isinstance(value, float) and value.is_integer() and low <= value <= high:
+                return int(value)  # a writer that prints 3.0 for 3
+            self.fail(key, f"is {_shown(value) if isinstance(value, float) else json_kind(value)}, "
+                           f"not a whole number")
+        if not low <= value <= high:
+            self.fail(key, f"is {_shown(value)}, outside {low}..{_shown(high)}")
+        return value
+
+    def number(self, key: str, low: float, high: float, required: bool = True, nullable: bool = False,
+               unit: str = "", non_finite: bool = False) -> float | None:
+        """A number in [low, high]; NaN or an infinity is returned as it is when `non_finite` (the caller
+        counts it as unavailable), else it is an error."""
+        value = self._get(key, required, nullable)
+        if value is None:
+            return None
+        return _checked_number(self, key, value, low, high, unit, non_finite)
+
+    def object(self, key: str, required: bool = True, nullable: bool = False) -> "_Object | None":
+        value = self._get(key, required, nullable)
+        if value is None:
+            return None
+        return _Object(self.path, value, f"{self.where}: {key}" if self.where else key)
+
+    def array(self, key: str, required: bool = True, nonempty: bool = True) -> list | None:
+        value = self._get(key, required)
+        if value is None:
+            return None
+        if not isinstance(value, list):
+            self.fail(key, f"is {json_kind(value)}, not a list")
+        if nonempty and not value:
+            self.fail(key, "is an empty list")
+        return value
 
 
-@dataclass
-class C2cFile:
-    path: str
-    label: str
-    document: dict
+def _checked_number(owner: _Object, key: str, value, low: float, high: float, unit: str = "",
+                    non_finite: bool = False, scale: float = 1.0) -> float:
+    """value * scale, checked to lie in [low, high] (given in the unit of the product)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        owner.fail(key, f"is {json_kind(value)}, not a number")
+    if isinstance(value, int) and abs(value) > high / scale:  # before float(): an int may exceed the floats
+        owner.fail(key, f"is {_shown(value)}, beyond any measured value (above {high:g}{unit})")
+    if not math.isfinite(value):
+        if non_finite:
+            return float(value)
+        owner.fail(key, f"is {_shown(value)}, not a finite number")
+    number = float(value) * scale
+    if number < low:
+        why = (": a time is positive" if low > 0 else ": it cannot be negative" if low == 0
+               else ", beyond any measured value")
+        owner.fail(key, f"is {_shown(number)}{unit}, below {low:g}{unit}{why}")
+    if number > high:
+        owner.fail(key, f"is {_shown(number)}{unit}, beyond any measured value (above {high:g}{unit})")
+    return number
 
 
-@dataclass
-class DelayFile:
-    path: str
-    label: str
-    document: dict
-
-
-@dataclass
-class VerifyFile:
-    path: str
-    label: str
-    t: list[float]
-    x1: list[float]
-    x2: list[float]
-
+# ---------------------------------------------------------------- files as text
 
 def read_text(path: str) -> str:
     if os.path.isdir(path):
@@ -174,8 +196,9 @@ def read_text(path: str) -> str:
         raise InputError(path, "is empty (an interrupted run?)")
     try:
         return raw.decode("utf-8")
-    except UnicodeDecodeError:
-        raise InputError(path, "is not text (binary data, or not UTF-8): not a lockstep result file") from None
+    except UnicodeDecodeError as error:
+        raise InputError(path, f"is not text (byte {error.start} is not UTF-8): not a lockstep result "
+                               "file") from None
 
 
 def parse_json(path: str, text: str):
@@ -187,34 +210,148 @@ def parse_json(path: str, text: str):
                                    "(an interrupted or still-running run?)") from None
         raise InputError(path, f"not valid JSON at line {error.lineno} column {error.colno} "
                                f"({error.msg})") from None
+    except RecursionError:
+        raise InputError(path, "not a lockstep result file: its JSON nests too deeply to read") from None
+    except ValueError as error:  # e.g. an integer longer than Python converts
+        raise InputError(path, f"not a lockstep result file: {error}") from None
 
 
-def _number(path: str, index: int, entry: dict, key: str) -> float:
-    value = entry.get(key)
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise InputError(path, f"benchmark entry {index} ({entry.get('name', '?')!r}) has no numeric "
-                               f"{key!r}: not Google Benchmark output")
-    return float(value)
+# ---------------------------------------------------------------- run files (Google Benchmark JSON)
+
+@dataclass
+class Repetition:
+    """One measured value set: real_ns is the per-unit counter (fields.UNIT_COUNTERS) where the entry has
+    one, else Google Benchmark's real_time; cpu_ns is its cpu_time; counters holds the read counters that
+    are finite numbers."""
+
+    real_ns: float
+    cpu_ns: float
+    counters: dict[str, float]
 
 
-def _counters(entry: dict) -> dict[str, float]:
-    return {key: float(value) for key, value in entry.items()
-            if key not in GB_ENTRY_FIELDS and isinstance(value, (int, float)) and not isinstance(value, bool)}
+@dataclass
+class Run:
+    """Everything one file says about one benchmark (its repetitions and the aggregates the tools read)."""
+
+    key: BenchmarkKey
+    names: list[str] = field(default_factory=list)  # names as written in the file
+    repetitions: list[Repetition] = field(default_factory=list)
+    aggregates: dict[str, Repetition] = field(default_factory=dict)  # fields.READ_AGGREGATES
+    errors: list[str] = field(default_factory=list)
+    unavailable: Counter = field(default_factory=Counter)  # what was NaN or infinite -> how many values
+
+    @property
+    def errored(self) -> bool:
+        return bool(self.errors)
+
+    def times_ns(self, time_kind: str = "real") -> list[float]:
+        """Per-repetition times: per unit (RK4 step, barrier episode) where the entry has the counter,
+        else per Google Benchmark iteration; CPU time per iteration for time_kind "cpu"."""
+        return [r.real_ns if time_kind == "real" else r.cpu_ns for r in self.repetitions]
+
+    def aggregate_time_ns(self, aggregate: str, time_kind: str = "real") -> float | None:
+        entry = self.aggregates.get(aggregate)
+        if entry is None:
+            return None
+        return entry.real_ns if time_kind == "real" else entry.cpu_ns
+
+    def counter_values(self, counter: str) -> list[float]:
+        """The counter's value in each repetition that has it, else its median aggregate's."""
+        values = [r.counters[counter] for r in self.repetitions if counter in r.counters]
+        if not values and "median" in self.aggregates and counter in self.aggregates["median"].counters:
+            values = [self.aggregates["median"].counters[counter]]
+        return values
 
 
-def _aggregate_name(entry: dict) -> str | None:
-    if entry.get("run_type") == "aggregate":
-        return str(entry.get("aggregate_name", "unknown"))
-    if "run_type" not in entry:  # Google Benchmark before 1.5 marked aggregates only by a name suffix
-        for suffix in ("mean", "median", "stddev", "cv"):
-            if str(entry.get("name", "")).endswith("_" + suffix):
-                return suffix
-    return None
+@dataclass
+class RunFile:
+    path: str
+    label: str
+    context: dict  # the context keys the tools read (fields.FINGERPRINT_KEYS), checked
+    runs: dict[BenchmarkKey, Run]
+    warnings: list[str] = field(default_factory=list)
+
+    def context_number(self, key: str) -> float | None:
+        """A numeric context value (lockstep writes them as text), or None when unavailable."""
+        value = self.context.get(key)
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            return None
+        return number if math.isfinite(number) and number > 0 else None
+
+
+def _read_context(path: str, label: str, raw) -> tuple[dict, list[str]]:
+    context = _Object(path, raw, "the context")
+    values = {}
+    for key in fields.FINGERPRINT_KEYS:
+        if key in fields.CONTEXT_INTEGERS:
+            value = context.integer(key, required=False)
+        else:
+            value = context.text(key, required=False)
+        if value is not None:
+            values[key] = value
+    for key in fields.CALIBRATION_CONTEXT:
+        if key in values and values[key] != fields.UNAVAILABLE:
+            try:
+                number = float(values[key])
+            except ValueError:
+                context.fail(key, f"is {_shown(values[key])}: neither a number of ns nor "
+                                  f"{fields.UNAVAILABLE!r}")
+            if not fields.SHORTEST_NS <= number <= fields.LONGEST_NS:  # NaN fails this too
+                context.fail(key, f"is {_shown(values[key])}: not a measured time in ns")
+
+    warnings = []
+    schema = context.integer("json_schema_version", required=False)
+    if schema is not None and schema > fields.KNOWN_GB_JSON_SCHEMA:
+        warnings.append(f"{label}: Google Benchmark JSON schema {schema} is newer than this tool knows "
+                        f"({fields.KNOWN_GB_JSON_SCHEMA}); reading the fields it knows")
+    lockstep_schema = values.get("lockstep_schema")
+    if lockstep_schema is None:
+        warnings.append(f"{label}: no lockstep keys in the context (not written by `lockstep run`?): "
+                        "no machine fingerprint or normalisation for it")
+    elif not lockstep_schema.isdigit():
+        context.fail("lockstep_schema", f"is {_shown(lockstep_schema)}, not a whole number")
+    elif int(lockstep_schema) > fields.KNOWN_LOCKSTEP_SCHEMA:
+        warnings.append(f"{label}: lockstep result schema {lockstep_schema} is newer than this tool knows "
+                        f"({fields.KNOWN_LOCKSTEP_SCHEMA}); reading the fields it knows")
+    return values, warnings
+
+
+def _measured_values(entry: _Object, run: Run, scale: float, least: float) -> Repetition | None:
+    """An entry's times (in ns: scale is its time unit's size) and read counters, checked; None when its
+    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold."""
+    times = {key: _checked_number(entry, key, entry._get(key, required=True), least, fields.LONGEST_NS, " ns",
+                                  non_finite=True, scale=scale)
+             for key in ("real_time", "cpu_time")}
+    counters = {}
+    for name in fields.READ_COUNTERS:
+        if name not in entry.value:
+            continue
+        if name in fields.DURATION_COUNTERS:
+            low, high = fields.SHORTEST_NS, fields.LONGEST_NS
+        elif name in fields.SIGNED_COUNTERS:
+            low, high = -fields.LONGEST_NS, fields.LONGEST_NS
+        else:
+            low, high = 0.0, fields.LARGEST_AMOUNT
+        counters[name] = entry.number(name, low, high, non_finite=True)
+    unit_counter = next((name for name in fields.UNIT_COUNTERS if name in counters), None)
+    real = counters[unit_counter] if unit_counter else times["real_time"]
+    if not (math.isfinite(real) and math.isfinite(times["cpu_time"])):
+        run.unavailable["repetition time"] += 1
+        return None
+    finite = {}
+    for name, value in counters.items():
+        if math.isfinite(value):
+            finite[name] = value
+        else:
+            run.unavailable[f"{name} value"] += 1
+    return Repetition(real, times["cpu_time"], finite)
 
 
 def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not isinstance(document, dict):
-        raise InputError(path, f"not Google Benchmark JSON: the top level is a {type(document).__name__}, "
+        raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
                                "not an object with \"context\" and \"benchmarks\"")
     kind = document.get("kind")
     if kind in ("c2c", "delay"):
@@ -227,62 +364,85 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
         raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `lockstep run` result file")
     if not benchmarks:
         raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
-
-    warnings = []
-    schema = context.get("json_schema_version")
-    if isinstance(schema, (int, float)) and schema > KNOWN_GB_JSON_SCHEMA:
-        warnings.append(f"{label}: Google Benchmark JSON schema {schema} is newer than this tool knows "
-                        f"({KNOWN_GB_JSON_SCHEMA}); reading the fields it knows")
-    lockstep_schema = context.get("lockstep_schema")
-    try:
-        if lockstep_schema is not None and int(str(lockstep_schema)) > KNOWN_LOCKSTEP_SCHEMA:
-            warnings.append(f"{label}: lockstep result schema {lockstep_schema} is newer than this tool knows "
-                            f"({KNOWN_LOCKSTEP_SCHEMA}); reading the fields it knows")
-    except ValueError:
-        warnings.append(f"{label}: lockstep_schema {lockstep_schema!r} is not a number")
-    if lockstep_schema is None:
-        warnings.append(f"{label}: no lockstep keys in the context (not written by `lockstep run`?): "
-                        "no machine fingerprint or normalisation for it")
+    context_values, warnings = _read_context(path, label, context)
 
     runs: dict[BenchmarkKey, Run] = {}
-    for index, entry in enumerate(benchmarks):
-        if not isinstance(entry, dict) or "name" not in entry:
-            raise InputError(path, f"benchmark entry {index} is not an object with a \"name\": "
-                                   "not Google Benchmark output")
-        name = str(entry.get("run_name") or entry["name"])
-        aggregate = _aggregate_name(entry)
-        if aggregate and "run_name" not in entry:
-            name = name[: -(len(aggregate) + 1)]
-        key = parse_name(name)
-        run = runs.setdefault(key, Run(key=key))
-        if name not in run.names:
-            run.names.append(name)
-        failed = entry.get("error_occurred") is True or entry.get("skipped") not in (None, False, 0)
-        if failed:
-            message = str(entry.get("error_message") or entry.get("skip_message") or "error (no message)")
-            if message not in run.errors:
-                run.errors.append(message)
-            continue
-        unit = entry.get("time_unit", "ns")
-        if unit not in TIME_UNIT_NS:
-            raise InputError(path, f"benchmark entry {index} ({name!r}) has an unknown time_unit {unit!r}")
-        scale = TIME_UNIT_NS[unit]
-        if aggregate == "cv" or entry.get("aggregate_unit") == "percentage":
-            scale = 1.0
-        real = _number(path, index, entry, "real_time") * scale
-        cpu = _number(path, index, entry, "cpu_time") * scale
-        repetition = Repetition(real, cpu, _counters(entry))
-        if aggregate:
-            run.aggregates[aggregate] = repetition
-        elif math.isfinite(real) and math.isfinite(cpu):
-            run.repetitions.append(repetition)
+    seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
+    first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
+    first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
+    for index, raw in enumerate(benchmarks):
+        entry = _Object(path, raw, f"benchmark entry {index}")
+        name = entry.text("name", empty=False)
+        entry.where = f"benchmark entry {index} ({_shown(name)})"
+        run_name = entry.text("run_name", required=False, empty=False)
+        run_type = entry.choice("run_type", ("iteration", "aggregate"))
+        aggregate = entry.text("aggregate_name", empty=False) if run_type == "aggregate" else None
+        base = run_name or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate) else name)
+        key = parse_name(base)
+        if not key.family:
+            entry.fail("name", "has no benchmark family")
+        if aggregate is None:
+            repetition_index = entry.integer("repetition_index", required=False)
+            identity = (key, "repetition", repetition_index if repetition_index is not None
+                        else json.dumps(raw, sort_keys=True))
         else:
-            run.unavailable += 1
-    for run in runs.values():
-        if run.unavailable:
-            warnings.append(f"{label}: {run.key.display}: {run.unavailable} repetition(s) with a NaN or "
-                            "infinite time left out")
-    return RunFile(path=path, label=label, context=context, runs=runs, warnings=warnings)
+            identity = (key, "aggregate", aggregate)
+        if identity in seen:
+            what = f"aggregate {aggregate}" if aggregate else "repetition"
+            raise InputError(path, f"{entry.where} repeats entry {seen[identity]} (the same {what} of the same "
+                                   "benchmark): a damaged or concatenated file")
+        seen[identity] = index
+
+        run = runs.setdefault(key, Run(key=key))
+        if base not in run.names:
+            run.names.append(base)
+        failure = None  # Google Benchmark 1.8 writes error_occurred + error_message, or skipped + skip_message
+        for flag, message_key in (("error_occurred", "error_message"), ("skipped", "skip_message")):
+            on, message = entry.flag(flag), entry.text(message_key, required=False)
+            if message is not None and not on:
+                entry.fail(message_key, f"is there but {flag} is not true")
+            if on and failure is None:
+                failure = message or f"{flag.replace('_', ' ')} (message {fields.UNAVAILABLE})"
+        if failure is not None:
+            if failure not in run.errors:
+                run.errors.append(failure)
+                run.errors.sort()  # the file's order of entries is not part of the result
+            continue
+        scale = fields.TIME_UNIT_NS[entry.choice("time_unit", tuple(fields.TIME_UNIT_NS))]
+        if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
+            continue  # stddev, cv and other statistics: not read
+        # The repetitions of one benchmark carry the same read counters, and every entry read (repetitions,
+        # median, mean) the same per-unit counter: a counter missing from one of them is a damaged file,
+        # and a time per batch read as a time per step would be off by the batch size.
+        present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
+        if aggregate is None:
+            _same_counters(entry, present, first_repetition.setdefault(key, (index, present)))
+        units = present & frozenset(fields.UNIT_COUNTERS)
+        _same_counters(entry, units, first_read.setdefault(key, (index, units)))
+        values = _measured_values(entry, run, scale, fields.SHORTEST_NS)
+        if values is None:
+            continue
+        if aggregate is not None:
+            run.aggregates[aggregate] = values
+        else:
+            run.repetitions.append(values)
+    for key in sorted(runs, key=BenchmarkKey.sort_key):
+        left_out = runs[key].unavailable
+        if left_out:
+            counts = ", ".join(f"{count} {what}(s)" for what, count in sorted(left_out.items()))
+            warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
+                            f"{counts}")
+    return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings)
+
+
+def _same_counters(entry: _Object, counters: frozenset, first: tuple[int, frozenset]) -> None:
+    index, expected = first
+    if counters != expected:
+        missing, extra = sorted(expected - counters), sorted(counters - expected)
+        problem = (f"lacks {', '.join(missing)}, which entry {index} of the same benchmark has" if missing
+                   else f"has {', '.join(extra)}, which entry {index} of the same benchmark lacks")
+        raise InputError(entry.path, f"{entry.where} {problem}: the entries of one benchmark carry the same "
+                                     "counters")
 
 
 def load_run_file(path: str, label: str | None = None) -> RunFile:
@@ -290,41 +450,240 @@ def load_run_file(path: str, label: str | None = None) -> RunFile:
     return run_file_from_document(path, label, parse_json(path, read_text(path)))
 
 
-def _check_c2c(path: str, document: dict) -> None:
-    pairs = document.get("pairs")
-    if not isinstance(pairs, list):
-        raise InputError(path, "a c2c file without a \"pairs\" list")
-    for index, pair in enumerate(pairs):
-        if not (isinstance(pair, dict) and isinstance(pair.get("a"), int) and isinstance(pair.get("b"), int)
-                and isinstance(pair.get("one_way_ns"), dict)):
-            raise InputError(path, f"c2c pair {index} lacks integer \"a\", \"b\" or a \"one_way_ns\" object")
+# ---------------------------------------------------------------- c2c and delay files
+
+@dataclass(frozen=True)
+class C2cPair:
+    a: int
+    b: int
+    method: str
+    relation: str
+    p50_ns: float | None  # None: no samples
 
 
-def _check_delay(path: str, document: dict) -> None:
-    for key in ("wakeup_latency_ns", "histogram"):
-        if not isinstance(document.get(key), dict):
-            raise InputError(path, f"a delay file without a \"{key}\" object")
-    histogram = document["histogram"]
-    if not isinstance(histogram.get("counts"), list) or not isinstance(histogram.get("bucket_ns"), (int, float)):
-        raise InputError(path, "a delay file whose histogram lacks \"bucket_ns\" or \"counts\"")
+@dataclass
+class C2cFile:
+    path: str
+    label: str
+    pairs: list[C2cPair]
+    sampled: bool
+
+    def methods(self) -> list[str]:
+        """The measuring methods present (`lockstep c2c --method both` writes cas and store_load pairs)."""
+        return sorted({pair.method for pair in self.pairs})
+
+
+@dataclass(frozen=True)
+class Distribution:
+    count: int | None
+    statistics: dict[str, float | None]  # fields.DISTRIBUTION_STATISTICS -> ns, None when unavailable
+
+
+@dataclass(frozen=True)
+class Histogram:
+    bucket_ns: float
+    first_ns: float
+    counts: list[int]
+
+
+@dataclass(frozen=True)
+class Figure5Row:
+    thread: str
+    role: str
+    cross_core_csw: int | None
+    total_csw: int
+    pct: float | None
+
+
+@dataclass(frozen=True)
+class PacedRun:
+    """One paced run of a delay file: the pinned one, or the unpinned one of `--compare-pinning`."""
+
+    wakeup: Distribution
+    completion: Distribution | None
+    deadline_misses: int | None
+    figure5: list[Figure5Row]
+
+
+@dataclass
+class DelayFile:
+    path: str
+    label: str
+    settings: dict  # fields.DELAY_SETTINGS present in the file, checked
+    pinned: PacedRun
+    unpinned: PacedRun | None
+    histogram: Histogram  # of the pinned run's wake-ups
+
+
+def _distribution(owner: _Object, key: str, required: bool, statistics=fields.DISTRIBUTION_STATISTICS,
+                  counted: bool = True) -> Distribution | None:
+    """{min, p50, ..., count}: every statistic a number, or all null with count 0. `counted`: count is
+    required (the delay files; older c2c files have none)."""
+    summary = owner.object(key, required=required)
+    if summary is None:
+        return None
+    count = summary.integer("count", required=counted)
+    values = {}
+    for name in statistics:
+        value = summary.number(name, 0.0, fields.LONGEST_NS, required=False, nullable=True, unit=" ns")
+        if value is not None and count == 0:
+            summary.fail(name, "is a number though count is 0")
+        if value is None and count != 0:
+            summary.fail(name, "is missing or null" + (f" though count is {count}" if count else ""))
+        values[name] = value
+    known = [(name, values[name]) for name in statistics if values[name] is not None]
+    for (low_name, low), (high_name, high) in zip(known, known[1:]):
+        if low > high:
+            summary.fail(high_name, f"is {high:g} ns, below {low_name} {low:g} ns: the statistics are out of order")
+    return Distribution(count, values)
+
+
+def _read_c2c(path: str, label: str, document: _Object) -> C2cFile:
+    pairs, seen = [], {}
+    for index, raw in enumerate(document.array("pairs")):
+        pair = _Object(path, raw, f"c2c pair {index}")
+        a = pair.integer("a", high=fields.CPU_LIMIT - 1)
+        b = pair.integer("b", high=fields.CPU_LIMIT - 1)
+        if a == b:
+            pair.fail("b", f"is {b}, the same CPU as a")
+        method = pair.text("method", empty=False)
+        identity = (min(a, b), max(a, b), method)
+        if identity in seen:
+            raise InputError(path, f"c2c pair {index} repeats pair {seen[identity]} (CPUs {a} and {b}, method "
+                                   f"{method})")
+        seen[identity] = index
+        p50 = _distribution(pair, "one_way_ns", required=True, statistics=("p50",), counted=False).statistics["p50"]
+        if p50 is not None and p50 < fields.SHORTEST_NS:
+            pair.fail("one_way_ns", f"p50 is {p50:g} ns: a time is positive")
+        pairs.append(C2cPair(a, b, method, pair.text("relation", empty=False), p50))
+    return C2cFile(path=path, label=label, pairs=pairs, sampled=document.flag("sampled"))
+
+
+def _figure5(owner: _Object, key: str) -> list[Figure5Row]:
+    rows, threads = [], {}
+    raw_rows = owner.array(key)
+    for index, raw in enumerate(raw_rows):
+        row = _Object(owner.path, raw, f"{key} row {index}")
+        thread = row.text("thread", empty=False)
+        if thread in threads:
+            raise InputError(owner.path, f"{key} row {index} repeats the thread {thread!r} of row {threads[thread]}")
+        threads[thread] = index
+        total = row.integer("total_csw")
+        cross = row.integer("cross_core_csw", nullable=True, high=total)
+        rows.append(Figure5Row(thread, row.text("role"), cross, total,
+                               row.number("pct", 0.0, 100.0, nullable=True, unit=" %")))
+    return rows
+
+
+def _settings(document: _Object) -> dict:
+    settings = document.object("settings", required=False)
+    values = {}
+    if settings is None:
+        return values
+    for key, kind in fields.DELAY_SETTINGS:
+        if kind == "duration":
+            value = settings.number(key, fields.SHORTEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
+            value = int(value) if value is not None and value.is_integer() else value
+        elif kind == "seconds":
+            value = settings.number(key, 0.0, fields.LONGEST_NS / 1e9, required=False, unit=" s")
+        elif kind == "count":
+            value = settings.integer(key, required=False)
+        elif kind == "priority":
+            value = settings.integer(key, required=False, nullable=True, low=1, high=99)
+            if key in settings.value and value is None:
+                values[key] = None  # SCHED_OTHER
+                continue
+        elif kind == "flag":
+            value = settings.flag(key) if key in settings.value else None  # absent: not said, not false
+        else:
+            value = settings.text(key, required=False)
+        if value is not None:
+            values[key] = value
+    return values
+
+
+def _paced_run(summaries: _Object, document: _Object, figure5_key: str) -> PacedRun:
+    return PacedRun(wakeup=_distribution(summaries, "wakeup_latency_ns", required=True),
+                    completion=_distribution(summaries, "completion_ns", required=False),
+                    deadline_misses=summaries.integer("deadline_misses", required=False),
+                    figure5=_figure5(document, figure5_key))
+
+
+def _read_delay(path: str, label: str, document: _Object) -> DelayFile:
+    pinned = _paced_run(document, document, "figure5")
+    # `lockstep delay --compare-pinning` writes both, without it neither: one alone is a damaged file.
+    unpinned = document.object("unpinned", required=False)
+    if (unpinned is None) != ("figure5_unpinned" not in document.value):
+        document.fail("unpinned", "and figure5_unpinned come together (`lockstep delay --compare-pinning` writes "
+                                  "both), but the file has one of them only")
+    wakeup = pinned.wakeup
+    histogram = document.object("histogram")
+    counts = histogram.array("counts")
+    for index, count in enumerate(counts):
+        if isinstance(count, bool) or not isinstance(count, int) or not 0 <= count <= fields.LARGEST_AMOUNT:
+            histogram.fail("counts", f"holds {_shown(count)} at {index}: a count is a whole number of 0 or more")
+    below, above = (histogram.integer(key, required=False) or 0 for key in ("below", "above"))
+    if sum(counts) + below + above != wakeup.count:
+        histogram.fail("counts", f"add up to {sum(counts) + below + above} (with below and above), not to the "
+                                 f"{wakeup.count} wake-ups of wakeup_latency_ns: a damaged file")
+    bucket = histogram.number("bucket_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns")
+    first = histogram.number("first_ns", 0.0, fields.LONGEST_NS, required=False, unit=" ns") or 0.0
+    # `lockstep delay` sizes the histogram to its samples (platform/stats.hpp, histogram::covering): when it
+    # holds every wake-up, the shortest falls in the first bucket and the longest in the last, so a bucket
+    # too many or too few (an empty one included) is a damaged file, not another histogram.
+    if below == above == 0 and wakeup.count:
+        shortest, longest = (math.floor(wakeup.statistics[name]) for name in ("min", "max"))
+        if not (first <= shortest < first + bucket and first + bucket * (len(counts) - 1) <= longest
+                < first + bucket * len(counts)):
+            histogram.fail("counts", f"has {len(counts)} buckets of {bucket:g} ns from {first:g} ns, which do not "
+                                     f"span the wake-ups from {shortest} to {longest} ns bucket for bucket: a "
+                                     "damaged file")
+    return DelayFile(path=path, label=label, settings=_settings(document), pinned=pinned,
+                     unpinned=_paced_run(unpinned, document, "figure5_unpinned") if unpinned else None,
+                     histogram=Histogram(bucket, first, counts))
+
+
+# ---------------------------------------------------------------- verify trajectories
+
+@dataclass
+class VerifyFile:
+    path: str
+    label: str
+    t: list[float]
+    x1: list[float]
+    x2: list[float]
 
 
 def load_verify_csv(path: str, text: str, label: str) -> VerifyFile:
-    reader = csv.reader(io.StringIO(text))
-    header = [cell.strip() for cell in next(reader, [])]
-    if header[:3] != ["t", "x1", "x2"]:
+    if not text.endswith("\n"):
+        raise InputError(path, "the last line is cut (no newline at the end): an interrupted `lockstep verify`?")
+    try:
+        rows = list(csv.reader(io.StringIO(text)))
+    except csv.Error as error:
+        raise InputError(path, f"not a CSV trajectory: {error}") from None
+    header = [cell.strip() for cell in rows[0]] if rows else []
+    if tuple(header[:3]) != fields.VERIFY_HEADER:
         raise InputError(path, f"a CSV whose header is {','.join(header)!r}, not 't,x1,x2' "
                                "(`lockstep verify --csv` writes that)")
     t, x1, x2 = [], [], []
-    for line_number, row in enumerate(reader, start=2):
+    for line_number, row in enumerate(rows[1:], start=2):
         if not row:
             continue
+        if len(row) < 3:
+            raise InputError(path, f"line {line_number} has {len(row)} values, not 3 (truncated?)")
         try:
             values = [float(cell) for cell in row[:3]]
         except ValueError:
-            raise InputError(path, f"line {line_number} is not three numbers: {','.join(row)!r}") from None
-        if len(values) < 3:
-            raise InputError(path, f"line {line_number} has {len(values)} values, not 3 (truncated?)")
+            raise InputError(path, f"line {line_number} is not three numbers: {_shown(','.join(row))}") from None
+        if not all(math.isfinite(value) for value in values):
+            raise InputError(path, f"line {line_number} holds a value that is not a finite number: "
+                                   f"{_shown(','.join(row))}")
+        if not 0.0 <= values[0] <= fields.LONGEST_NS / 1e9 or (t and values[0] <= t[-1]):
+            raise InputError(path, f"line {line_number}: t = {values[0]:g} s does not follow the t before it "
+                                   "(time runs forward from 0)")
+        if max(abs(values[1]), abs(values[2])) > fields.LARGEST_DISPLACEMENT:
+            raise InputError(path, f"line {line_number}: a displacement beyond {fields.LARGEST_DISPLACEMENT:g} "
+                                   "is not this model's")
         t.append(values[0])
         x1.append(values[1])
         x2.append(values[2])
@@ -332,6 +691,8 @@ def load_verify_csv(path: str, text: str, label: str) -> VerifyFile:
         raise InputError(path, "a trajectory with fewer than two rows")
     return VerifyFile(path=path, label=label, t=t, x1=x1, x2=x2)
 
+
+# ---------------------------------------------------------------- any file
 
 def load_any(path: str, label: str | None = None):
     """Any of the four kinds, recognised by content (never by the file name)."""
@@ -344,13 +705,11 @@ def load_any(path: str, label: str | None = None):
     document = parse_json(path, text)
     kind = document.get("kind") if isinstance(document, dict) else None
     if kind == "c2c":
-        _check_c2c(path, document)
-        return C2cFile(path=path, label=label, document=document)
+        return _read_c2c(path, label, _Object(path, document, ""))
     if kind == "delay":
-        _check_delay(path, document)
-        return DelayFile(path=path, label=label, document=document)
+        return _read_delay(path, label, _Object(path, document, ""))
     if kind is not None:
-        raise InputError(path, f"unknown lockstep file kind {kind!r}")
+        raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
     return run_file_from_document(path, label, document)
 
 

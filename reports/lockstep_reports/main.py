@@ -1,14 +1,17 @@
 """Command lines of the two tools. Exit status: 0 ok, 1 a regression beyond
 --fail-above (compare), 2 bad input (one line on stderr naming the file and the
-problem)."""
+problem): an unusable result file, a bad option, or an output location that
+cannot be written, which is checked before any work."""
 from __future__ import annotations
 
 import argparse
 import json
 import math
+import os
 import sys
 
 from .inputs import InputError, load_run_file, unique_labels
+from .output import OutputError, check_directory_target, check_file_target, write_file
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
 
@@ -38,19 +41,25 @@ def percentage(text: str) -> float:
     return value
 
 
+def tool_parser(tool: str, description: str, files_metavar: str, files_help: str) -> OneLineParser:
+    parser = OneLineParser(prog=f"lockstep {tool}", description=description)
+    parser.add_argument("files", nargs="+", metavar=files_metavar, help=files_help)
+    return parser
+
+
 def compare_parser() -> argparse.ArgumentParser:
     from .compare import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
 
-    parser = OneLineParser(
-        prog="lockstep compare",
-        description="Compare Google Benchmark JSON results of `lockstep run` across runs and machines. "
+    parser = tool_parser(
+        "compare",
+        "Compare Google Benchmark JSON results of `lockstep run` across runs and machines. "
                     "The first file is the baseline A; every other file is compared with it. An entry is "
                     "slower or faster only when it is significant after Holm's correction AND the whole "
                     "confidence interval of its ratio lies beyond the noise threshold; a significant shift "
                     "inside it is 'within noise'. rk4/serial, c2c (by its one_way_ns counter) and the overhead "
                     "pair are compared apart, as calibrations, and the context's calibrations say how far the "
-                    "machine itself moved between the runs.")
-    parser.add_argument("files", nargs="+", metavar="RESULT.json", help="two or more result files")
+                    "machine itself moved between the runs.",
+        "RESULT.json", "two or more result files")
     parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
                         help=f"noise threshold in percent (default {DEFAULT_NOISE_PERCENT:g}): a significant "
                              f"entry is slower only when its whole interval of B/A lies above 1 + PCT/100, "
@@ -63,19 +72,22 @@ def compare_parser() -> argparse.ArgumentParser:
                         help="family-wise significance level after Holm's correction (default 0.05)")
     parser.add_argument("--time", choices=("real", "cpu"), default="real",
                         help="which time to compare (default: real, the wall-clock step time)")
-    parser.add_argument("--json", metavar="FILE", help="also write the comparison as JSON to FILE")
+    parser.add_argument("--json", metavar="FILE", help="also write the comparison as JSON to FILE (atomically; "
+                                                       "its directory must exist)")
     return parser
 
 
 def report_parser() -> argparse.ArgumentParser:
-    parser = OneLineParser(
-        prog="lockstep report",
-        description="Write a self-contained HTML page and a Markdown file with figures from lockstep's "
-                    "result files: `lockstep run` JSON, `lockstep c2c --json`, `lockstep delay --json`, "
-                    "`lockstep verify --csv` (recognised by their content).")
-    parser.add_argument("files", nargs="+", metavar="RESULT", help="result files of any of the four kinds")
+    parser = tool_parser(
+        "report",
+        "Write a self-contained HTML page and a Markdown file with figures from lockstep's "
+        "result files: `lockstep run` JSON, `lockstep c2c --json`, `lockstep delay --json`, "
+        "`lockstep verify --csv` (recognised by their content).",
+        "RESULT", "result files of any of the four kinds")
     parser.add_argument("--out", default="lockstep-report", metavar="DIR",
-                        help="directory for report.html, report.md and figures/ (default: lockstep-report)")
+                        help="directory for report.html, report.md and figures/ (default: lockstep-report); its "
+                             "parent must exist; an earlier report there is replaced whole, any other content "
+                             "is refused")
     parser.add_argument("--title", default="lockstep report", help="the page's title")
     return parser
 
@@ -88,13 +100,19 @@ def run_compare(argv: list[str]) -> int:
         raise UsageError("compare needs at least two result files (the first is the baseline)")
     if not 0.0 < options.alpha < 1.0:
         raise UsageError(f"--alpha {options.alpha:g}: give a level between 0 and 1")
+    if options.json:
+        check_file_target(options.json)
+        if os.path.exists(options.json) and any(os.path.exists(path) and os.path.samefile(path, options.json)
+                                                for path in options.files):
+            raise UsageError(f"--json {options.json} is one of the result files: give another file")
     labels = unique_labels(options.files)
     run_files = [load_run_file(path, label) for path, label in zip(options.files, labels)]
     comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha, options.noise)
                    for other in run_files[1:]]
-    sys.stdout.write(compare.render_text(run_files, comparisons, options.time))
+    text = compare.render_text(run_files, comparisons, options.time)
     if options.json:
-        write_comparison_json(options.json, comparisons)
+        write_file(options.json, comparison_json(comparisons))
+    sys.stdout.write(text)
     if options.fail_above is not None:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
         if failures:
@@ -116,10 +134,7 @@ def row_json(comparison, row) -> dict:
             "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
 
 
-def write_comparison_json(path: str, comparisons) -> None:
-    import os
-    import tempfile
-
+def comparison_json(comparisons) -> str:
     document = {"kind": "compare", "comparisons": []}
     for comparison in comparisons:
         document["comparisons"].append({
@@ -130,9 +145,8 @@ def write_comparison_json(path: str, comparisons) -> None:
             "verdicts": comparison.verdict_counts(),
             "rows": [row_json(comparison, row) for row in comparison.rows],
             "calibrations": [row_json(comparison, row) for row in comparison.calibrations],
-            "calibration_moves": [{"name": name, "unit": unit, "a": before, "b": after,
-                                   "change_pct": (after / before - 1.0) * 100.0 if (before and after) else None}
-                                  for name, unit, before, after in comparison.calibration_moves()],
+            "calibration_moves": [{"name": name, "unit": unit, "a": before, "b": after, "change_pct": change}
+                                  for name, unit, before, after, change in comparison.calibration_moves()],
             "accounting_overheads": [{"name": key.display, "a": ratio_a, "b": ratio_b}
                                      for key, ratio_a, ratio_b in comparison.accounting_overheads()],
             "added": [key.display for key in comparison.added],
@@ -141,18 +155,15 @@ def write_comparison_json(path: str, comparisons) -> None:
                         for key, where, message in comparison.errored],
             "warnings": comparison.warnings,
         })
-    directory = os.path.dirname(os.path.abspath(path))
-    handle, temporary = tempfile.mkstemp(prefix=".compare-", dir=directory)
-    with os.fdopen(handle, "w", encoding="utf-8") as stream:
-        json.dump(document, stream, indent=2, sort_keys=True)
-        stream.write("\n")
-    os.replace(temporary, path)
+    # allow_nan=False: inputs.py lets no NaN or infinity through to a figure; one here is a bug, not JSON.
+    return json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
 def run_report(argv: list[str]) -> int:
-    from . import report
-
     options = report_parser().parse_args(argv)
+    check_directory_target(options.out)
+    from . import report  # matplotlib and jinja2: a second or more, so only once the output can be written
+
     written = report.write_report(options.files, options.out, options.title)
     for path in written:
         sys.stderr.write(f"lockstep report: wrote {path}\n")
@@ -167,8 +178,12 @@ def main(argv: list[str]) -> int:
     tool = argv[0]
     try:
         return tools[tool](argv[1:])
-    except (InputError, UsageError) as error:
+    except (InputError, OutputError, UsageError) as error:
         sys.stderr.write(f"lockstep {tool}: {error}\n")
+        return EXIT_USAGE
+    except ModuleNotFoundError as error:
+        sys.stderr.write(f"lockstep {tool}: needs the Python module {error.name} from Debian "
+                         f"(`scripts/setup.sh` installs it; run by /usr/bin/python3, not a pyenv python3)\n")
         return EXIT_USAGE
     except BrokenPipeError:
         return EXIT_OK

@@ -13,6 +13,7 @@ repetitions still matches one with 6.
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 # Google Benchmark's run-configuration segments (benchmark_register.cc adds them to names).
@@ -66,6 +67,7 @@ class BenchmarkKey:
         return BenchmarkKey(self.family, tuple(sorted(kept)))
 
 
+@functools.lru_cache(maxsize=4096)  # a file names each benchmark once per repetition and aggregate
 def parse_name(name: str) -> BenchmarkKey:
     parts = [part for part in name.split("/") if part != ""]
     if not parts:

@@ -1,26 +1,33 @@
 """`lockstep report RESULT... [--out DIR]`: one self-contained HTML page and one Markdown file.
 
-The page carries its figures as inline SVG and its style inline: it loads
-nothing from anywhere (no network, no other file). A few lines of script
-record, on the <body> element, how many figures the browser laid out and
-whether any error occurred: the browser test reads them back. The Markdown
-file shows the same tables and links the same figures, written as SVG files
-under figures/.
+The results become Sections (title, paragraphs, tables, figures); two jinja2
+templates (templates/) render them: report.html.j2, autoescaped, carries its
+figures as inline SVG and its style inline and loads nothing from anywhere (a
+few lines of script record, on the <body> element, how many figures the
+browser laid out and whether any error occurred: the browser test reads them
+back); report.md.j2 shows the same tables and links the same figures, written
+as SVG files under figures/. The whole directory is written at once
+(output.write_directory).
 
 Deterministic: the same inputs give the same bytes (figures.py fixes
 matplotlib's hash salt and drops its date; nothing here reads the clock).
 """
 from __future__ import annotations
 
-import html
-import math
+import functools
 import os
-import tempfile
 from dataclasses import dataclass, field
 
+import jinja2
+import markupsafe
+
 from . import figures, paper
-from .compare import calibration, fingerprint, FINGERPRINT_KEYS, format_ns, layout_effects, rank_tables
-from .inputs import C2cFile, DelayFile, InputError, RunFile, VerifyFile, load_any, unique_labels
+from .compare import calibration, fingerprint, layout_effects, rank_tables
+from .fields import DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, SERIAL_CONTEXT, UNAVAILABLE
+from .formatting import format_ns, format_number
+from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, load_any, unique_labels
+from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
+TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
 
 @dataclass
@@ -46,14 +53,6 @@ class Section:
     figures: list[Figure] = field(default_factory=list)
 
 
-def _fmt(value, digits: int = 1, unit: str = "") -> str:
-    if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "unavailable"
-    if isinstance(value, float):
-        return f"{value:.{digits}f}{unit}"
-    return f"{value}{unit}"
-
-
 # ---------------------------------------------------------------- sections
 
 def inputs_section(loaded) -> Section:
@@ -67,10 +66,10 @@ def machines_section(run_files: list[RunFile]) -> Section | None:
     if not run_files:
         return None
     prints = [fingerprint(f) for f in run_files]
-    rows = [[key] + [p[key] or "unavailable" for p in prints] for key in FINGERPRINT_KEYS]
+    rows = [[key] + [p[key] or UNAVAILABLE for p in prints] for key in FINGERPRINT_KEYS]
     tables = [Table(["context"] + [f.label for f in run_files], rows)]
     if len(run_files) > 1:
-        effects = [[sync, pin, str(threads), layout] + [f"{s:.2f}x" if s else "unavailable" for s in speedups]
+        effects = [[sync, pin, str(threads), layout] + [format_number(s, 2, "x") for s in speedups]
                    for sync, pin, threads, layout, speedups in layout_effects(run_files)]
         tables.append(Table(["sync", "pin", "threads", "layout"] + [f"{f.label}: vs packed" for f in run_files],
                             effects, caption="Each layout's speed-up over packed (packed time / layout time), "
@@ -98,22 +97,22 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
                                    figures.bars_with_spread(run_file, pin, threads)))
     sections += [heat, bars]
-    penalties = figures.penalties(run_file)
-    if penalties is not None:
-        svg, rows = penalties
+    rows = figures.penalty_rows(run_file)
+    if rows:
         table = Table(["penalty", "sync", "threads", "time ratio"],
-                      [[kind, sync, str(threads), f"{ratio:.2f}x"] for kind, sync, threads, ratio in rows])
+                      [[kind, sync, str(threads), format_number(ratio, 2, "x")] for kind, sync, threads, ratio in rows])
         sections.append(Section(f"False-sharing and migration penalties: {run_file.label}",
                                 paragraphs=["False sharing: the packed layout's step time over the padded one's, "
                                             "threads pinned compactly. Migration: the step time when threads are "
                                             "moved on purpose (pin:migrate) or left to the OS (pin:none), over "
                                             "compact pinning. 1.0 is no penalty."],
-                                figures=[Figure(f"penalties-{counter[0]}", "penalties", svg)], tables=[table]))
+                                figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows))],
+                                tables=[table]))
     rank_rows = []
     for (pin, threads), per_file in rank_tables([run_file], top=5).items():
         for rank, (name, step, vs_serial) in enumerate(per_file[0], start=1):
             rank_rows.append([f"pin:{pin} threads:{threads}", str(rank), name, format_ns(step),
-                              _fmt(vs_serial, 2, "x")])
+                              format_number(vs_serial, 2, "x")])
     sections.append(Section(f"Fastest combinations: {run_file.label}",
                             paragraphs=["The five fastest sync/layout pairs per placement and thread count; x serial "
                                         "is the step time over this run's serial RK4 step."],
@@ -123,31 +122,31 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
 
 
 def c2c_section(item: C2cFile, counter: list[int]) -> Section:
-    pairs = item.document["pairs"]
     rows = []
     section_figures = []
-    for method in figures.c2c_methods(item.document):
+    for method in item.methods():
         by_relation: dict[str, list[float]] = {}
-        for pair in pairs:
-            value = pair["one_way_ns"].get("p50")
-            if str(pair.get("method", "unknown")) == method and isinstance(value, (int, float)) \
-                    and math.isfinite(value):
-                by_relation.setdefault(pair.get("relation", "unknown"), []).append(float(value))
-        for relation, values in sorted(by_relation.items(), key=lambda kv: (figures.RELATION_RANK.get(kv[0], 6), kv[0])):
-            values = sorted(values)
-            rows.append([method, relation, str(len(values)), _fmt(values[0]), _fmt(values[len(values) // 2]),
-                         _fmt(values[-1])])
+        for pair in item.pairs:
+            if pair.method == method and pair.p50_ns is not None:
+                by_relation.setdefault(pair.relation, []).append(pair.p50_ns)
+        for relation in sorted(by_relation, key=figures.relation_order):
+            values = sorted(by_relation[relation])
+            rows.append([method, relation, str(len(values)), format_ns(values[0]),
+                         format_ns(values[len(values) // 2]), format_ns(values[-1])])
         section_figures.append(Figure(f"c2c-{counter[0]}-{_slug(method)}", f"{item.label}, method {method}",
-                                      figures.c2c_heatmap(item.document, item.label, method)))
-    paragraphs = ["One-way latency of a cache line passed between two CPUs (median of its samples, ns), CPUs "
+                                      figures.c2c_heatmap(item, method)))
+    paragraphs = ["One-way latency of a cache line passed between two CPUs (median of its samples), CPUs "
                   "ordered so that those sharing a core or a cache sit next to each other; one map per "
                   "measuring method."]
-    if item.document.get("sampled"):
+    if item.sampled:
         paragraphs.append("Sampled: not every pair was measured (blank cells).")
+    without_samples = sum(pair.p50_ns is None for pair in item.pairs)
+    if without_samples:
+        paragraphs.append(f"{without_samples} pair(s) without samples: {UNAVAILABLE} (blank cells, not in the "
+                          "table).")
     counter[0] += 1
     return Section(f"Core-to-core latency: {item.label}", paragraphs=paragraphs, figures=section_figures,
-                   tables=[Table(["method", "relation", "pairs", "min p50 (ns)", "median p50 (ns)", "max p50 (ns)"],
-                                 rows)])
+                   tables=[Table(["method", "relation", "pairs", "min p50", "median p50", "max p50"], rows)])
 
 
 def figure5_table(rows_measured, title: str) -> Table:
@@ -158,8 +157,8 @@ def figure5_table(rows_measured, title: str) -> Table:
         cells = []
         if index < len(measured):
             row = measured[index]
-            cells += [f"{row.get('thread', '?')} ({row.get('role', '')})", str(row.get("cross_core_csw", "?")),
-                      str(row.get("total_csw", "?")), _fmt(row.get("pct"), 2, " %")]
+            cells += [f"{row.thread} ({row.role})", format_number(row.cross_core_csw), str(row.total_csw),
+                      format_number(row.pct, 2, " %")]
         else:
             cells += ["", "", "", ""]
         if index < len(paper_rows):
@@ -172,35 +171,47 @@ def figure5_table(rows_measured, title: str) -> Table:
                  rows, caption=title)
 
 
+def _setting(settings: dict, key: str) -> str:
+    if key not in settings:
+        return UNAVAILABLE
+    value = settings[key]
+    if value is None:
+        return "none"  # fifo_priority: SCHED_OTHER
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return str(value)
+
+
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
-    document = item.document
-    settings = document.get("settings", {})
+    runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
     summary_rows = []
-    for name, key in (("wake-up latency", "wakeup_latency_ns"), ("completion", "completion_ns")):
-        summary = document.get(key) or {}
-        summary_rows.append([name] + [format_ns(summary.get(q)) if isinstance(summary.get(q), (int, float)) else "unavailable"
-                                      for q in ("min", "p50", "p99", "p999", "max")]
-                            + [str(summary.get("count", "unavailable"))])
+    for which, run in runs:
+        for name, summary in (("wake-up latency", run.wakeup), ("completion", run.completion)):
+            statistics = summary.statistics if summary else {}
+            count = summary.count if summary else None
+            summary_rows.append([name + which] + [format_ns(statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
+                                + [format_number(count)])
+    misses = [f"{format_number(run.deadline_misses)}{which}" for which, run in runs]
     paragraphs = [
-        "Settings: " + ", ".join(f"{key} {settings[key]}" for key in sorted(settings)) + ".",
-        f"Deadline misses: {document.get('deadline_misses', 'unavailable')}.",
+        "Settings: " + ", ".join(f"{key} {_setting(item.settings, key)}" for key, _ in sorted(DELAY_SETTINGS)) + ".",
+        f"Deadline misses: {', '.join(misses)}.",
         "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
         f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
         "per-thread accounting.",
     ]
     tables = [Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"], summary_rows),
-              figure5_table(document.get("figure5"), "Figure 5: this machine (pinned) beside the paper")]
-    if document.get("figure5_unpinned"):
-        tables.append(figure5_table(document["figure5_unpinned"],
+              figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper")]
+    if item.unpinned:
+        tables.append(figure5_table(item.unpinned.figure5,
                                     "Figure 5: this machine unpinned (the paper's OpenMP case) beside the paper"))
-    figure = Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(document, item.label))
+    figure = Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(item))
     counter[0] += 1
     return Section(f"Multi-core delay: {item.label}", paragraphs=paragraphs, tables=tables, figures=[figure])
 
 
 def trajectory_section(item: VerifyFile, counter: list[int]) -> Section:
-    svg, deviation = figures.trajectory(item, item.label)
-    figure = Figure(f"trajectory-{counter[0]}", item.label, svg)
+    deviation = figures.trajectory_deviation(item)
+    figure = Figure(f"trajectory-{counter[0]}", item.label, figures.trajectory(item, deviation))
     counter[0] += 1
     return Section(f"Trajectory: {item.label}",
                    paragraphs=[f"x1 and x2 of the two-mass system from x(0) = (2, -3) (the paper's Figure 2), with "
@@ -219,9 +230,9 @@ def paper_section(run_files: list[RunFile]) -> Section:
     for equation, seconds in paper.PAPER_EQUATION_TIMES_S.items():
         cells = [equation, f"{seconds:.2e} s"]
         for run_file in run_files:
-            serial = calibration(run_file, "serial_step_ns")
+            serial = calibration(run_file, SERIAL_CONTEXT)
             # A serial RK4 step evaluates D1..D4 once per stage: 16 evaluations.
-            cells.append(f"{serial / 16 * 1e-9:.2e} s" if serial else "unavailable")
+            cells.append(f"{serial / 16 * 1e-9:.2e} s" if serial else UNAVAILABLE)  # the paper's notation
         equation_rows.append(cells)
     equations = Table(["equation", f"paper ({paper.PAPER_MACHINE})"]
                       + [f"{f.label}: serial step / 16" for f in run_files], equation_rows,
@@ -263,135 +274,47 @@ def build_sections(loaded) -> list[Section]:
 
 # ---------------------------------------------------------------- rendering
 
-STYLE = """
-body { font-family: system-ui, sans-serif; margin: 2em auto; max-width: 72em; color: #222; line-height: 1.4; }
-h1 { font-size: 1.6em; } h2 { font-size: 1.25em; border-bottom: 1px solid #ccc; padding-bottom: .2em; margin-top: 2em; }
-table { border-collapse: collapse; margin: .8em 0; font-size: .85em; }
-th, td { border: 1px solid #ccc; padding: .2em .5em; text-align: left; vertical-align: top; }
-th { background: #f2f2f2; }
-caption { caption-side: bottom; font-size: .85em; color: #555; text-align: left; padding-top: .3em; }
-.figures { display: flex; flex-wrap: wrap; gap: 1em; align-items: flex-start; }
-figure { margin: 1em 0; } figure svg { max-width: 100%; height: auto; }
-figcaption { font-size: .85em; color: #555; }
-nav ul { columns: 2; font-size: .9em; }
-"""
-
-# Records what the browser did with the page, for the headless browser test:
-# data-errors counts script errors and failed loads, data-figures the inline
-# figures, data-figures-shown those laid out at a visible size, data-resources
-# whatever the page fetched (it must be 0: the page is self-contained).
-CHECK_SCRIPT = """
-document.documentElement.dataset.errors = "0";
-window.addEventListener("error", function () {
-  document.documentElement.dataset.errors = String(Number(document.documentElement.dataset.errors) + 1);
-}, true);
-window.addEventListener("load", function () {
-  var svgs = document.querySelectorAll("figure > svg");
-  var shown = 0;
-  for (var i = 0; i < svgs.length; i++) {
-    var box = svgs[i].getBoundingClientRect();
-    if (box.width > 100 && box.height > 50 && svgs[i].querySelector("path, use")) shown++;
-  }
-  document.body.dataset.figures = String(svgs.length);
-  document.body.dataset.figuresShown = String(shown);
-  document.body.dataset.resources = String(performance.getEntriesByType("resource").length);
-  document.body.dataset.loaded = "yes";
-});
-"""
-
-
 def _slug(title: str) -> str:
     return "".join(c if c.isalnum() else "-" for c in title.lower()).strip("-")
 
 
-def render_html(title: str, sections: list[Section]) -> str:
-    e = html.escape
-    out = ["<!DOCTYPE html>", '<html lang="en">', "<head>", '<meta charset="utf-8">',
-           '<meta name="viewport" content="width=device-width, initial-scale=1">',
-           f"<title>{e(title)}</title>", f"<style>{STYLE}</style>", f"<script>{CHECK_SCRIPT}</script>",
-           "</head>", "<body>", f"<h1>{e(title)}</h1>", "<nav><ul>"]
-    anchors = []
-    for index, section in enumerate(sections):
-        anchor = f"s{index}-{_slug(section.title)}"
-        anchors.append(anchor)
-        out.append(f'<li><a href="#{anchor}">{e(section.title)}</a></li>')
-    out.append("</ul></nav>")
-    for anchor, section in zip(anchors, sections):
-        out.append(f'<section id="{anchor}">')
-        out.append(f"<h2>{e(section.title)}</h2>")
-        out += [f"<p>{e(p)}</p>" for p in section.paragraphs]
-        for table in section.tables:
-            out.append("<table>")
-            if table.caption:
-                out.append(f"<caption>{e(table.caption)}</caption>")
-            out.append("<thead><tr>" + "".join(f"<th>{e(h)}</th>" for h in table.headings) + "</tr></thead>")
-            out.append("<tbody>")
-            out += ["<tr>" + "".join(f"<td>{e(cell)}</td>" for cell in row) + "</tr>" for row in table.rows]
-            out.append("</tbody></table>")
-        if section.figures:
-            out.append('<div class="figures">')
-            for figure in section.figures:
-                out.append(f'<figure id="{e(figure.slug)}">')
-                out.append(figures.inline_svg(figure.svg, figure.slug))
-                out.append(f"<figcaption>{e(figure.title)}</figcaption></figure>")
-            out.append("</div>")
-        out.append("</section>")
-    out += ["</body>", "</html>"]
-    return "\n".join(out) + "\n"
-
-
-def _md_cell(text: str) -> str:
+def _md_cell(text) -> str:
     return str(text).replace("|", "\\|").replace("\n", " ")
 
 
+@functools.lru_cache(maxsize=1)
+def _templates() -> jinja2.Environment:
+    """The templates' environment, made once: it compiles each template on first use and keeps it."""
+    environment = jinja2.Environment(
+        loader=jinja2.FileSystemLoader(TEMPLATES), undefined=jinja2.StrictUndefined,
+        autoescape=jinja2.select_autoescape(enabled_extensions=("html.j2",), default=False),
+        trim_blocks=True, lstrip_blocks=True, keep_trailing_newline=True)
+    # matplotlib's SVG, its ids made unique per figure: matplotlib escaped the text it put there.
+    environment.filters["inline_svg"] = lambda svg, prefix: markupsafe.Markup(figures.inline_svg(svg, prefix))
+    environment.filters["md_cell"] = _md_cell
+    return environment
+
+
+def render_html(title: str, sections: list[Section]) -> str:
+    anchored = [(f"s{index}-{_slug(section.title)}", section) for index, section in enumerate(sections)]
+    return _templates().get_template("report.html.j2").render(title=title, sections=anchored)
+
+
 def render_markdown(title: str, sections: list[Section]) -> str:
-    out = [f"# {title}", ""]
-    for section in sections:
-        out += [f"## {section.title}", ""]
-        for paragraph in section.paragraphs:
-            out += [paragraph, ""]
-        for table in section.tables:
-            out.append("| " + " | ".join(_md_cell(h) for h in table.headings) + " |")
-            out.append("|" + "|".join("---" for _ in table.headings) + "|")
-            out += ["| " + " | ".join(_md_cell(c) for c in row) + " |" for row in table.rows]
-            out.append("")
-            if table.caption:
-                out += [f"*{table.caption}*", ""]
-        for figure in section.figures:
-            out += [f"![{figure.title}](figures/{figure.slug}.svg)", ""]
-    return "\n".join(out).rstrip("\n") + "\n"
-
-
-def _write_atomically(path: str, text: str) -> None:
-    directory = os.path.dirname(os.path.abspath(path))
-    handle, temporary = tempfile.mkstemp(prefix=".report-", dir=directory)
-    try:
-        with os.fdopen(handle, "w", encoding="utf-8", newline="\n") as stream:
-            stream.write(text)
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    except BaseException:
-        if os.path.exists(temporary):
-            os.unlink(temporary)
-        raise
+    text = _templates().get_template("report.md.j2").render(title=title, sections=sections,
+                                                            figures_directory=FIGURES_DIRECTORY)
+    return text.rstrip("\n") + "\n"
 
 
 def write_report(paths: list[str], out_dir: str, title: str = "lockstep report") -> list[str]:
+    """Reads every input and writes the report directory whole (the command line has checked out_dir
+    with output.check_directory_target first). Returns the pages written."""
     labels = unique_labels(paths)
     loaded = [load_any(path, label) for path, label in zip(paths, labels)]
     sections = build_sections(loaded)
-    try:
-        os.makedirs(os.path.join(out_dir, "figures"), exist_ok=True)
-    except OSError as error:
-        raise InputError(out_dir, f"cannot create the output directory: {error.strerror or error}") from None
-    written = []
-    for section in sections:
-        for figure in section.figures:
-            path = os.path.join(out_dir, "figures", f"{figure.slug}.svg")
-            _write_atomically(path, figure.svg)
-    html_path = os.path.join(out_dir, "report.html")
-    markdown_path = os.path.join(out_dir, "report.md")
-    _write_atomically(html_path, render_html(title, sections))
-    _write_atomically(markdown_path, render_markdown(title, sections))
-    written += [html_path, markdown_path]
-    return written
+    files = {os.path.join(FIGURES_DIRECTORY, f"{figure.slug}.svg"): figure.svg
+             for section in sections for figure in section.figures}
+    files[HTML_PAGE] = render_html(title, sections)
+    files[MARKDOWN_PAGE] = render_markdown(title, sections)
+    write_directory(out_dir, files)
+    return [os.path.join(out_dir, page) for page in PAGES]

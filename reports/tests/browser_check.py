@@ -52,6 +52,7 @@ def attribute(dom: str, element: str, name: str) -> str | None:
 def check_page(work: str, inputs: list[str], options) -> list[str]:
     """Makes a report of the inputs and opens it in Chromium; returns what went wrong."""
     failures = []
+    os.makedirs(work, exist_ok=True)  # `lockstep report --out` creates the report directory, not its parents
     out_dir = os.path.join(work, "report")
     make_report(inputs, out_dir, options.lockstep)
     page = os.path.join(out_dir, "report.html")

@@ -95,6 +95,21 @@ class Report(unittest.TestCase):
         self.assertNotIn("Multi-core delay", markdown)
         self.assertIn("±51.47j", markdown)
 
+    def test_a_hostile_file_name_is_text_everywhere(self):
+        # The label is the file name: in the page's tables and headings (autoescaped by the template) and
+        # in the figure's SVG (matplotlib escapes the text it writes, comments included).
+        import shutil
+        hostile = os.path.join(self.directory.name, "x--><script>alert(1)<b>.csv")
+        shutil.copy(fixture("verify_a.csv"), hostile)
+        out = os.path.join(self.directory.name, "hostile")
+        status, _, err = run_tool("report", hostile, "--out", out)
+        self.assertEqual(status, 0, err)
+        with open(os.path.join(out, "report.html"), encoding="utf-8") as stream:
+            page = stream.read()
+        self.assertEqual(page.count("<script"), 1)  # the page's own check script
+        self.assertNotIn("<b>", page)
+        self.assertIn("x--&gt;&lt;script&gt;alert(1)&lt;b&gt;.csv", page)
+
     def test_bad_input_is_one_line_and_exit_2(self):
         for name in ("truncated.json", "foreign.json"):
             status, _, err = run_tool("report", fixture(name), "--out", os.path.join(self.directory.name, "bad"))
@@ -105,8 +120,7 @@ class Report(unittest.TestCase):
 
 class Pieces(unittest.TestCase):
     def test_topology_order_puts_siblings_and_cache_domains_together(self):
-        document = load_any(fixture("c2c_b.json")).document
-        order = figures.topology_order(document["pairs"])
+        order = figures.topology_order(load_any(fixture("c2c_b.json")).pairs)
         self.assertEqual(order[:4], [0, 8, 1, 9])
         self.assertEqual(set(order[:8]), {0, 1, 2, 3, 8, 9, 10, 11})
 

@@ -1,0 +1,101 @@
+"""What lockstep's result files hold that the tools read: one place for each fact about the format.
+
+inputs.py checks every field named here when it reads a file (type and range),
+and the tools read nothing else: an unknown field is ignored, whatever it
+holds. compare.py and report.py take their names and headings from here.
+"""
+from __future__ import annotations
+
+# ---------------------------------------------------------------- ranges
+
+# A measured duration lies between these (ns): shorter than a picosecond or
+# longer than about eleven days is not a measurement but a damaged file. The
+# tools divide by durations, so the lower bound also keeps every ratio finite.
+SHORTEST_NS = 1e-3
+LONGEST_NS = 1e15
+# A count, a rate or a ratio (context switches per kstep, x serial) lies in [0, LARGEST_AMOUNT].
+LARGEST_AMOUNT = 1e15
+# CPU numbers (c2c pairs) lie below this.
+CPU_LIMIT = 1 << 20
+
+# What a table or a context value says where a value is missing or not a number.
+UNAVAILABLE = "unavailable"
+
+# ---------------------------------------------------------------- Google Benchmark JSON (`lockstep run`)
+
+# The schema versions this reader was written against (Google Benchmark 1.7
+# writes none, 1.8 and later write "json_schema_version": 1; lockstep's own in
+# CMakeLists.txt, LOCKSTEP_RESULT_SCHEMA).
+KNOWN_GB_JSON_SCHEMA = 1
+KNOWN_LOCKSTEP_SCHEMA = 1
+
+TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
+
+# The aggregates the tools read (a benchmark with no repetitions is read from them).
+READ_AGGREGATES = ("median", "mean")
+
+# The per-unit time counters of lockstep's entries, in the order they are looked
+# for: ns_per_step (rk4 entries, DESIGN.md, Measurements) and ns_per_episode
+# (the bare barrier entries). Both time a batch of units per Google Benchmark
+# iteration, and the batch size comes from each run's own probe, so only the
+# per-unit counter compares across runs; the iteration time does not.
+UNIT_COUNTERS = ("ns_per_step", "ns_per_episode")
+# The counter that is a c2c entry's measurement (its iteration time includes thread start-up).
+C2C_COUNTER = "one_way_ns"
+# Mean time in one stage sync, less one clock reading's cost: a small negative value is an
+# honest measurement of a sync that costs less than the clock's own noise.
+SYNC_COUNTER = "sync_ns_per_stage"
+# Derived by `lockstep run` against its in-run calibrations (vs_c2c from SYNC_COUNTER, so it may be negative too).
+VS_SERIAL_COUNTER = "vs_serial"
+VS_C2C_COUNTER = "vs_c2c"
+# Counters shown beside the time (when present), with short headings.
+COUNTERS_SHOWN = (
+    ("csw_vol_per_kstep", "csw vol/kstep"),
+    ("csw_invol_per_kstep", "csw invol/kstep"),
+    ("migrations_per_kstep", "migr/kstep"),
+    ("futex_waits_per_step", "futex/step"),
+    ("timeouts", "timeouts"),
+)
+# Every counter the tools read, by what it may hold; all other counters are ignored.
+DURATION_COUNTERS = UNIT_COUNTERS + (C2C_COUNTER,)  # ns, in [SHORTEST_NS, LONGEST_NS]
+SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_NS
+AMOUNT_COUNTERS = tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)  # in [0, LARGEST_AMOUNT]
+READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
+
+# ---------------------------------------------------------------- the context of a run file
+
+# The in-run calibrations lockstep writes into the context: text, a number of ns or "unavailable".
+C2C_CONTEXT = "c2c_one_way_ns"
+SERIAL_CONTEXT = "serial_step_ns"
+CALIBRATION_CONTEXT = (C2C_CONTEXT, SERIAL_CONTEXT)
+# Context keys that identify a machine and a build, in the order shown.
+FINGERPRINT_KEYS = (
+    "cpu_model", "topology", "hypervisor", "kernel", "num_cpus", "mhz_per_cpu", "host_name",
+    "compiler", "cxx_flags", "build_type", "lockstep_version", "lockstep_schema", "git_revision",
+    "benchmark_version", "hwloc_version", "boost_version", C2C_CONTEXT, SERIAL_CONTEXT,
+    "oversubscribed_note", "lockstep_order", "date",
+)
+# Keys whose difference means "another machine" rather than "another run".
+MACHINE_KEYS = ("cpu_model", "topology", "hypervisor", "kernel", "num_cpus")
+# Google Benchmark writes these as whole numbers; every other fingerprint key is text.
+CONTEXT_INTEGERS = ("num_cpus", "mhz_per_cpu")
+# lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).
+BACK_TO_BACK_ORDER = "registration order"
+
+# ---------------------------------------------------------------- `lockstep c2c --json`, `lockstep delay --json`
+
+# A distribution as the C++ writes it; with count 0 every statistic is null.
+DISTRIBUTION_STATISTICS = ("min", "p50", "p99", "p999", "max")
+# The settings of a delay run the report shows, in this order, with the JSON type each holds
+# ("integer or null" for fifo_priority: null is SCHED_OTHER).
+DELAY_SETTINGS = (
+    ("period_ns", "duration"), ("periods", "count"), ("duration_s", "seconds"), ("sync", "text"),
+    ("layout", "text"), ("pin", "text"), ("threads", "count"), ("placement", "text"),
+    ("fifo_priority", "priority"), ("mlock", "flag"),
+)
+
+# ---------------------------------------------------------------- `lockstep verify --csv`
+
+VERIFY_HEADER = ("t", "x1", "x2")
+# The model's displacements stay within its initial amplitude (x(0) = (2, -3)); far beyond is a damaged file.
+LARGEST_DISPLACEMENT = 1e6

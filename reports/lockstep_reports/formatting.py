@@ -1,0 +1,50 @@
+"""How the tools write numbers: one formatter for durations and one for plain numbers.
+
+A value that is missing or not a finite number is never written as a number:
+it is written as fields.UNAVAILABLE (or the caller's own word for a table cell).
+"""
+from __future__ import annotations
+
+import math
+
+from .fields import UNAVAILABLE
+
+# The units a duration is written in, largest first, with their size in ns.
+DURATION_UNITS = (("s", 1e9), ("ms", 1e6), ("us", 1e3), ("ns", 1.0))
+# Decimals in a table: one in ns, three in the larger units.
+TABLE_DECIMALS = {"ns": 1, "us": 3, "ms": 3, "s": 3}
+
+
+def is_number(value) -> bool:
+    """A finite int or float (never a bool; an int of any size is finite, and math.isfinite would
+    overflow on one beyond the floats)."""
+    if isinstance(value, bool):
+        return False
+    return isinstance(value, int) or (isinstance(value, float) and math.isfinite(value))
+
+
+def format_ns(value, significant: int | None = None) -> str:
+    """A duration given in ns, in the largest unit that keeps it at 1 or more: "61.5 ns", "1.234 us".
+
+    Tables take the default (TABLE_DECIMALS); a figure's cells give `significant` digits
+    ("950 ns", "1.23 us", "12.3 us")."""
+    if not is_number(value):
+        return UNAVAILABLE
+    unit, size = next(((unit, size) for unit, size in DURATION_UNITS if abs(value) >= size), DURATION_UNITS[-1])
+    scaled = value / size
+    if significant is None:
+        decimals = TABLE_DECIMALS[unit]
+    else:
+        magnitude = math.floor(math.log10(abs(scaled))) if scaled else 0
+        decimals = max(0, significant - 1 - magnitude)
+    return f"{scaled:.{decimals}f} {unit}"
+
+
+def format_number(value, digits: int = 2, suffix: str = "", missing: str = UNAVAILABLE) -> str:
+    """A plain number with `digits` decimals (an int as it is) and a suffix ("x", " %"); `missing` when it
+    is None or not a finite number."""
+    if not is_number(value):
+        return missing
+    if isinstance(value, int):
+        return f"{value}{suffix}"
+    return f"{value:.{digits}f}{suffix}"
