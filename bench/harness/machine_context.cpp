@@ -91,8 +91,8 @@ std::string kernel() {
   return std::string(name.release) + " " + name.version;
 }
 
-context_map machine_context(const platform::topology& machine) {
-  context_map context;
+nlohmann::json machine_context(const platform::topology& machine) {
+  nlohmann::json context = nlohmann::json::object();
   context["lockstep_version"] = build_info::kVersion;
   context["lockstep_schema"] = std::to_string(build_info::kResultSchema);
   context["git_revision"] = build_info::kGitRevision;
@@ -105,7 +105,7 @@ context_map machine_context(const platform::topology& machine) {
   context["kernel"] = kernel();
   std::array<char, 256> host{};
   context["host_name"] = ::gethostname(host.data(), host.size() - 1) == 0 ? host.data() : "unavailable";
-  context["num_cpus"] = std::to_string(::sysconf(_SC_NPROCESSORS_ONLN));
+  context["num_cpus"] = ::sysconf(_SC_NPROCESSORS_ONLN);
   context["topology"] = machine.summary();
   context["topology_packages"] = std::to_string(machine.packages());
   context["topology_l3"] = std::to_string(machine.l3_domains());
@@ -128,6 +128,11 @@ context_map machine_context(const platform::topology& machine) {
 void merge_into_result(nlohmann::json& result, const context_map& keys) {
   nlohmann::json& context = result["context"];
   for (const auto& [key, value] : keys) context[key] = value;
+}
+
+void merge_into_result(nlohmann::json& result, const nlohmann::json& keys) {
+  nlohmann::json& context = result["context"];
+  for (const auto& [key, value] : keys.items()) context[key] = value;
 }
 
 nlohmann::json result_document(const std::string& kind, const platform::topology& machine) {

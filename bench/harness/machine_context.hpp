@@ -1,7 +1,7 @@
 #pragma once
 // The result JSON's "context": what a comparison across machines needs
-// (DESIGN.md, Measurements). Every value is a string, as Google Benchmark's
-// custom context requires.
+// (DESIGN.md, Measurements). Every value is a string (num_cpus excepted, a
+// number as Google Benchmark writes it), as Google Benchmark's custom context requires.
 //
 // One producer for every command that writes a result (run, c2c, delay,
 // falseshare, migrate, verify): machine_context() is the machine and build
@@ -11,7 +11,7 @@
 // never another value for a fingerprint key. `lockstep run` merges it into
 // Google Benchmark's context after the run (replacing Google Benchmark's own
 // host_name and num_cpus with the same figures from here).
-#include <nlohmann/json_fwd.hpp>
+#include <nlohmann/json.hpp>
 
 #include <map>
 #include <string>
@@ -28,10 +28,13 @@ using context_map = std::map<std::string, std::string>;
 // topology_packages, topology_l3, topology_cores, topology_pus, hwloc_version,
 // benchmark_version, boost_version, clocksource, migrations (available or why
 // not). Values the machine cannot give are "unavailable".
-context_map machine_context(const platform::topology& machine);
+// Every value is a string but num_cpus, a whole number as Google Benchmark
+// writes it (a reader of either file sees one type).
+nlohmann::json machine_context(const platform::topology& machine);
 
 // Sets (or replaces) these keys in a result document's context.
 void merge_into_result(nlohmann::json& result, const context_map& keys);
+void merge_into_result(nlohmann::json& result, const nlohmann::json& keys);
 
 // A new result document of one kind ("c2c", "delay", "falseshare", "migrate",
 // "verify"): {"kind", "lockstep_schema", "context": machine_context(machine)}.

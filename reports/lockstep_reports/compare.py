@@ -557,8 +557,12 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
     return out
 
 
-def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real") -> str:
-    out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(run_files))]
+def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real",
+                context_files=()) -> str:
+    """`context_files`: results of other kinds (inputs.ContextFile), shown in the fingerprint only, after the
+    run files (so a run file's letter is its place among the compared files)."""
+    all_files = list(run_files) + list(context_files)
+    out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(all_files))]
     if comparisons:
         noise = comparisons[0].noise_percent
         if noise == DEFAULT_NOISE_PERCENT:
@@ -566,15 +570,19 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
         else:
             out.append(f"noise threshold: {noise:g} % (--noise; the default is {DEFAULT_NOISE_PERCENT:g} %)")
     out.append("")
-    out += fingerprint_lines(run_files)
-    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in run_files}
+    out += fingerprint_lines(all_files)
+    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
     out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")
+    if context_files:
+        out.append("fingerprint only (not benchmark results): " +
+                   ", ".join(f"{f.label} (lockstep {f.kind})" for f in context_files))
     out.append("")
-    warnings = [w for f in run_files for w in f.warnings]
+    warnings = [w for f in all_files for w in f.warnings]
     for index, comparison in enumerate(comparisons, start=1):
         out += comparison_lines(comparison, file_letter(index))
         out.append("")
-    out += across_machines_lines(run_files, time_kind)
+    if run_files:
+        out += across_machines_lines(run_files, time_kind)
     if warnings:
         out.append("")
         out += [f"warning: {w}" for w in warnings]

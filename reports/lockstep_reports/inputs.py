@@ -450,6 +450,35 @@ def load_run_file(path: str, label: str | None = None) -> RunFile:
     return run_file_from_document(path, label, parse_json(path, read_text(path)))
 
 
+# The kinds of lockstep result that carry the machine context but no benchmark entries.
+CONTEXT_ONLY_KINDS = ("c2c", "delay", "falseshare", "migrate", "verify")
+
+
+@dataclass
+class ContextFile:
+    """A `lockstep c2c`, `delay`, `falseshare`, `migrate` or `verify` result as compare reads it: only its
+    machine context (the same fingerprint every lockstep command writes), so that compare can say whether
+    files of different kinds come from one machine."""
+    path: str
+    label: str
+    kind: str
+    context: dict
+    warnings: list[str]
+
+
+def load_for_compare(path: str, label: str | None = None) -> "RunFile | ContextFile":
+    """A `lockstep run` file, or the context of another kind of lockstep result."""
+    label = label or os.path.basename(path)
+    document = parse_json(path, read_text(path))
+    kind = document.get("kind") if isinstance(document, dict) else None
+    if kind in CONTEXT_ONLY_KINDS:
+        if not isinstance(document.get("context"), dict):
+            raise InputError(path, f"is `lockstep {kind}` output without a \"context\" object")
+        context, warnings = _read_context(path, label, document["context"])
+        return ContextFile(path=path, label=label, kind=kind, context=context, warnings=warnings)
+    return run_file_from_document(path, label, document)
+
+
 # ---------------------------------------------------------------- c2c and delay files
 
 @dataclass(frozen=True)

@@ -10,7 +10,7 @@ import math
 import os
 import sys
 
-from .inputs import InputError, load_run_file, unique_labels
+from .inputs import InputError, RunFile, load_for_compare, unique_labels
 from .output import OutputError, check_directory_target, check_file_target, write_file
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
@@ -72,8 +72,9 @@ def compare_parser() -> argparse.ArgumentParser:
                         help="family-wise significance level after Holm's correction (default 0.05)")
     parser.add_argument("--time", choices=("real", "cpu"), default="real",
                         help="which time to compare (default: real, the wall-clock step time)")
-    parser.add_argument("--json", metavar="FILE", help="also write the comparison as JSON to FILE (atomically; "
-                                                       "its directory must exist)")
+    # --out, as in every lockstep command that writes a result; --json, its earlier name, still works.
+    parser.add_argument("--out", "--json", dest="json", metavar="FILE",
+                        help="also write the comparison as JSON to FILE (atomically; its directory must exist)")
     return parser
 
 
@@ -106,10 +107,14 @@ def run_compare(argv: list[str]) -> int:
                                                 for path in options.files):
             raise UsageError(f"--json {options.json} is one of the result files: give another file")
     labels = unique_labels(options.files)
-    run_files = [load_run_file(path, label) for path, label in zip(options.files, labels)]
+    files = [load_for_compare(path, label) for path, label in zip(options.files, labels)]
+    # `lockstep run` files are compared, the first against each later one; the other kinds (c2c, delay, ...)
+    # only join the machine fingerprint.
+    run_files = [f for f in files if isinstance(f, RunFile)]
+    context_files = [f for f in files if not isinstance(f, RunFile)]
     comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha, options.noise)
                    for other in run_files[1:]]
-    text = compare.render_text(run_files, comparisons, options.time)
+    text = compare.render_text(run_files, comparisons, options.time, context_files)
     if options.json:
         write_file(options.json, comparison_json(comparisons))
     sys.stdout.write(text)

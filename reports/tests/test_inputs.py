@@ -98,8 +98,18 @@ class UnusableFiles(unittest.TestCase):
     def test_foreign_json(self):
         self.assert_one_line_error(fixture("foreign.json"), "not Google Benchmark JSON")
 
-    def test_c2c_output_is_not_benchmark_results(self):
-        self.assert_one_line_error(fixture("c2c_a.json"), "lockstep c2c")
+    def test_c2c_output_joins_only_the_fingerprint(self):
+        status, out, err = run_tool("compare", fixture("machine_a.json"), fixture("c2c_a.json"))
+        self.assertEqual(status, 0, err)
+        self.assertIn("fingerprint only (not benchmark results): c2c_a.json (lockstep c2c)", out)
+        self.assertIn("machines: ", out)
+
+    def test_c2c_output_without_a_context(self):
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "c2c.json")
+            with open(path, "w") as file:
+                file.write('{"kind": "c2c", "pairs": []}')
+            self.assert_one_line_error(path, "lockstep c2c", "context")
 
     def test_missing_file(self):
         self.assert_one_line_error(os.path.join(tempfile.gettempdir(), "lockstep-no-such-file.json"), "cannot read")
