@@ -378,9 +378,11 @@ struct search_outcome {
 search_outcome run_search(const delay_plan& plan, probes::paced_step_settings settings,
                           const platform::placement_plan& placement) {
   search_outcome outcome;
-  const auto runner = [&](std::int64_t period_ns, std::int64_t periods, bool confirming) {
+  const auto runner = [&](std::int64_t period_ns, std::int64_t periods, std::optional<std::uint64_t> stop_after_misses,
+                          bool confirming) {
     settings.pacing.period_ns = period_ns;
     settings.pacing.periods = periods;
+    settings.pacing.stop_after_misses = stop_after_misses;
     const std::int64_t began = platform::now_ns();
     probes::paced_result run = probes::run_paced_step(settings, placement);
     probes::trial_outcome trial;
@@ -419,11 +421,12 @@ nlohmann::json trial_json(const probes::period_trial& trial) {
 std::string search_rule(const probes::period_search_settings& search, std::int64_t trial_periods) {
   return fmt::format(
       "a period holds when the one-sided {:g} % Clopper-Pearson upper bound on its miss rate is at most {:g}; "
-      "each trial runs {} periods ({} is the fewest with which zero misses shows the rate below {:g}); "
-      "halve or double until a period fails and a longer one holds, then bisect geometrically until they are "
-      "within {:g} %",
+      "each trial runs {} periods ({} is the fewest with which zero misses shows the rate below {:g}) and ends "
+      "early at the miss that makes it fail ({} allowed); halve or double until a period fails and a longer one "
+      "holds, then bisect geometrically until they are within {:g} %; the confirming run runs its whole length",
       100 * search.confidence, search.miss_rate, trial_periods,
-      probes::minimum_trial_periods(search.miss_rate, search.confidence), search.miss_rate, 100 * search.tolerance);
+      probes::minimum_trial_periods(search.miss_rate, search.confidence), search.miss_rate,
+      probes::allowed_misses(trial_periods, search.miss_rate, search.confidence), 100 * search.tolerance);
 }
 
 nlohmann::json print_search(const search_outcome& outcome, const delay_plan& plan, const std::string& name) {

@@ -47,6 +47,17 @@
 // nothing and stop on their own. Either way the result keeps periods 0..k
 // (every participant ran them): the late wake-up is the last sample.
 //
+// Stop after misses (paced_settings::stop_after_misses, for the period
+// search: once a trial has failed, running it on cannot change its verdict):
+// a participant whose step ends after its period's deadline has seen that
+// period miss (the period's completion is the latest end); the first to
+// record a period counts it (a high-water mark of counted periods, so a
+// period is counted at most once; one reported out of order may go
+// uncounted, which only delays the stop). When the count reaches the limit
+// after period k's step, that participant stores S = k + 1 + margin before
+// its next publication, the same protocol as above from period k + 1; the
+// result keeps the S periods every participant ran.
+//
 // Per thread, the paper's Figure 5 counters (platform/thread_accounting.hpp):
 // context switches and the share that crossed cores, from the run's start to
 // its end, for each participant and for the thread that launched the team.
@@ -86,6 +97,9 @@ struct paced_settings {
   // Per-CPU runs: every participant is its own deadline (end_p > period is a
   // miss of p); a team: the period's latest end is the one deadline.
   bool independent = false;
+  // End the run once this many periods have missed their deadline (a team
+  // only; see above). Empty: run every period.
+  std::optional<std::uint64_t> stop_after_misses;
 };
 
 // The first wake-up later than stop_above_ns, and what the step was doing.
@@ -111,6 +125,7 @@ struct paced_result {
   std::uint64_t deadline_misses = 0;  // completion_ns above the period
   std::vector<std::optional<unsigned>> cpus;  // where each participant woke for its first period
   std::optional<paced_stop> stop;
+  bool stopped_after_misses = false;  // stop_after_misses ended the run early
   platform::figure5_table figure5;    // "main" first, then "worker <id>"
   std::vector<std::string> errors;    // a participant that could not pin or go FIFO (it still ran)
 };
@@ -158,8 +173,22 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   // participant, read once per period by everyone. No stop: never below
   // `periods`, so the read never ends a run early.
   std::atomic<std::int64_t> leave_before{std::numeric_limits<std::int64_t>::max()};
+  // Lowers the agreed end to `period` (never raises it).
+  const auto leave_before_period = [&leave_before](std::int64_t period) {
+    std::int64_t agreed = leave_before.load(std::memory_order_relaxed);
+    // (1) relaxed, sequenced before this participant's next publication: see
+    // (2). The minimum wins when two participants ask at once.
+    while (period < agreed &&
+           !leave_before.compare_exchange_weak(agreed, period, std::memory_order_relaxed, std::memory_order_relaxed)) {
+    }
+  };
   std::mutex stop_mutex;  // guards `stop`: taken only on a late wake-up
   std::optional<paced_stop> stop;
+  // Stop after misses: the last period counted, and how many were. Relaxed:
+  // the count only decides when to ask for the end; the end itself is
+  // agreed by (1) and (2).
+  std::atomic<std::int64_t> last_counted_miss{-1};
+  std::atomic<std::uint64_t> counted_misses{0};
 
   const platform::thread_counters main_before = platform::snapshot_current_thread();
   const std::int64_t start = platform::now_ns() + settings.lead_ns;
@@ -194,17 +223,23 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
                             latency,
                             static_cast<std::int64_t>(k) * settings.period_ns + latency,
                             k == 0 ? std::nullopt : std::optional<std::int64_t>(end[(k - 1) * participants + id])};
-          if (settings.stop_margin_periods > 0) {
-            // (1) relaxed, sequenced before this participant's first
-            // publication of period k: see (2). The mutex makes the earliest
-            // late period win when two participants are late at once.
-            leave_before.store(static_cast<std::int64_t>(k) + settings.stop_margin_periods,
-                               std::memory_order_relaxed);
-          }
+          if (settings.stop_margin_periods > 0)
+            leave_before_period(static_cast<std::int64_t>(k) + settings.stop_margin_periods);
         }
       }
       step_one(id, static_cast<std::uint64_t>(k));
-      end[k * participants + id] = platform::now_ns() - target;
+      const std::int64_t ended = platform::now_ns() - target;
+      end[k * participants + id] = ended;
+      if (settings.stop_after_misses && settings.stop_margin_periods > 0 && ended > settings.period_ns) {
+        const auto period = static_cast<std::int64_t>(k);
+        std::int64_t counted = last_counted_miss.load(std::memory_order_relaxed);
+        while (counted < period && !last_counted_miss.compare_exchange_weak(counted, period, std::memory_order_relaxed,
+                                                                            std::memory_order_relaxed)) {
+        }
+        if (counted < period &&
+            counted_misses.fetch_add(1, std::memory_order_relaxed) + 1 >= *settings.stop_after_misses)
+          leave_before_period(period + 1 + settings.stop_margin_periods);
+      }
     }
     if (settings.fifo_priority) {
       try {
@@ -216,7 +251,14 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   });
   const platform::thread_counters main_delta = platform::snapshot_current_thread() - main_before;
 
-  const std::size_t kept = stop ? static_cast<std::size_t>(stop->period) + 1 : periods;
+  const std::int64_t agreed_end = leave_before.load(std::memory_order_relaxed);  // the team has joined
+  std::size_t kept = periods;
+  if (stop) {
+    kept = static_cast<std::size_t>(stop->period) + 1;
+  } else if (agreed_end < static_cast<std::int64_t>(periods)) {
+    kept = static_cast<std::size_t>(agreed_end);
+    result.stopped_after_misses = true;
+  }
   result.periods = static_cast<std::int64_t>(kept);
   result.stop = stop;
   result.cpus = cpus;

@@ -87,6 +87,15 @@ std::int64_t minimum_trial_periods(double miss_rate, double confidence) {
   return static_cast<std::int64_t>(std::ceil(std::log1p(-confidence) / std::log1p(-miss_rate) - 1e-9));
 }
 
+std::int64_t allowed_misses(std::int64_t periods, double miss_rate, double confidence) {
+  std::int64_t misses = -1;
+  while (misses + 1 <= periods &&
+         miss_rate_upper_bound(static_cast<std::uint64_t>(misses + 1), static_cast<std::uint64_t>(periods), confidence) <=
+             miss_rate)
+    ++misses;
+  return misses;
+}
+
 std::string period_search_problem(const period_search_settings& settings) {
   if (!(settings.miss_rate > 0.0 && settings.miss_rate < 1.0)) return "the miss rate must lie between 0 and 1";
   if (!(settings.confidence > 0.0 && settings.confidence < 1.0)) return "the confidence must lie between 0 and 1";
@@ -113,6 +122,8 @@ period_search_result find_period(const period_search_settings& settings, const t
                                    ? settings.trial_periods
                                    : minimum_trial_periods(settings.miss_rate, settings.confidence);
   result.trial_periods = periods;
+  // The miss that makes a trial fail whatever follows.
+  const auto failing_misses = static_cast<std::uint64_t>(allowed_misses(periods, settings.miss_rate, settings.confidence) + 1);
 
   const auto judge = [&](std::int64_t period_ns, const trial_outcome& outcome) {
     period_trial trial;
@@ -170,7 +181,7 @@ period_search_result find_period(const period_search_settings& settings, const t
       result.stopped_because = "budget";
       break;
     }
-    const trial_outcome outcome = run(period_ns, periods, false);
+    const trial_outcome outcome = run(period_ns, periods, failing_misses, false);
     result.elapsed_ns += outcome.elapsed_ns;
     slowest_step_ns = std::max(slowest_step_ns, outcome.completion_p50_ns);
     const period_trial trial = judge(period_ns, outcome);
@@ -187,7 +198,7 @@ period_search_result find_period(const period_search_settings& settings, const t
   result.found_period_ns = held;
   result.failed_period_ns = failed;
   if (held) {
-    const trial_outcome outcome = run(*held, periods, true);
+    const trial_outcome outcome = run(*held, periods, std::nullopt, true);
     result.elapsed_ns += outcome.elapsed_ns;
     result.confirm = judge(*held, outcome);
     if (observe) observe(*result.confirm, true);

@@ -16,6 +16,12 @@
 // periods for R = 1e-3); that is the default trial length, and a longer one
 // (trial_periods) allows some misses (at n = 10 / R, up to 4).
 //
+// A trial that has already seen more misses than a hold allows
+// (allowed_misses: 0 at the default length) cannot hold any more: the
+// search asks the runner to end it there, so failing trials (most of them,
+// and the long ones) cost a fraction of their length. The confirming run
+// always runs its whole length, so that its rate is measured, not bounded.
+//
 // Search: the first trial at start_period; while every trial held, halve; while
 // every trial failed, double; once one period failed and a longer one held,
 // bisect on a logarithmic scale (the geometric mean, rounded to the
@@ -48,6 +54,10 @@ double miss_rate_upper_bound(std::uint64_t misses, std::uint64_t periods, double
 // The fewest periods with which zero misses can show a rate of at most
 // `miss_rate` at `confidence`: ceil(ln(1 - confidence) / ln(1 - miss_rate)).
 std::int64_t minimum_trial_periods(double miss_rate, double confidence);
+
+// The most misses in `periods` periods that still hold `miss_rate` at
+// `confidence` (-1 when even none would not).
+std::int64_t allowed_misses(std::int64_t periods, double miss_rate, double confidence);
 
 struct period_search_settings {
   double miss_rate = 1e-3;  // R
@@ -93,9 +103,11 @@ struct period_search_result {
   std::int64_t elapsed_ns = 0;  // every run, the confirming one included
 };
 
-// Runs a trial: the paced step at `period_ns` for `periods` periods.
-// `confirming` is true for the last call, the confirming run.
-using trial_runner = std::function<trial_outcome(std::int64_t period_ns, std::int64_t periods, bool confirming)>;
+// Runs a trial: the paced step at `period_ns` for `periods` periods, ended
+// early (when set) once `stop_after_misses` periods have missed.
+// `confirming` is true for the last call, the confirming run (never ended early).
+using trial_runner = std::function<trial_outcome(std::int64_t period_ns, std::int64_t periods,
+                                                 std::optional<std::uint64_t> stop_after_misses, bool confirming)>;
 // Called after each trial (for progress lines); may be empty.
 using trial_observer = std::function<void(const period_trial&, bool confirming)>;
 

@@ -149,6 +149,35 @@ TEST(PacedRun, StopAboveEndsATeamTogether) {
   }
 }
 
+// Stop after misses: a team whose step overruns from period 3 on ends soon
+// after the second miss, together, and keeps every period it ran.
+TEST(PacedRun, StopAfterMissesEndsATeamTogether) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced stop after misses");
+  probes::paced_settings settings;
+  settings.period_ns = 1'000'000;
+  settings.periods = 200;
+  settings.lead_ns = 1'000'000;
+  settings.stop_after_misses = 2;
+  settings.stop_margin_periods = 1;
+  lockstep::sync::std_thread_team team(2);
+  std::array<std::atomic<int>, 2> steps{};
+  std::barrier<> stage(2);
+  const auto run = probes::run_paced(
+      team, 2, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t period) {
+        if (period >= 3) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  EXPECT_TRUE(run.stopped_after_misses);
+  EXPECT_FALSE(run.stop.has_value());
+  EXPECT_LT(run.periods, 200);
+  EXPECT_GE(run.deadline_misses, 2u);
+  EXPECT_EQ(steps[0].load(), steps[1].load());
+  EXPECT_EQ(steps[0].load(), run.periods);  // every period run is kept
+  EXPECT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.periods));
+}
+
 TEST(PacedRun, WithoutAStopEveryPeriodIsKept) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced no stop");
   probes::paced_settings settings;

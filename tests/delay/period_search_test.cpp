@@ -60,14 +60,23 @@ struct threshold_step {
   std::int64_t step_ns = 50'000;
   int runs = 0;
   int confirming_runs = 0;
-  probes::trial_outcome operator()(std::int64_t period_ns, std::int64_t periods, bool confirming) {
+  int ended_early = 0;
+  probes::trial_outcome operator()(std::int64_t period_ns, std::int64_t periods,
+                                   std::optional<std::uint64_t> stop_after_misses, bool confirming) {
     ++runs;
     confirming_runs += confirming ? 1 : 0;
+    EXPECT_EQ(confirming, !stop_after_misses.has_value());  // the confirming run runs its whole length
     probes::trial_outcome outcome;
     outcome.periods = periods;
     outcome.misses = period_ns < threshold_ns ? static_cast<std::uint64_t>(periods) : 0;
+    if (stop_after_misses && outcome.misses >= *stop_after_misses) {
+      // every period misses: the run ends after the limit's period
+      ++ended_early;
+      outcome.periods = static_cast<std::int64_t>(*stop_after_misses);
+      outcome.misses = *stop_after_misses;
+    }
     outcome.completion_p50_ns = static_cast<double>(step_ns);
-    outcome.elapsed_ns = periods * std::max(period_ns, step_ns);
+    outcome.elapsed_ns = outcome.periods * std::max(period_ns, step_ns);
     return outcome;
   }
 };
@@ -103,6 +112,27 @@ TEST(FindPeriod, BisectsToTheThreshold) {
       EXPECT_EQ(trial.holds, trial.period_ns >= threshold);
     }
   }
+}
+
+TEST(AllowedMisses, IsTheLargestCountThatStillHolds) {
+  EXPECT_EQ(probes::allowed_misses(2995, 1e-3, 0.95), 0);
+  EXPECT_EQ(probes::allowed_misses(2994, 1e-3, 0.95), -1);
+  EXPECT_EQ(probes::allowed_misses(10'000, 1e-3, 0.95), 4);  // 5 in 10000: bound 0.00105
+  EXPECT_EQ(probes::allowed_misses(6000, 1e-3, 0.95), 1);
+}
+
+TEST(FindPeriod, FailingTrialsEndAtTheMissThatDecidesThem) {
+  threshold_step step{137'000};
+  const auto result = probes::find_period(quick_settings(), std::ref(step));
+  int failing = 0;
+  for (const auto& trial : result.trials) {
+    if (trial.holds) continue;
+    ++failing;
+    EXPECT_EQ(trial.outcome.misses, 1u);  // 299 periods allow none: the first miss decides
+    EXPECT_EQ(trial.outcome.periods, 1);
+  }
+  EXPECT_EQ(step.ended_early, failing);
+  EXPECT_GT(failing, 0);
 }
 
 TEST(FindPeriod, StopsAtTheFloorAndTheCeiling) {
@@ -154,7 +184,7 @@ TEST(FindPeriod, LongerTrialsAllowSomeMisses) {
   auto settings = quick_settings();
   settings.miss_rate = 1e-3;
   settings.trial_periods = 10'000;
-  const auto few_misses = [](std::int64_t, std::int64_t periods, bool) {
+  const auto few_misses = [](std::int64_t, std::int64_t periods, std::optional<std::uint64_t>, bool) {
     probes::trial_outcome outcome;
     outcome.periods = periods;
     outcome.misses = 4;
