@@ -16,8 +16,10 @@
 # latency taken as now - next right after the sleep returns (cyclictest's
 # definition; bench/probes/paced.hpp does the same). lockstep's thread then
 # computes one RK4 step (`--threads 1`, the like-for-like view); cyclictest's
-# does nothing. cyclictest runs with -d 0 so that its one thread's interval
-# is --period-us (cyclictest 2.4 adds the distance to thread 0 too); lockstep
+# does nothing. cyclictest runs with -d 0 so that a second thread would keep
+# the interval too (its verbose header prints interval + distance for thread
+# 0, 1500 by default, but thread 0 runs at the interval: 995 loops in 1 s at
+# the default 1000 us, rt-tests 2.4); lockstep
 # is confined to --cpu with taskset, so its compact placement puts the one
 # participant there.
 #
@@ -67,7 +69,7 @@ while [ $# -gt 0 ]; do
     --defaults) defaults=1; shift ;;
     --lockstep) lockstep="${2:-}"; shift 2 || die "--lockstep needs a value" ;;
     --keep) keep="${2:-}"; shift 2 || die "--keep needs a value" ;;
-    -h|--help) sed -n '2,43p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,44p' "$0"; exit 0 ;;
     *) die "unknown option '$1' (see --help)" ;;
   esac
 done
@@ -120,8 +122,7 @@ run_lockstep() {  # round
 }
 run_cyclictest() {  # round
   if [ "$defaults" = 1 ]; then
-    # Its default interval (1000 us plus the 500 us distance in cyclictest
-    # 2.4); the loops that fill --duration-s at that interval.
+    # Its default interval (1000 us) for --duration-s.
     cyclictest --duration="${duration_s}" --nsecs --verbose --quiet \
       > "$work/cyclictest-$1.txt" 2> "$work/cyclictest-$1.err" ||
       die "cyclictest failed: $(tail -1 "$work/cyclictest-$1.err")"

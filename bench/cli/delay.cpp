@@ -708,9 +708,9 @@ void add_delay(CLI::App& app, int& result) {
                                    "Leave /dev/cpu_dma_latency alone (idle states not limited)");
   dma->excludes(no_dma);
   command->add_option("--histogram-bound", options->histogram_bound,
-                      "Last 1 us histogram bucket (cyclictest -h); later wake-ups count as overflows")
-      ->option_text("TIME")
-      ->capture_default_str();
+                      "1 us histogram buckets up to this time (cyclictest -h; default 1000us); later wake-ups "
+                      "count as overflows")
+      ->option_text("TIME");
   command->add_option("--histogram-file", options->histogram_file,
                       "Write the wake-up histogram to FILE in cyclictest's -h text format")
       ->option_text("FILE");
@@ -726,9 +726,8 @@ void add_delay(CLI::App& app, int& result) {
   auto* rate = command->add_option("--miss-rate", options->miss_rate, "The miss rate --find-period must hold (1e-3)");
   rate->needs(find);
   command->add_option("--search-budget", options->search_budget,
-                      "Longest time --find-period may take, the confirming run included")
+                      "Longest time --find-period may take, the confirming run included (default 120s)")
       ->option_text("TIME")
-      ->capture_default_str()
       ->needs(find);
   command->add_option("--trial-periods", options->trial_periods,
                       "Periods per --find-period trial (default: the fewest that can show the rate)")
