@@ -169,9 +169,9 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   std::vector<platform::thread_counters> deltas(participants);
   std::vector<std::string> errors(participants);
 
-  // The agreed end (see the header): written at most once per late
-  // participant, read once per period by everyone. No stop: never below
-  // `periods`, so the read never ends a run early.
+  // The agreed end (see the header): lowered by a late wake-up or by the
+  // miss that reaches stop_after_misses, read once per period by everyone.
+  // No stop: never below `periods`, so the read never ends a run early.
   std::atomic<std::int64_t> leave_before{std::numeric_limits<std::int64_t>::max()};
   // Lowers the agreed end to `period` (never raises it).
   const auto leave_before_period = [&leave_before](std::int64_t period) {
