@@ -1,7 +1,13 @@
 // The paced RK4 step (paced.hpp): the dispatch from names to the composed step.
 #include "bench/probes/paced.hpp"
 
+#include <algorithm>
+#include <cstdint>
+#include <exception>
+#include <memory>
 #include <stdexcept>
+#include <type_traits>
+#include <vector>
 
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
@@ -18,13 +24,47 @@ namespace {
 // period is chosen.
 constexpr double kStepSeconds = 1e-4;
 
+// How many periods after a late one a team can leave together (paced.hpp):
+// max(1, ceil(d / 4)) for d the longest distance between two participants in
+// the producer -> consumer graph (a barrier: 1); 0 when some participant
+// cannot reach another (it could lead without bound: no early end).
+template <class Step>
+std::int64_t stop_margin_periods(const Step& step) {
+  const unsigned threads = step.threads();
+  std::size_t longest = threads > 1 ? 1 : 0;
+  if constexpr (!sync::phase_barrier<typename Step::sync_type>) {
+    longest = 0;
+    for (unsigned source = 0; source < threads; ++source) {
+      std::vector<std::size_t> distance(threads, SIZE_MAX);
+      std::vector<unsigned> frontier{source};
+      distance[source] = 0;
+      for (std::size_t head = 0; head < frontier.size(); ++head)
+        for (unsigned consumer = 0; consumer < threads; ++consumer) {
+          const auto& producers = step.plan_of(consumer).producers;
+          if (distance[consumer] == SIZE_MAX &&
+              std::binary_search(producers.begin(), producers.end(), frontier[head])) {
+            distance[consumer] = distance[frontier[head]] + 1;
+            frontier.push_back(consumer);
+          }
+        }
+      for (std::size_t d : distance) {
+        if (d == SIZE_MAX) return 0;
+        longest = std::max(longest, d);
+      }
+    }
+  }
+  return std::max<std::int64_t>(1, static_cast<std::int64_t>((longest + kernels::kRk4Stages - 1) / kernels::kRk4Stages));
+}
+
 template <class Sync, class Layout>
-paced_result run_combination(unsigned threads, const platform::placement_plan& plan, const paced_settings& settings) {
+paced_result run_combination(unsigned threads, const platform::placement_plan& plan, paced_settings settings) {
   const kernels::two_mass_model model;
   kernels::parallel_rk4<Sync, Layout> step(model, kStepSeconds, threads);
   std::vector<sync::participant> participants(threads);
   for (unsigned id = 0; id < threads; ++id) participants[id].id = id;
   sync::team_of_t<Sync> team(threads);
+  settings.stop_margin_periods = stop_margin_periods(step);
+  settings.independent = false;
   return run_paced(
       team, threads, settings, [&](unsigned id) { platform::pin_current_thread(plan, id); },
       [&](unsigned id, std::uint64_t period) {
@@ -40,6 +80,33 @@ paced_result run_combination(unsigned threads, const platform::placement_plan& p
         }
         step.run(participants[id], 1);
       });
+}
+
+// Per CPU: participant i alone on cpus[i], with a step of its own, built on
+// its own thread after the pin (its memory is first touched there).
+template <class Sync, class Layout>
+paced_result run_per_cpu(std::span<const unsigned> cpus, paced_settings settings) {
+  using step_type = kernels::parallel_rk4<Sync, Layout>;
+  const kernels::two_mass_model model;
+  const auto count = static_cast<unsigned>(cpus.size());
+  std::vector<std::unique_ptr<step_type>> steps(count);
+  std::vector<sync::participant> participants(count);  // every one is participant 0 of its own step
+  sync::std_thread_team team(count);
+  settings.stop_margin_periods = 1;
+  settings.independent = true;
+  return run_paced(
+      team, count, settings,
+      [&](unsigned id) {
+        std::exception_ptr pin_failure;  // reported by run_paced; the step is built either way
+        try {
+          platform::pin_current_thread_to_pu(cpus[id]);
+        } catch (...) {
+          pin_failure = std::current_exception();
+        }
+        steps[id] = std::make_unique<step_type>(model, kStepSeconds, 1);
+        if (pin_failure) std::rethrow_exception(pin_failure);
+      },
+      [&](unsigned id, std::uint64_t) { steps[id]->run(participants[id], 1); });
 }
 
 // Calls visit.template operator()<Sync, Layout>() for the named pair when it
@@ -88,6 +155,32 @@ paced_result run_paced_step(const paced_step_settings& settings, const platform:
         result = run_combination<Sync, Layout>(settings.threads, plan, settings.pacing);
       });
   if (!problem.empty()) throw std::invalid_argument(problem);
+  return result;
+}
+
+}  // namespace lockstep::bench::probes
+
+namespace lockstep::bench::probes {
+
+std::string paced_per_cpu_problem(const std::string& sync_name, const std::string& layout_name) {
+  std::string problem;
+  const std::string basic = with_combination(sync_name, layout_name, 1, [&]<class Sync, class Layout>() {
+    if constexpr (!std::is_same_v<sync::team_of_t<Sync>, sync::std_thread_team>)
+      problem = "--per-cpu runs each CPU's step on a thread of its own; " + sync_name + " needs a team of its own (" +
+                std::string(sync::team_of_t<Sync>::kName) + "): choose another --sync";
+  });
+  return basic.empty() ? problem : basic;
+}
+
+paced_result run_paced_per_cpu(const paced_step_settings& settings, std::span<const unsigned> cpus) {
+  if (const std::string problem = paced_per_cpu_problem(settings.sync, settings.layout); !problem.empty())
+    throw std::invalid_argument(problem);
+  if (cpus.empty()) throw std::invalid_argument("a per-CPU run needs at least one CPU");
+  paced_result result;
+  (void)with_combination(settings.sync, settings.layout, 1, [&]<class Sync, class Layout>() {
+    if constexpr (std::is_same_v<sync::team_of_t<Sync>, sync::std_thread_team>)
+      result = run_per_cpu<Sync, Layout>(cpus, settings.pacing);
+  });
   return result;
 }
 

@@ -9,8 +9,11 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -19,6 +22,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "tests/delay/cyclictest_histogram_parser.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/watchdog.hpp"
 
@@ -167,6 +171,45 @@ TEST(DelayCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"delay", "--fifo", "100"});
   expect_usage_error({"delay", "--compare-pinning", "--pin", "none"});
   expect_usage_error({"delay", "--out", "/nonexistent-dir/d.json"});
+  // idle states
+  expect_usage_error({"delay", "--dma-latency", "5"});  // a time needs its unit
+  expect_usage_error({"delay", "--dma-latency", "-1us"});
+  expect_usage_error({"delay", "--dma-latency", "1.5us"});  // PM QoS takes whole microseconds
+  expect_usage_error({"delay", "--dma-latency", "0us", "--no-dma-latency"});
+  // histograms
+  expect_usage_error({"delay", "--histogram-bound", "0us"});
+  expect_usage_error({"delay", "--histogram-bound", "1.5us"});
+  expect_usage_error({"delay", "--histogram-bound", "200ms"});
+  expect_usage_error({"delay", "--histogram-bound", "x"});
+  expect_usage_error({"delay", "--histogram-file", "/nonexistent-dir/h.txt"});
+  // per CPU
+  expect_usage_error({"delay", "--per-cpu", "--threads", "2"});
+  expect_usage_error({"delay", "--per-cpu", "--pin", "scatter"});
+  expect_usage_error({"delay", "--per-cpu", "--compare-pinning"});
+  expect_usage_error({"delay", "--per-cpu", "--sync", "omp_barrier"});
+  expect_usage_error({"delay", "--per-cpu", "--sync", "nope"});
+  // stop on a threshold
+  expect_usage_error({"delay", "--stop-above", "0us"});
+  expect_usage_error({"delay", "--stop-above", "10"});
+  // the period search
+  expect_usage_error({"delay", "--find-period"});
+  expect_usage_error({"delay", "--miss-rate", "1e-3"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "0"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-9"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "often"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--duration", "1s"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--stop-above", "1ms"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--per-cpu"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--compare-pinning"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--trial-periods", "100"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--trial-periods", "-5"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--search-budget", "0.5s"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--search-budget", "10"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--period", "5us"});
+  expect_usage_error({"delay", "--search-budget", "10s"});
+  expect_usage_error({"delay", "--trial-periods", "5000"});
+  expect_usage_error({"delay", "--find-period", "--miss-rate", "1e-3", "--out", "/nonexistent-dir/d.json"});
 }
 
 void expect_delay_json(const nlohmann::json& document, int periods, int threads) {
@@ -185,6 +228,25 @@ void expect_delay_json(const nlohmann::json& document, int periods, int threads)
     EXPECT_TRUE(document["completion_ns"][key].is_number()) << key;
   }
   EXPECT_LE(document["deadline_misses"].get<int>(), periods);
+  EXPECT_EQ(document["periods_measured"], periods);
+  // The idle setting in force, in the context (strings) and in "idle".
+  for (const char* key : {"dma_latency", "dma_latency_in_force_us", "cpuidle_driver", "cpuidle_governor", "clocksource"})
+    EXPECT_TRUE(document["context"][key].is_string()) << key;
+  for (const char* key : {"requested_us", "held", "in_force_us", "path", "cpuidle_driver", "cpuidle_governor",
+                          "clocksource"})
+    EXPECT_TRUE(document["idle"].contains(key)) << key;
+  // cyclictest's histogram: one column per thread, 1 us buckets to the bound.
+  const auto& latency = document["latency_histogram"];
+  EXPECT_EQ(latency["bucket_us"], 1);
+  EXPECT_EQ(latency["bound_us"], document["settings"]["histogram_bound_us"]);
+  ASSERT_EQ(latency["columns"].size(), static_cast<std::size_t>(threads));
+  for (const auto& column : latency["columns"]) {
+    EXPECT_EQ(column["counts"].size(), latency["bound_us"].get<std::size_t>());
+    std::uint64_t in_buckets = 0;
+    for (const auto& count : column["counts"]) in_buckets += count.get<std::uint64_t>();
+    EXPECT_EQ(in_buckets + column["overflow"].get<std::uint64_t>(), static_cast<std::uint64_t>(periods));
+    EXPECT_EQ(column["samples"], periods);
+  }
   std::uint64_t in_histogram = 0;
   for (const auto& count : document["histogram"]["counts"]) in_histogram += count.get<std::uint64_t>();
   EXPECT_EQ(in_histogram, static_cast<std::uint64_t>(periods * threads));
@@ -288,11 +350,251 @@ TEST(DelayCommand, FifoAndMlockWhenPermitted) {
   EXPECT_EQ(document["settings"]["mlock"], true);
 }
 
+// The PM QoS file, pointed elsewhere for one run (LOCKSTEP_DMA_LATENCY_PATH,
+// read only by `lockstep delay`).
+class dma_latency_path {
+ public:
+  explicit dma_latency_path(const std::string& path) { ::setenv("LOCKSTEP_DMA_LATENCY_PATH", path.c_str(), 1); }
+  ~dma_latency_path() { ::unsetenv("LOCKSTEP_DMA_LATENCY_PATH"); }
+  dma_latency_path(const dma_latency_path&) = delete;  // owns the variable
+  dma_latency_path& operator=(const dma_latency_path&) = delete;
+};
+
+std::string line_starting(const std::string& text, const std::string& prefix) {
+  std::istringstream lines(text);
+  std::string line;
+  while (std::getline(lines, line))
+    if (line.rfind(prefix, 0) == 0) return line;
+  return {};
+}
+
+TEST(DelayCommand, WithoutTheQosFileTheRunCompletesAndSaysSo) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay without QoS");
+  const dma_latency_path missing("/nonexistent-lockstep-dir/cpu_dma_latency");
+  const auto path = temp_json("delay-no-qos");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const std::string idle = line_starting(result.out, "idle: ");
+  EXPECT_NE(idle.find("could not be held at 0 us"), std::string::npos) << result.out;
+  EXPECT_NE(idle.find("idle states not limited"), std::string::npos) << idle;
+  EXPECT_NE(result.err.find("cannot hold /nonexistent-lockstep-dir/cpu_dma_latency"), std::string::npos)
+      << result.err;
+  const auto document = read_json(path);
+  expect_delay_json(document, 10, 1);
+  EXPECT_EQ(document["idle"]["held"], false);
+  EXPECT_EQ(document["idle"]["requested_us"], 0);
+  EXPECT_TRUE(document["idle"]["problem"].is_string());
+  EXPECT_EQ(document["context"]["dma_latency"].get<std::string>().rfind("not held (cannot hold", 0), 0u);
+}
+
+TEST(DelayCommand, HoldsTheRequestedLatencyForTheRun) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --dma-latency");
+  const std::string qos = "/tmp/lockstep-delay-test-" + std::to_string(::getpid()) + "-qos";
+  { std::ofstream create(qos); }
+  const dma_latency_path stand_in(qos);
+  const auto path = temp_json("delay-qos");
+  const auto result = run_command(
+      {LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--dma-latency", "7us", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(line_starting(result.out, "idle: ").find(qos + " held at 7 us for the run"), std::string::npos)
+      << result.out;
+  std::ifstream in(qos, std::ios::binary);
+  std::int32_t written = -1;
+  in.read(reinterpret_cast<char*>(&written), sizeof written);
+  EXPECT_EQ(written, 7);
+  std::remove(qos.c_str());
+  const auto document = read_json(path);
+  EXPECT_EQ(document["settings"]["dma_latency_us"], 7);
+  EXPECT_EQ(document["idle"]["held"], true);
+  EXPECT_EQ(document["idle"]["in_force_us"], 7);
+  EXPECT_EQ(document["context"]["dma_latency"], "held at 7 us");
+}
+
+TEST(DelayCommand, NoDmaLatencyLeavesTheFileAlone) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --no-dma-latency");
+  const std::string qos = "/tmp/lockstep-delay-test-" + std::to_string(::getpid()) + "-untouched";
+  { std::ofstream create(qos); }
+  const dma_latency_path stand_in(qos);
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--no-dma-latency"});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(line_starting(result.out, "idle: ").find("left alone (--no-dma-latency)"), std::string::npos) << result.out;
+  std::ifstream in(qos, std::ios::binary);
+  EXPECT_EQ(in.peek(), std::ifstream::traits_type::eof());  // nothing written
+  std::remove(qos.c_str());
+}
+
+// --stop-above 1us: some wake-up of the run is later than 1 us on any
+// machine this runs on; whichever, the result must be complete and valid.
+TEST(DelayCommand, StopAboveLeavesACompleteResult) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --stop-above");
+  const auto path = temp_json("delay-stop");
+  const std::string histogram = temp_json("delay-stop-histogram");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--duration", "200ms", "--stop-above",
+                                   "1us", "--histogram-file", histogram, "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const auto document = read_json(path);
+  ASSERT_TRUE(document.contains("stop"));
+  const auto& stop = document["stop"];
+  EXPECT_EQ(stop["threshold_ns"], 1000);
+  const int kept = document["periods_measured"].get<int>();
+  EXPECT_EQ(stop["periods_kept"], kept);
+  EXPECT_EQ(document["wakeup_latency_ns"]["count"], kept * 2);
+  EXPECT_EQ(document["completion_ns"]["count"], kept);
+  EXPECT_EQ(document["figure5"].size(), 3u);
+  if (stop["stopped"].get<bool>()) {
+    EXPECT_EQ(stop["period"].get<int>() + 1, kept);
+    EXPECT_GT(stop["wakeup_latency_ns"].get<std::int64_t>(), 1000);
+    EXPECT_EQ(stop["period_ns"], 1'000'000);
+    EXPECT_TRUE(stop["thread"].is_string());
+    EXPECT_GE(stop["since_start_ns"].get<std::int64_t>(), stop["wakeup_latency_ns"].get<std::int64_t>());
+    EXPECT_NE(result.out.find("stopped: period " + std::to_string(stop["period"].get<int>())), std::string::npos)
+        << result.out;
+  } else {
+    EXPECT_EQ(kept, 200);
+    EXPECT_NE(result.out.find("no wake-up was later"), std::string::npos) << result.out;
+  }
+  std::ifstream in(histogram);
+  const auto parsed = lockstep::testing::parse_cyclictest_histogram(in);
+  std::remove(histogram.c_str());
+  ASSERT_EQ(parsed.error, "");
+  ASSERT_EQ(parsed.total.size(), 2u);
+  EXPECT_EQ(parsed.total[0] + parsed.overflows[0], static_cast<std::uint64_t>(kept));
+}
+
+TEST(DelayCommand, HistogramFileReadsBackAsCyclictestsFormat) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --histogram-file");
+  const auto path = temp_json("delay-histogram");
+  const std::string histogram = temp_json("delay-histogram-text");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--duration", "30ms", "--histogram-bound",
+                                   "50us", "--histogram-file", histogram, "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  std::ifstream in(histogram);
+  const auto parsed = lockstep::testing::parse_cyclictest_histogram(in);
+  std::remove(histogram.c_str());
+  ASSERT_EQ(parsed.error, "");
+  const auto document = read_json(path);
+  expect_delay_json(document, 30, 2);
+  const auto& columns = document["latency_histogram"]["columns"];
+  ASSERT_EQ(parsed.counts.size(), 2u);
+  ASSERT_EQ(parsed.buckets.size(), 50u);
+  EXPECT_EQ(parsed.buckets.front(), 0);
+  EXPECT_EQ(parsed.buckets.back(), 49);
+  for (std::size_t thread = 0; thread < 2; ++thread) {
+    const auto& column = columns[thread];
+    for (std::size_t bucket = 0; bucket < 50; ++bucket)
+      EXPECT_EQ(parsed.counts[thread][bucket], column["counts"][bucket].get<std::uint64_t>()) << thread << " " << bucket;
+    EXPECT_EQ(parsed.total[thread] + parsed.overflows[thread], 30u);
+    EXPECT_EQ(parsed.overflows[thread], column["overflow"].get<std::uint64_t>());
+    EXPECT_EQ(parsed.min[thread], column["min_us"].get<std::uint64_t>());
+    EXPECT_EQ(parsed.avg[thread], column["avg_us"].get<std::uint64_t>());
+    EXPECT_EQ(parsed.max[thread], column["max_us"].get<std::uint64_t>());
+    EXPECT_EQ(parsed.overflow_cycles[thread].size() + parsed.others[thread], parsed.overflows[thread]);
+  }
+  // The JSON's whole-run maximum agrees with the histogram's (us, truncated).
+  const auto max_ns = document["wakeup_latency_ns"]["max"].get<double>();
+  EXPECT_EQ(std::max(parsed.max[0], parsed.max[1]), static_cast<std::uint64_t>(max_ns / 1000));
+}
+
+// The reader is written from cyclictest's documented format: it must read
+// cyclictest's own file too (when cyclictest is here and may run).
+TEST(CyclictestHistogram, TheReaderReadsCyclictestsOwnFile) {
+  if (::access("/usr/bin/cyclictest", X_OK) != 0) GTEST_SKIP() << "cyclictest is not installed";
+  lockstep::testing::watchdog guard(std::chrono::seconds(60), "cyclictest -h");
+  const std::string histogram = temp_json("cyclictest-histogram");
+  const auto result = run_command({"/usr/bin/cyclictest", "-q", "-t", "2", "-i", "1000", "-l", "50", "-h", "30",
+                                   "--histfile=" + histogram});
+  if (result.exit_status != 0) GTEST_SKIP() << "cyclictest did not run here: " << result.err;
+  std::ifstream in(histogram);
+  const auto parsed = lockstep::testing::parse_cyclictest_histogram(in);
+  std::remove(histogram.c_str());
+  ASSERT_EQ(parsed.error, "");
+  ASSERT_EQ(parsed.counts.size(), 2u);
+  EXPECT_EQ(parsed.buckets.size(), 30u);
+  ASSERT_EQ(parsed.total.size(), 2u);
+  ASSERT_EQ(parsed.overflows.size(), 2u);
+  for (std::size_t thread = 0; thread < 2; ++thread) {
+    std::uint64_t sum = 0;
+    for (std::uint64_t count : parsed.counts[thread]) sum += count;
+    EXPECT_EQ(sum, parsed.total[thread]);
+    EXPECT_EQ(parsed.total[thread] + parsed.overflows[thread], 50u);  // -l 50 loops
+  }
+}
+
+TEST(DelayCommand, PerCpuShowsEveryCpuAndNamesTheNoisiest) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --per-cpu");
+  const auto path = temp_json("delay-per-cpu");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--per-cpu", "--duration", "20ms", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("noisiest CPU: "), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("like for like with cyclictest -S"), std::string::npos) << result.out;
+  const auto document = read_json(path);
+  const int cpus = document["settings"]["threads"].get<int>();
+  ASSERT_GE(cpus, 1);
+  EXPECT_EQ(document["settings"]["per_cpu"], true);
+  EXPECT_EQ(document["settings"]["pin"], "per_cpu");
+  ASSERT_EQ(document["per_cpu"]["cpus"].size(), static_cast<std::size_t>(cpus));
+  for (const auto& cpu : document["per_cpu"]["cpus"]) {
+    EXPECT_TRUE(cpu["cpu"].is_number());
+    EXPECT_EQ(cpu["wakeup_latency_ns"]["count"], 20);
+    EXPECT_EQ(cpu["completion_ns"]["count"], 20);
+  }
+  EXPECT_TRUE(document["per_cpu"]["noisiest"]["cpu"].is_number());
+  EXPECT_TRUE(document["per_cpu"]["noisiest"]["rule"].is_string());
+  ASSERT_EQ(document["latency_histogram"]["columns"].size(), static_cast<std::size_t>(cpus));
+  EXPECT_EQ(document["latency_histogram"]["columns"][0]["name"].get<std::string>().rfind("cpu ", 0), 0u);
+  EXPECT_EQ(document["wakeup_latency_ns"]["count"], 20 * cpus);
+  EXPECT_EQ(document["completion_ns"]["count"], 20 * cpus);  // each CPU its own deadline
+}
+
+// A rate of 0.5 needs trials of 5 periods: the search runs in a moment.
+TEST(DelayCommand, FindPeriodRecordsTheSearch) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(120 * lockstep::testing::kSlowdown), "delay --find-period");
+  const auto path = temp_json("delay-find");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--find-period", "--miss-rate", "0.5",
+                                   "--period", "2ms", "--search-budget", "20s", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("find-period: "), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("rule: a period holds when the one-sided 95 % Clopper-Pearson"), std::string::npos);
+  EXPECT_NE(result.out.find("answer: "), std::string::npos) << result.out;
+  const auto document = read_json(path);
+  const auto& search = document["find_period"];
+  EXPECT_EQ(search["miss_rate"], 0.5);
+  EXPECT_EQ(search["trial_periods"], 5);
+  EXPECT_EQ(search["start_period_ns"], 2'000'000);
+  ASSERT_FALSE(search["trials"].empty());
+  EXPECT_EQ(search["trials"][0]["period_ns"], 2'000'000);
+  for (const auto& trial : search["trials"]) {
+    for (const char* key : {"period_ns", "periods", "misses", "miss_rate", "upper_bound", "holds"})
+      EXPECT_TRUE(trial.contains(key)) << key;
+    EXPECT_EQ(trial["holds"].get<bool>(), trial["upper_bound"].get<double>() <= 0.5);
+  }
+  for (const char* key : {"budget_cut", "stopped_because", "elapsed_s", "rule", "confidence"})
+    EXPECT_TRUE(search.contains(key)) << key;
+  if (search["found_period_ns"].is_number()) {
+    ASSERT_TRUE(search["confirm"].is_object());
+    EXPECT_EQ(search["confirm"]["period_ns"], search["found_period_ns"]);
+    EXPECT_EQ(document["settings"]["period_ns"], search["found_period_ns"]);
+    EXPECT_EQ(document["completion_ns"]["count"], search["confirm"]["periods"]);
+    EXPECT_NE(result.out.find("confirming run at "), std::string::npos);
+  } else {
+    EXPECT_TRUE(search["confirm"].is_null());
+  }
+}
+
+TEST(DelayCommand, HelpSaysWhichViewIsLikeForLike) {
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--help"});
+  ASSERT_EQ(result.exit_status, 0);
+  EXPECT_NE(result.out.find("the paper's model: 4 participants"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("like for like with cyclictest -t1"), std::string::npos);
+  EXPECT_NE(result.out.find("like for like with cyclictest -S"), std::string::npos);
+}
+
 const std::string kScript = std::string(LOCKSTEP_SOURCE_DIR) + "/bench/vs_cyclictest.sh";
 
 TEST(VsCyclictestScript, BadInputExitsTwoWithOneLine) {
   for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
-           {"--priority", "0"}, {"--period-us", "5"}, {"--cpu", "4095"}, {"--duration-s", "x"}, {"--bogus"}}) {
+           {"--priority", "0"}, {"--period-us", "5"}, {"--cpu", "4095"}, {"--duration-s", "x"}, {"--bogus"},
+           {"--rounds", "0"}, {"--rounds", "x"}, {"--dma-latency-us", "-1"}, {"--dma-latency-us"}}) {
     std::vector<std::string> argv{kScript, "--lockstep", LOCKSTEP_BINARY};
     argv.insert(argv.end(), args.begin(), args.end());
     const auto result = run_command(argv);
@@ -306,11 +608,15 @@ TEST(VsCyclictestScript, PrintsBothDistributions) {
   if (::geteuid() != 0) GTEST_SKIP() << "SCHED_FIFO and mlock need root here";
   lockstep::testing::watchdog guard(std::chrono::seconds(120), "vs_cyclictest.sh");
   const auto result = run_command({kScript, "--lockstep", LOCKSTEP_BINARY, "--duration-s", "1", "--cpu", "0",
-                                   "--period-us", "2000"});
+                                   "--period-us", "2000", "--rounds", "2"});
   ASSERT_EQ(result.exit_status, 0) << result.err;
-  for (const char* row : {"min", "median", "p99", "max", "samples"}) EXPECT_NE(result.out.find(row), std::string::npos) << row;
+  for (const char* row : {"min", "median", "p99", "max", "samples", "median ratio:", "p99 ratio:"})
+    EXPECT_NE(result.out.find(row), std::string::npos) << row;
   EXPECT_NE(result.out.find("cyclictest"), std::string::npos);
-  EXPECT_NE(result.out.find(" 500 "), std::string::npos) << result.out;  // 1 s / 2 ms periods, both tools
+  EXPECT_NE(result.out.find("2 rounds)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("held at 0 us by both"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("lockstep's idle: "), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("      500"), std::string::npos) << result.out;  // 1 s / 2 ms periods
 }
 
 }  // namespace

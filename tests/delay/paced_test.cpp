@@ -4,10 +4,13 @@
 // the totals. No latency is asserted.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
+#include <barrier>
 #include <chrono>
 #include <cstdint>
 #include <thread>
+#include <vector>
 
 #include "bench/probes/paced.hpp"
 #include "sync/team.hpp"
@@ -74,6 +77,196 @@ TEST(PacedRun, AFailedPinIsReportedAndTheRunCompletes) {
   ASSERT_EQ(run.errors.size(), 1u);
   EXPECT_EQ(run.errors[0], "worker 1: cannot pin");
   EXPECT_EQ(run.completion_ns.size(), 3u);
+}
+
+// --stop-above: a threshold of 0 ns makes the first wake-up late (an
+// absolute sleep returns after its target); the result keeps that one period.
+TEST(PacedRun, StopAboveKeepsPeriodsUpToTheLateWakeUp) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced stop");
+  probes::paced_settings settings;
+  settings.period_ns = 1'000'000;
+  settings.periods = 50;
+  settings.lead_ns = 1'000'000;
+  settings.stop_above_ns = 0;
+  settings.stop_margin_periods = 1;
+  lockstep::sync::std_thread_team team(2);
+  std::array<std::atomic<int>, 2> steps{};
+  std::barrier<> stage(2);  // a team that syncs: leaving at different periods would hang it
+  const auto run = probes::run_paced(
+      team, 2, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t) {
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  ASSERT_TRUE(run.stop.has_value());
+  EXPECT_EQ(run.stop->period, 0);
+  EXPECT_LT(run.stop->participant, 2u);
+  EXPECT_GT(run.stop->wakeup_ns, 0);
+  EXPECT_EQ(run.stop->since_start_ns, run.stop->wakeup_ns);  // period 0 starts at the start
+  EXPECT_FALSE(run.stop->previous_end_ns.has_value());
+  EXPECT_EQ(run.periods, 1);
+  EXPECT_EQ(run.wakeup_ns.size(), 2u);
+  EXPECT_EQ(run.completion_ns.size(), 1u);
+  // Both left after the same period: margin 1 past the late one.
+  EXPECT_EQ(steps[0].load(), steps[1].load());
+  EXPECT_LT(steps[0].load(), 50);
+}
+
+// A late wake-up made on purpose: participant 1 overruns period 4 by far, so
+// (at the latest) period 5 wakes late. The team syncs every period and
+// leaves together; the result ends at the late period, whichever it was.
+TEST(PacedRun, StopAboveEndsATeamTogether) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced stop team");
+  constexpr unsigned kParticipants = 3;
+  probes::paced_settings settings;
+  settings.period_ns = 2'000'000;
+  settings.periods = 40;
+  settings.lead_ns = 1'000'000;
+  settings.stop_above_ns = 100'000'000;  // 100 ms
+  settings.stop_margin_periods = 2;
+  lockstep::sync::std_thread_team team(kParticipants);
+  std::array<std::atomic<int>, kParticipants> steps{};
+  std::barrier<> stage(kParticipants);
+  const auto run = probes::run_paced(
+      team, kParticipants, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t period) {
+        if (id == 1 && period == 4) std::this_thread::sleep_for(std::chrono::milliseconds(250));
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  ASSERT_TRUE(run.stop.has_value());
+  EXPECT_LE(run.stop->period, 5);
+  EXPECT_GT(run.stop->wakeup_ns, 100'000'000);
+  EXPECT_EQ(run.periods, run.stop->period + 1);
+  EXPECT_EQ(run.wakeup_ns.size(), static_cast<std::size_t>(run.periods) * kParticipants);
+  EXPECT_EQ(run.end_ns.size(), run.wakeup_ns.size());
+  EXPECT_EQ(steps[0].load(), steps[1].load());
+  EXPECT_EQ(steps[1].load(), steps[2].load());
+  EXPECT_EQ(steps[0].load(), run.stop->period + 2);  // the margin: one more period, together
+  if (run.stop->period > 0) {
+    ASSERT_TRUE(run.stop->previous_end_ns.has_value());
+    EXPECT_GE(*run.stop->previous_end_ns, 0);
+  }
+}
+
+// Stop after misses: a team whose step overruns from period 3 on ends soon
+// after the second miss, together, and keeps every period it ran.
+TEST(PacedRun, StopAfterMissesEndsATeamTogether) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced stop after misses");
+  probes::paced_settings settings;
+  settings.period_ns = 1'000'000;
+  settings.periods = 200;
+  settings.lead_ns = 1'000'000;
+  settings.stop_after_misses = 2;
+  settings.stop_margin_periods = 1;
+  lockstep::sync::std_thread_team team(2);
+  std::array<std::atomic<int>, 2> steps{};
+  std::barrier<> stage(2);
+  const auto run = probes::run_paced(
+      team, 2, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t period) {
+        if (period >= 3) std::this_thread::sleep_for(std::chrono::milliseconds(2));
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  EXPECT_TRUE(run.stopped_after_misses);
+  EXPECT_FALSE(run.stop.has_value());
+  EXPECT_LT(run.periods, 200);
+  EXPECT_GE(run.deadline_misses, 2u);
+  EXPECT_EQ(steps[0].load(), steps[1].load());
+  EXPECT_EQ(steps[0].load(), run.periods);  // every period run is kept
+  EXPECT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.periods));
+}
+
+TEST(PacedRun, WithoutAStopEveryPeriodIsKept) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced no stop");
+  probes::paced_settings settings;
+  settings.period_ns = 1'000'000;
+  settings.periods = 5;
+  settings.lead_ns = 1'000'000;
+  settings.stop_above_ns = 3'600'000'000'000;  // an hour
+  lockstep::sync::std_thread_team team(1);
+  const auto run = probes::run_paced(team, 1, settings, [](unsigned) {}, [](unsigned, std::uint64_t) {});
+  EXPECT_FALSE(run.stop.has_value());
+  EXPECT_EQ(run.periods, 5);
+  ASSERT_EQ(run.cpus.size(), 1u);
+}
+
+// Independent participants (per CPU): each period's completion is each
+// participant's own, so one that overruns misses alone.
+TEST(PacedRun, IndependentParticipantsMissAlone) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced independent");
+  probes::paced_settings settings;
+  settings.period_ns = 100'000;
+  settings.periods = 4;
+  settings.lead_ns = 1'000'000;
+  settings.independent = true;
+  lockstep::sync::std_thread_team team(2);
+  const auto run = probes::run_paced(team, 2, settings, [](unsigned) {}, [](unsigned id, std::uint64_t) {
+    if (id == 1) std::this_thread::sleep_for(std::chrono::microseconds(500));
+  });
+  ASSERT_EQ(run.completion_ns.size(), 8u);
+  const auto slow = probes::participant_samples(run.completion_ns, 2, 1);
+  ASSERT_EQ(slow.size(), 4u);
+  for (double completion : slow) EXPECT_GT(completion, 100'000.0);
+  EXPECT_GE(run.deadline_misses, 4u);
+  EXPECT_EQ(probes::participant_samples(run.wakeup_ns, 2, 0).size(), 4u);
+}
+
+TEST(PacedRun, ParticipantSamplesTakesEveryNth) {
+  const std::vector<double> samples{0, 1, 2, 10, 11, 12};
+  EXPECT_EQ(probes::participant_samples(samples, 3, 1), (std::vector<double>{1, 11}));
+  EXPECT_EQ(probes::participant_samples(samples, 3, 2), (std::vector<double>{2, 12}));
+}
+
+// The per-CPU probe: one participant per CPU given, each pinned there.
+TEST(PacedStep, PerCpuRunsOneParticipantPerCpu) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced per cpu");
+  const unsigned cpu = lockstep::platform::current_cpu().value_or(0);
+  std::vector<unsigned> cpus{cpu};
+  probes::paced_step_settings settings;
+  settings.sync = "std_barrier";
+  settings.layout = "padded64";
+  settings.pacing.period_ns = 1'000'000;
+  settings.pacing.periods = 5;
+  settings.pacing.lead_ns = 1'000'000;
+  const auto run = probes::run_paced_per_cpu(settings, cpus);
+  EXPECT_EQ(run.participants, 1u);
+  EXPECT_EQ(run.periods, 5);
+  ASSERT_EQ(run.cpus.size(), 1u);
+  ASSERT_TRUE(run.cpus[0].has_value());
+  if (run.errors.empty()) {
+    EXPECT_EQ(*run.cpus[0], cpu);
+  }
+  EXPECT_EQ(run.completion_ns.size(), 5u);
+}
+
+TEST(PacedStep, PerCpuRefusesATeamOfItsOwn) {
+  EXPECT_NE(probes::paced_per_cpu_problem("omp_barrier", "padded64"), "");
+  EXPECT_EQ(probes::paced_per_cpu_problem("futex_spin", "padded64"), "");
+  EXPECT_NE(probes::paced_per_cpu_problem("nope", "padded64").find("unknown primitive"), std::string::npos);
+}
+
+// The team's stop on a real step: the dataflow step (seqlock, 4
+// participants) leaves together as the barrier step does (no hang).
+TEST(PacedStep, StopAboveEndsTheComposedStep) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "paced step stop");
+  for (const char* sync : {"std_barrier", "seqlock"}) {
+    probes::paced_step_settings settings;
+    settings.sync = sync;
+    settings.layout = "per_thread";
+    settings.threads = 4;
+    settings.pacing.period_ns = 1'000'000;
+    settings.pacing.periods = 30;
+    settings.pacing.lead_ns = 1'000'000;
+    settings.pacing.stop_above_ns = 0;  // the first wake-up is late
+    const lockstep::platform::topology machine = lockstep::platform::topology::this_machine();
+    const auto plan = lockstep::platform::plan_placement(machine, lockstep::platform::placement::none, 4);
+    const auto run = probes::run_paced_step(settings, plan);
+    ASSERT_TRUE(run.stop.has_value()) << sync;
+    EXPECT_EQ(run.periods, 1) << sync;
+    EXPECT_EQ(run.wakeup_ns.size(), 4u) << sync;
+  }
 }
 
 TEST(Figure5Table, TotalsAreTheSumsOfTheRows) {
