@@ -616,7 +616,7 @@ void run_delay(const delay_options& options, int& result) {
   }
   if (!options.out.empty()) {
     nlohmann::json document = bench::result_document("delay", machine);
-    bench::merge_into_result(document, {{"dma_latency", idle.state()},
+    bench::merge_into_result(document, bench::context_map{{"dma_latency", idle.state()},
                                         {"dma_latency_in_force_us",
                                          idle.in_force_us ? std::to_string(*idle.in_force_us) : "unavailable"},
                                         {"cpuidle_driver", idle.driver},
