@@ -23,6 +23,8 @@
 #include "bench/harness/barrier_entries.hpp"
 #include "bench/cli/command.hpp"
 #include "bench/harness/machine_context.hpp"
+#include "bench/harness/pace.hpp"
+#include "bench/harness/paired_blocks.hpp"
 #include "bench/harness/run_book.hpp"
 #include "bench/harness/reporters.hpp"
 #include "bench/harness/result_file.hpp"
@@ -50,7 +52,10 @@ struct run_options {
   std::string out;
   bool quick = false;
   bool no_accounting = false;
-  bool interleave = false;
+  bool no_interleave = false;
+  bool interleave = false;  // the default now; kept so that older command lines still run
+  int pairs = -1;           // -1: the mode's default
+  double noise_pct = 100.0 * bench::kDefaultNoise;
   std::vector<std::string> benchmark_flags;
 };
 
@@ -59,6 +64,14 @@ constexpr int kDefaultRepetitions = 5;
 constexpr int kQuickRepetitions = 3;
 constexpr const char* kDefaultMinTime = "40ms";
 constexpr const char* kQuickMinTime = "5ms";
+// Paired comparisons (paired_blocks.hpp): pairs per comparison and the timed
+// block. Blocks of about 1 ms (0.5 ms quick) put both sides of a pair within
+// a few milliseconds of each other; the development VM keeps a pace for
+// seconds at least, so a pair straddles a change rarely (the trace says when).
+constexpr int kDefaultPairs = 10;
+constexpr int kQuickPairs = 6;
+constexpr std::int64_t kDefaultBlockNs = 1'000'000;
+constexpr std::int64_t kQuickBlockNs = 500'000;
 
 // The thread counts: the paper's four and this machine's core count by
 // default, each a count the model can split (the 2-mass model has four
@@ -179,6 +192,10 @@ int execute(const run_options& options) {
   // What one clock reading costs here, taken off every timed sync span
   // (rk4_benchmarks.cpp) and stated in the context.
   book.clock_read_ns = platform::clock_read_cost_ns();
+  // The pace trace (pace.hpp): a reading around every call of an entry and
+  // every pair of blocks.
+  bench::pace_probe pace(machine);
+  harness.pace = &pace;
 
   // Google Benchmark's flags: ours first, the user's after (the last wins).
   std::vector<std::string> arguments{"lockstep run",
@@ -186,7 +203,8 @@ int execute(const run_options& options) {
                                      "--benchmark_out_format=json",
                                      fmt::format("--benchmark_repetitions={}", repetitions),
                                      fmt::format("--benchmark_min_time={}", static_cast<double>(min_time_ns) / 1e9)};
-  if (options.interleave) arguments.emplace_back("--benchmark_enable_random_interleaving=true");
+  const bool interleave = !options.no_interleave;
+  if (interleave) arguments.emplace_back("--benchmark_enable_random_interleaving=true");
   arguments.insert(arguments.end(), options.benchmark_flags.begin(), options.benchmark_flags.end());
   std::vector<char*> argv;
   for (auto& argument : arguments) argv.push_back(argument.data());
@@ -205,10 +223,12 @@ int execute(const run_options& options) {
       if (!info.counts_futex_waits) hidden += (hidden.empty() ? "" : ",") + std::string(info.name);
     benchmark::AddCustomContext("futex_waits_unavailable", hidden.empty() ? "none" : hidden);
   }
-  benchmark::AddCustomContext("lockstep_order", options.interleave
-                                                    ? "random interleaving: the repetitions of every entry "
-                                                      "shuffled over the whole run"
-                                                    : "registration order: every entry's repetitions back to back");
+  benchmark::AddCustomContext("lockstep_order", interleave
+                                                    ? "random interleaving (the default): the repetitions of every "
+                                                      "entry shuffled over the whole run"
+                                                    : "registration order (--no-interleave): every entry's "
+                                                      "repetitions back to back");
+  benchmark::AddCustomContext("noise_band", fmt::format("{:g}", options.noise_pct / 100.0));
   benchmark::AddCustomContext("clock_read_ns", fmt::format("{:.1f}", book.clock_read_ns));
   benchmark::AddCustomContext(
       "lockstep_timing",
@@ -229,6 +249,27 @@ int execute(const run_options& options) {
   benchmark::Shutdown();
   book.derive_ratios();
 
+  // The paired comparisons, after the matrix: the plan needs its medians.
+  bench::pairing_settings pairing;
+  pairing.pairs = static_cast<unsigned>(options.pairs >= 0 ? options.pairs : options.quick ? kQuickPairs : kDefaultPairs);
+  pairing.block_ns = options.quick ? kQuickBlockNs : kDefaultBlockNs;
+  pairing.noise = options.noise_pct / 100.0;
+  const std::vector<bench::comparison> plan = bench::plan_comparisons(book);
+  if (pairing.pairs > 0 && !plan.empty()) {
+    fmt::print(stderr, "lockstep run: {} paired comparisons, {} pairs of blocks of about {} each\n", plan.size(),
+               pairing.pairs, bench::format_ns(static_cast<double>(pairing.block_ns)));
+    std::fflush(stderr);
+  }
+  bench::measure_pairs(harness, plan, pairing, [](std::size_t done, std::size_t total) {
+    if (done % 25 == 0 || done == total) {
+      fmt::print(stderr, "  paired {}/{}\n", done, total);
+      std::fflush(stderr);
+    }
+  });
+  pace.take();  // the trace's last reading
+  const bench::pace_modes modes = bench::find_modes(pace.trace());
+  bench::assign_pace_modes(book, modes);
+
   // The in-run context keys, then the rename.
   nlohmann::json document;
   {
@@ -242,6 +283,7 @@ int execute(const run_options& options) {
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
   bench::derive_ratios(document, {book.c2c_one_way_ns(), book.serial_step_ns()});
+  bench::write_pace_and_pairs(document, book, &pace, modes);
   // The machine's fingerprint from the one producer (replacing Google
   // Benchmark's host_name and num_cpus with the same figures), then the
   // in-run keys.
@@ -249,6 +291,7 @@ int execute(const run_options& options) {
   bench::context_map in_run;
   in_run["c2c_one_way_ns"] = book.c2c_one_way_ns() ? fmt::format("{:.1f}", *book.c2c_one_way_ns()) : "unavailable";
   in_run["serial_step_ns"] = book.serial_step_ns() ? fmt::format("{:.2f}", *book.serial_step_ns()) : "unavailable";
+  in_run["pace_summary"] = modes.summary();
   in_run["oversubscribed_note"] =
       bench::oversubscribed_note(book, static_cast<unsigned>(machine.affinity().size()));
   std::string not_applicable;
@@ -290,10 +333,20 @@ void add_run(CLI::App& app, int& result) {
                               kDefaultMinTime, kQuickMinTime));
   add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)");
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
-  run->add_flag("--interleave", options->interleave,
-                "Shuffle the repetitions of all entries over the whole run (Google Benchmark's random "
-                "interleaving): a machine that drifts during the run widens every entry's spread instead of "
-                "shifting the entries that ran at the wrong moment; use it for runs you will compare");
+  run->add_flag("--no-interleave", options->no_interleave,
+                "Run every entry's repetitions back to back. The default shuffles the repetitions of all entries "
+                "over the whole run (Google Benchmark's random interleaving), so that a machine that changes pace "
+                "widens every entry's spread instead of shifting the entries that ran at the wrong moment");
+  run->add_flag("--interleave", options->interleave, "The default (kept for older command lines)");
+  run->add_option("--pairs", options->pairs,
+                  fmt::format("Pairs of alternating blocks per paired comparison (the summary's ratios with "
+                              "their intervals; default {}, --quick {}; 0: none)",
+                              kDefaultPairs, kQuickPairs))
+      ->check(CLI::Range(0, 1000));
+  run->add_option("--noise", options->noise_pct,
+                  "The noise band in percent: a paired ratio whose interval reaches within it of 1 is "
+                  "\"within noise\" (default 5)")
+      ->check(CLI::Range(0.0, 100.0));
   run->add_flag("--no-accounting", options->no_accounting,
                 "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");
   run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");

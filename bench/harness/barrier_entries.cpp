@@ -62,6 +62,15 @@ std::vector<std::string> register_barrier_benchmarks(const run_selection& select
             ->UseManualTime()
             ->Unit(benchmark::kNanosecond);
         registered.push_back(spec.name());
+        // The entry's side of a paired comparison (paired_blocks.hpp).
+        using episode_barrier = sync::as_barrier_t<Primitive>;
+        harness.block_runners[spec.name()] =
+            block_runner_of<sync::team_of_t<episode_barrier>, episode_barrier>(
+                harness, pin, threads,
+                [](episode_barrier& barrier, sync::participant& self, std::uint64_t count) {
+                  for (std::uint64_t episode = 0; episode < count; ++episode) barrier.arrive_and_wait(self);
+                },
+                threads);
       }
     }
   });

@@ -250,6 +250,14 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
           if constexpr (kernels::applicable<Sync, Layout>().applicable) {
             register_rk4_entry<Sync, Layout>(spec, harness, harness.settings.accounting);
             registered.push_back(spec.name());
+            // The entry's side of a paired comparison: the bare step, as the
+            // matrix builds it (paired_blocks.hpp).
+            harness.block_runners[spec.name()] =
+                block_runner_of<sync::team_of_t<Sync>,
+                                kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, kernels::sync_timing::off>>(
+                    harness, pin, threads,
+                    [](auto& step, sync::participant& self, std::uint64_t count) { step.run(self, count); },
+                    kernels::two_mass_model{}, kBenchmarkStepSeconds, threads);
           }
         }
       }

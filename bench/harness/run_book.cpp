@@ -100,9 +100,7 @@ void run_book::derive_ratios() {
 std::uint64_t units_for_batch(double unit_ns, const run_settings& settings) {
   if (!(unit_ns > 0.0)) return 1;
   const double units = std::floor(static_cast<double>(settings.target_batch_ns) / unit_ns);
-  // At least one unit; at most a million, so that a batch of a broken clock
-  // reading (0 ns) cannot become endless.
-  return static_cast<std::uint64_t>(std::clamp(units, 1.0, 1'000'000.0));
+  return static_cast<std::uint64_t>(std::clamp(units, 1.0, static_cast<double>(kMaxUnitsPerBatch)));
 }
 
 std::vector<std::string> split_list(const std::string& text) {

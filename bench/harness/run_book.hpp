@@ -40,6 +40,8 @@
 #include <string>
 #include <vector>
 
+#include "bench/harness/pace.hpp"
+#include "bench/harness/paired_ratio.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"
 
@@ -121,6 +123,12 @@ class run_book {
   void record(captured_entry entry);
   const std::vector<captured_entry>& entries() const noexcept { return entries_; }
   const captured_entry* find(const std::string& name) const;
+  // Visits every repetition's counters (to add what is known after the run).
+  template <class Visit>
+  void for_each_repetition(Visit&& visit) {
+    for (captured_entry& entry : entries_)
+      for (auto& repetition : entry.repetitions) visit(repetition);
+  }
 
   // In-run calibrations: medians of c2c/pin:compact/threads:2 (one_way_ns)
   // and rk4/serial (ns_per_step), once they ran.
@@ -140,6 +148,12 @@ class run_book {
   double clock_read_ns = 0.0;
   std::vector<skipped_combination> not_applicable;
   std::vector<std::string> notes;  // one line each, for the summary and the context
+  // The paired comparisons measured after the matrix (paired_blocks.hpp), in plan order.
+  std::vector<paired_result> pairs;
+  double noise = kDefaultNoise;    // the band their verdicts use
+  // The pace modes of the run (pace.hpp), once the trace is analysed; a
+  // repetition's "pace_mode" counter holds its index (-1: it straddles a change).
+  std::optional<pace_modes> pace;
 
  private:
   std::vector<captured_entry> entries_;
@@ -252,7 +266,10 @@ class batch_gate {
   std::barrier<batch_completion> barrier_;
 };
 
-// How many units a batch should hold, from a probe's time per unit.
+// How many units a batch should hold, from a probe's time per unit: at
+// least one, at most kMaxUnitsPerBatch (a broken clock reading of 0 ns must
+// not make a batch endless).
+inline constexpr std::uint64_t kMaxUnitsPerBatch = 1'000'000;
 std::uint64_t units_for_batch(double unit_ns, const run_settings& settings);
 
 // Splits "a,b,c" into its items (empty items dropped).

@@ -2,7 +2,7 @@
 #include "bench/harness/summary.hpp"
 
 #include "bench/harness/derived_figures.hpp"
-#include "layouts/registry.hpp"
+#include "bench/harness/paired_blocks.hpp"
 
 #include <fmt/core.h>
 
@@ -50,103 +50,122 @@ std::vector<measured> measured_of(const run_book& book, const std::string& kind,
   return found;
 }
 
-// From the layout registry: a shared layout whose writers share lines (the
-// false-sharing case), and a shared layout that gives each writer its own
-// aligned block (the padded cases).
-bool writers_share_lines(const std::string& layout) {
-  const layouts::layout_info* info = layouts::find_layout(layout);
-  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation == 0;
-}
-bool writers_isolated(const std::string& layout) {
-  const layouts::layout_info* info = layouts::find_layout(layout);
-  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation > 0;
+// The pace modes an entry's repetitions ran in: mode -> their values of `counter`.
+std::map<int, std::vector<double>> by_mode(const captured_entry& entry, const std::string& counter) {
+  std::map<int, std::vector<double>> modes;
+  for (const auto& repetition : entry.repetitions) {
+    const auto mode = repetition.find("pace_mode");
+    const auto value = repetition.find(counter);
+    if (mode != repetition.end() && value != repetition.end())
+      modes[static_cast<int>(mode->second)].push_back(value->second);
+  }
+  return modes;
 }
 
-void false_sharing(std::string& out, const std::vector<measured>& steps) {
-  // (sync, pin, threads) -> layout -> median
-  std::map<std::tuple<std::string, std::string, std::string>, std::map<std::string, double>> groups;
-  for (const auto& step : steps)
-    groups[{step.entry->field("sync"), step.entry->field("pin"), step.entry->field("threads")}]
-          [step.entry->field("layout")] = step.median;
-  out += "\nBest and worst layout per primitive (false-sharing penalty = a layout whose writers share lines / the "
-         "best one that isolates them):\n";
-  for (const auto& [key, layouts] : groups) {
-    const auto& [sync, pin, threads] = key;
-    const auto best = std::min_element(layouts.begin(), layouts.end(),
-                                       [](const auto& a, const auto& b) { return a.second < b.second; });
-    const auto worst = std::max_element(layouts.begin(), layouts.end(),
-                                        [](const auto& a, const auto& b) { return a.second < b.second; });
-    std::optional<std::pair<std::string, double>> best_isolated;
-    std::optional<std::pair<std::string, double>> sharing;
-    for (const auto& [layout, median] : layouts) {
-      if (writers_isolated(layout) && (!best_isolated || median < best_isolated->second)) best_isolated = {layout, median};
-      if (writers_share_lines(layout) && !sharing) sharing = {layout, median};
+// "  [oversubscribed] [straddles a pace change] [short batches]"
+std::string entry_flags(const captured_entry& entry) {
+  std::string flags;
+  if (entry.median("oversubscribed").value_or(0.0) > 0.5) flags += "  [oversubscribed]";
+  const auto modes = by_mode(entry, entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  if (modes.count(-1) > 0) flags += "  [straddles a pace change]";
+  if (entry.median("short_batches").value_or(0.0) > 0.5) flags += "  [short batches: the harness barrier weighs in]";
+  return flags;
+}
+
+double middle_of(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t middle = values.size() / 2;
+  return values.size() % 2 == 1 ? values[middle] : (values[middle - 1] + values[middle]) / 2.0;
+}
+
+// Entries whose repetitions ran in more than one pace mode: their median in each.
+void per_mode_medians(std::string& out, const run_book& book) {
+  if (!book.pace || book.pace->modes.size() < 2) return;
+  std::string lines;
+  std::size_t count = 0;
+  for (const auto& entry : book.entries()) {
+    if (!entry.error.empty()) continue;
+    const std::string kind = entry.field("kind");
+    if (kind != "rk4" && kind != "barrier") continue;
+    const std::string counter = kind == "barrier" ? "ns_per_episode" : "ns_per_step";
+    const auto modes = by_mode(entry, counter);
+    std::size_t moded = 0;
+    for (const auto& [mode, values] : modes) moded += mode >= 0 ? 1 : 0;
+    if (moded < 2) continue;
+    ++count;
+    std::string cells;
+    for (const auto& [mode, values] : modes) {
+      if (mode < 0) continue;
+      const pace_mode& pace = book.pace->modes[static_cast<std::size_t>(mode)];
+      cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", book.pace->has_c2c ? "c2c" : "serial",
+                           format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(middle_of(values)),
+                           values.size());
     }
-    std::string penalty = "false-sharing penalty: -";
-    if (sharing && best_isolated)
-      penalty = fmt::format("{}/{}: {:.2f}x", sharing->first, best_isolated->first,
-                            sharing->second / best_isolated->second);
-    out += fmt::format("  {:<20} pin:{:<8} threads:{:<3} best {} {}, worst {} {}, {}\n", sync, pin, threads,
-                       best->first, format_ns(best->second), worst->first, format_ns(worst->second), penalty);
+    lines += fmt::format("  {:<62} {}\n", entry.name, cells);
   }
+  if (count == 0) return;
+  out += fmt::format("\nMedian per pace mode ({} entries ran in more than one mode; repetitions that straddle a "
+                     "change left out):\n",
+                     count);
+  out += lines;
 }
 
-void migration(std::string& out, const std::vector<measured>& steps) {
-  // (sync, layout, threads) -> pin -> median
-  std::map<std::tuple<std::string, std::string, std::string>, std::map<std::string, double>> groups;
-  for (const auto& step : steps)
-    groups[{step.entry->field("sync"), step.entry->field("layout"), step.entry->field("threads")}]
-          [step.entry->field("pin")] = step.median;
-  // Per (sync, threads): the layout that is best pinned (compact).
-  std::map<std::pair<std::string, std::string>, std::pair<std::string, double>> best_pinned;
-  for (const auto& [key, pins] : groups) {
-    const auto& [sync, layout, threads] = key;
-    const auto compact = pins.find("compact");
-    if (compact == pins.end() || pins.find("none") == pins.end()) continue;
-    auto& best = best_pinned[{sync, threads}];
-    if (best.first.empty() || compact->second < best.second) best = {layout, compact->second};
+// One comparison's line: the paired ratio with its interval and verdict, or,
+// when it was not measured as a pair, the ratio of the two medians (marked).
+std::string comparison_figure(const run_book& book, const comparison& what) {
+  const auto pair = std::find_if(book.pairs.begin(), book.pairs.end(), [&](const paired_result& measured_pair) {
+    return measured_pair.what.a == what.a && measured_pair.what.b == what.b;
+  });
+  if (pair != book.pairs.end() && pair->failure.empty() && !pair->ratios.empty()) {
+    std::size_t straddling = 0;
+    for (int mode : pair->modes) straddling += mode < 0 ? 1 : 0;
+    return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{})", pair->estimate.median, pair->estimate.low,
+                       pair->estimate.high, to_string(pair->verdict), pair->ratios.size(),
+                       straddling > 0 ? fmt::format(", {} straddling a pace change", straddling) : "");
   }
-  out += "\nPinned against unpinned (migration penalty = pin:none / pin:compact, each primitive's best pinned "
-         "layout):\n";
-  if (best_pinned.empty()) out += "  (needs both pin:none and pin:compact in the run)\n";
-  for (const auto& [key, best] : best_pinned) {
-    const auto& pins = groups[{key.first, best.first, key.second}];
-    const double none = pins.at("none");
-    out += fmt::format("  {:<20} threads:{:<3} layout:{:<10} none {}, compact {}, none/compact {:.2f}x\n", key.first,
-                       key.second, best.first, format_ns(none), format_ns(best.second), none / best.second);
-  }
+  const captured_entry* a = book.find(what.a);
+  const captured_entry* b = book.find(what.b);
+  const char* counter = what.a.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
+  const auto median_a = a != nullptr ? a->median(counter) : std::nullopt;
+  const auto median_b = b != nullptr ? b->median(counter) : std::nullopt;
+  std::string why = pair != book.pairs.end() ? pair->failure : std::string("not measured as a pair");
+  if (!median_a || !median_b || *median_b <= 0.0) return why;
+  return fmt::format("{:.2f}x (medians, unpaired: no interval; {})", *median_a / *median_b, why);
 }
 
-// Each primitive against the best other primitive at each placement and
-// thread count: both on their best layout (the lowest median over layouts),
-// ratio = this primitive / the best other (below 1: it leads the group).
-void against_best_other(std::string& out, const std::vector<measured>& entries, const char* what, const char* unit) {
-  // (pin, threads) -> sync -> its best entry
-  std::map<std::pair<std::string, std::string>, std::map<std::string, measured>> groups;
-  for (const auto& item : entries) {
-    auto& best = groups[{item.entry->field("pin"), item.entry->field("threads")}];
-    const auto found = best.find(item.entry->field("sync"));
-    if (found == best.end() || item.median < found->second.median) best.insert_or_assign(item.entry->field("sync"), item);
-  }
-  out += fmt::format("\nEach primitive against the best other primitive ({}; best layout each; ratio < 1: it leads):\n",
-                     what);
-  bool any = false;
-  for (const auto& [key, best] : groups) {
-    if (best.size() < 2) continue;
-    any = true;
-    std::vector<measured> ranked;
-    for (const auto& [sync, item] : best) ranked.push_back(item);
-    std::sort(ranked.begin(), ranked.end(), [](const measured& a, const measured& b) { return a.median < b.median; });
-    out += fmt::format("  pin:{} threads:{}\n", key.first, key.second);
-    for (std::size_t i = 0; i < ranked.size(); ++i) {
-      const measured& other = ranked[i == 0 ? 1 : 0];
-      const std::string layout = ranked[i].entry->field("layout");
-      out += fmt::format("    {:<20} {:>11}{} {:<12} vs best other {:<20} {:>6.2f}x\n", ranked[i].entry->field("sync"),
-                         format_ns(ranked[i].median), unit, layout.empty() ? "" : "(" + layout + ")",
-                         other.entry->field("sync"), ranked[i].median / other.median);
+std::string median_of(const run_book& book, const std::string& name) {
+  const captured_entry* entry = book.find(name);
+  const char* counter = name.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
+  const auto median = entry != nullptr ? entry->median(counter) : std::nullopt;
+  return median ? format_ns(*median) : "-";
+}
+
+void comparisons_of(std::string& out, const run_book& book, const std::vector<comparison>& plan,
+                    comparison_kind kind) {
+  std::string last_group;
+  for (const comparison& what : plan) {
+    if (what.kind != kind) continue;
+    const captured_entry* a = book.find(what.a);
+    const captured_entry* b = book.find(what.b);
+    if (a == nullptr || b == nullptr) continue;
+    switch (kind) {
+      case comparison_kind::false_sharing:
+        out += fmt::format("  {:<44} {}/{} ({} / {}): {}\n", what.group, a->field("layout"), b->field("layout"),
+                           median_of(book, what.a), median_of(book, what.b), comparison_figure(book, what));
+        break;
+      case comparison_kind::migration:
+        out += fmt::format("  {:<44} none {} / compact {}: {}\n", what.group, median_of(book, what.a),
+                           median_of(book, what.b), comparison_figure(book, what));
+        break;
+      case comparison_kind::against_best_other:
+        if (what.group != last_group) out += "  " + what.group + "\n";
+        last_group = what.group;
+        out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {}\n", a->field("sync"), median_of(book, what.a),
+                           a->field("layout").empty() ? "" : "(" + a->field("layout") + ")", b->field("sync"),
+                           comparison_figure(book, what));
+        break;
     }
   }
-  if (!any) out += "  (needs two primitives at one placement and thread count)\n";
 }
 
 }  // namespace
@@ -184,6 +203,10 @@ std::string render_summary(const run_book& book, const std::string& result_path)
   out += book.serial_step_ns() ? ", serial RK4 step " + format_ns(*book.serial_step_ns()) : ", serial step unavailable";
   out += fmt::format(", clock reading {} (taken off each timed sync)", format_ns(book.clock_read_ns));
   out += "\n";
+  if (book.pace) {
+    out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n",
+                       book.pace->mode_of.size(), book.pace->summary());
+  }
 
   std::vector<measured> steps = measured_of(book, "rk4", "ns_per_step");
   steps.erase(std::remove_if(steps.begin(), steps.end(),
@@ -201,12 +224,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
       out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}{}\n", ++rank, format_ns(step.median),
                          spread_of(entry, "ns_per_step"), optional_number(entry, "vs_serial", "{:.2f}"),
                          sync_stage ? format_ns(*sync_stage) : "-", optional_number(entry, "vs_c2c", "{:.2f}"),
-                         entry.name, entry.median("oversubscribed").value_or(0.0) > 0.5 ? "  [oversubscribed]" : "");
+                         entry.name, entry_flags(entry));
     }
-    false_sharing(out, steps);
-    migration(out, steps);
-    against_best_other(out, steps, "RK4 step time", "/step");
-
     // The best stage sync at 2 threads pinned, against the one-way
     // core-to-core latency: the latency measured in the same call
     // (vs_c2c_paired) where the entry has it, and the run's calibration
@@ -245,9 +264,24 @@ std::string render_summary(const run_book& book, const std::string& result_path)
                          // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
                          optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
                          optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
-                         episode.entry->median("oversubscribed").value_or(0.0) > 0.5 ? "  [oversubscribed]" : "");
-    against_best_other(out, episodes, "bare episodes", "/episode");
+                         entry_flags(*episode.entry));
   }
+
+  // Every ratio the summary prints, paired (paired_blocks.hpp).
+  const std::vector<comparison> plan = plan_comparisons(book);
+  out += fmt::format(
+      "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), the median ratio "
+      "over pairs with its {:.0f} % bootstrap interval; \"penalty\" / \"gain\" only when the whole interval lies "
+      "beyond the noise band of {:.0f} %, else \"within noise\".\n",
+      100.0 * kConfidence, 100.0 * book.noise);
+  out += "\nFalse-sharing penalty per primitive (a layout whose writers share lines / the best one that isolates "
+         "them):\n";
+  comparisons_of(out, book, plan, comparison_kind::false_sharing);
+  out += "\nMigration penalty (pin:none / pin:compact, each primitive's best pinned layout):\n";
+  comparisons_of(out, book, plan, comparison_kind::migration);
+  out += "\nEach primitive against the best other primitive (best layout each; ratio < 1 and \"gain\": it leads):\n";
+  comparisons_of(out, book, plan, comparison_kind::against_best_other);
+
 
   // The harness's own cost: the overhead pair.
   std::optional<double> with_accounting;
@@ -277,6 +311,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
                        paired_shown ? "  " : "\nHarness overhead (" + overhead_name + "), ",
                        format_ns(*with_accounting), format_ns(*without_accounting),
                        *with_accounting / *without_accounting);
+
+  per_mode_medians(out, book);
 
   std::vector<std::string> oversubscribed;
   for (const auto& entry : book.entries())

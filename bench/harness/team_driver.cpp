@@ -1,6 +1,8 @@
 // Stall reasons and accounting counters (harness_team.hpp).
 #include "bench/harness/team_driver.hpp"
 
+#include "bench/harness/pace.hpp"
+
 #include <fmt/core.h>
 
 #include <algorithm>
@@ -35,6 +37,30 @@ std::string stall_reason(const call_result& result, const char* unit, bool pure_
     why += fmt::format(": {} threads on {} CPUs", plan.threads, cpus);
   }
   return why;
+}
+
+// Two calls of entries rarely lie more than this apart (the benchmark thread
+// only reports and registers between them), so the reading taken after one
+// call serves as the reading before the next.
+constexpr std::int64_t kFreshReadingNs = 50'000'000;
+
+long pace_reading_before(harness_state& harness) {
+  return harness.pace == nullptr ? -1 : static_cast<long>(harness.pace->latest_or_take(kFreshReadingNs));
+}
+
+long pace_reading_after(harness_state& harness) {
+  return harness.pace == nullptr ? -1 : static_cast<long>(harness.pace->take());
+}
+
+void set_pace_counters(benchmark::State& state, const harness_state& harness, long before, long after) {
+  if (harness.pace == nullptr || before < 0 || after < 0) return;
+  const auto& trace = harness.pace->trace();
+  const pace_reading& first = trace.at(static_cast<std::size_t>(before));
+  const pace_reading& last = trace.at(static_cast<std::size_t>(after));
+  if (first.c2c_ns && last.c2c_ns) state.counters["pace_c2c_ns"] = (*first.c2c_ns + *last.c2c_ns) / 2.0;
+  state.counters["pace_serial_ns"] = (first.serial_ns + last.serial_ns) / 2.0;
+  state.counters[std::string(kPaceBeforeCounter)] = static_cast<double>(before);
+  state.counters[std::string(kPaceAfterCounter)] = static_cast<double>(after);
 }
 
 double median_unit_ns(const batch_record& record) {

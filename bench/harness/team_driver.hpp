@@ -12,9 +12,11 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <memory>
 #include <set>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "bench/harness/run_book.hpp"
@@ -126,6 +128,46 @@ class affinity_guard {
   bool saved_ok_ = false;
 };
 
+// One side of a paired comparison (paired_blocks.hpp): an entry's
+// combination, built once, ready to run short blocks on demand. A block is
+// one call (run_call): a warm-up batch and one timed batch of `units` units,
+// without accounting or instrumentation (a pair compares the bare costs).
+class block_runner {
+ public:
+  virtual ~block_runner() = default;
+  // The timed batch's time per unit, or empty when the block stalled, ran
+  // out of its budget, or the team could not be placed.
+  virtual std::optional<double> run_block(std::uint64_t units) = 0;
+};
+using block_runner_factory = std::function<std::unique_ptr<block_runner>()>;
+
+// A block_runner over a team that runs `Subject` (the composed step, or a
+// bare barrier): `work(subject, self, units)` is one participant's share.
+template <class Team, class Subject, class Work>
+class team_block_runner final : public block_runner {
+ public:
+  team_block_runner(const run_settings& settings, platform::placement_plan plan, std::unique_ptr<Subject> subject,
+                    Work work)
+      : settings_(settings),
+        plan_(std::move(plan)),
+        subject_(std::move(subject)),
+        work_(std::move(work)),
+        team_(plan_.threads),
+        slots_(plan_.threads) {}
+
+  std::optional<double> run_block(std::uint64_t units) override;
+
+ private:
+  const run_settings& settings_;
+  platform::placement_plan plan_;
+  std::unique_ptr<Subject> subject_;
+  Work work_;
+  Team team_;
+  std::vector<participant_slot> slots_;
+};
+
+class pace_probe;
+
 // The run-wide state every entry function shares: the machine, the settings,
 // the run book, and what earlier calls learned (batch sizes from each entry's
 // probe, primitives that already stalled).
@@ -141,7 +183,25 @@ struct harness_state {
   // remaining entries at that count are skipped at once (each stall costs up
   // to the stall bound or a 1000 ms timeout; the verdict is already known).
   unsigned stalls_before_skipping_sync = 3;
+  // Readings of the machine's pace around every repetition (pace.hpp); null: none taken.
+  pace_probe* pace = nullptr;
+  // Entry name -> how to build one side of a paired comparison of it.
+  std::map<std::string, block_runner_factory> block_runners;
+  // Entries whose batches stayed shorter than a quarter of the target after
+  // re-probing: the harness barrier weighs in their figure (the summary says so).
+  std::set<std::string> short_batches;
 };
+
+// Takes a pace reading around a call (pace.hpp: the reading after the
+// previous call when it is fresh, else a new one; always a new one after)
+// when the harness has a probe; returns its index in the trace, or -1.
+inline constexpr std::string_view kPaceBeforeCounter = "pace_reading_before";
+inline constexpr std::string_view kPaceAfterCounter = "pace_reading_after";
+long pace_reading_before(harness_state& harness);
+long pace_reading_after(harness_state& harness);
+// Sets pace_c2c_ns, pace_serial_ns and the reading indices (pace_reading_before,
+// pace_reading_after: replaced by pace_mode after the run) on a repetition.
+void set_pace_counters(benchmark::State& state, const harness_state& harness, long before, long after);
 
 // Why a call stopped early, in one line, from what the primitive is and what
 // it counted: "stalled: one step took 212 ms (bound 50 ms): pure-spin
@@ -238,20 +298,45 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
 
   auto batch_size = harness.units_per_batch.find(name);
   if (batch_size == harness.units_per_batch.end()) {
+    // The first probe (8 batches of one unit) can land on a slow moment, or
+    // weigh the harness barrier's own cost (a sleeping team's wake-up) in
+    // its unit, and settle on batches far shorter than the target: the
+    // entry's figure is then mostly the harness's. So the size is checked
+    // by batches of the size it chose, and grown by what they fell short,
+    // up to kRegrowths times; batches still under a quarter of the target
+    // are flagged (harness.short_batches), not hidden.
     constexpr unsigned kProbeBatches = 8;
+    constexpr unsigned kCheckBatches = 3;
+    constexpr int kRegrowths = 3;
     call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
     if (!probe.failure.empty()) return record_placement_failure(probe);
     if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
-    batch_size = harness.units_per_batch.emplace(name, units_for_batch(median_unit_ns(probe.batches), settings)).first;
+    std::uint64_t units = units_for_batch(median_unit_ns(probe.batches), settings);
+    bool short_batch = false;
+    for (int regrowth = 0; regrowth <= kRegrowths; ++regrowth) {
+      call_result check = run_call(team, slots, plan, kCheckBatches, units, settings, false, work);
+      if (!check.failure.empty()) return record_placement_failure(check);
+      if (check.batches.stalled || check.batches.over_budget) return record_stop(check);
+      const double batch_ns = median_unit_ns(check.batches) * static_cast<double>(units);
+      short_batch = batch_ns < static_cast<double>(settings.target_batch_ns) / 4.0;
+      if (batch_ns >= static_cast<double>(settings.target_batch_ns) / 2.0 || units >= kMaxUnitsPerBatch) break;
+      units = units_for_batch(median_unit_ns(check.batches), settings);
+    }
+    if (short_batch) harness.short_batches.insert(name);
+    batch_size = harness.units_per_batch.emplace(name, units).first;
   }
 
   const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
+  const long pace_before = pace_reading_before(harness);
   call_result result =
       run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work, std::move(warmed_up));
+  const long pace_after = pace_reading_after(harness);
   if (!result.failure.empty()) return record_placement_failure(result);
   if (result.batches.stalled || result.batches.over_budget || result.batches.batch_ns.size() < wanted)
     return record_stop(result);
   harness.measured.insert(name);
+  set_pace_counters(state, harness, pace_before, pace_after);
+  if (harness.short_batches.count(name) > 0) state.counters["short_batches"] = 1.0;
 
   std::size_t batch = 0;
   for (auto _ : state) {
@@ -263,6 +348,28 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
 
 // Per-unit time of a call's timed batches, in ns.
 double ns_per_unit(const call_result& result);
+
+template <class Team, class Subject, class Work>
+std::optional<double> team_block_runner<Team, Subject, Work>::run_block(std::uint64_t units) {
+  affinity_guard restore_caller;  // omp_team runs participant 0 on the calling thread
+  auto share = [this](sync::participant& self, std::uint64_t count) { work_(*subject_, self, count); };
+  const call_result result = run_call(team_, slots_, plan_, 1, units, settings_, false, share);
+  if (!result.failure.empty() || result.batches.stalled || result.batches.over_budget ||
+      result.batches.batch_ns.empty())
+    return std::nullopt;
+  return ns_per_unit(result);
+}
+
+// The factory of an entry's block runner: a fresh Subject(args...) per runner.
+template <class Team, class Subject, class Work, class... Args>
+block_runner_factory block_runner_of(const harness_state& harness, platform::placement plan_kind, unsigned threads,
+                                     Work work, Args... args) {
+  return [&harness, plan_kind, threads, work, args...]() -> std::unique_ptr<block_runner> {
+    return std::make_unique<team_block_runner<Team, Subject, Work>>(
+        harness.settings, platform::plan_placement(*harness.machine, plan_kind, threads),
+        std::make_unique<Subject>(args...), work);
+  };
+}
 
 // Sets the accounting counters on an entry: <prefix>_per_k<unit> for
 // voluntary / involuntary switches and migrations, and cross_core_csw_pct.

@@ -1,0 +1,244 @@
+// Planning and measuring the paired comparisons (paired_blocks.hpp).
+#include "bench/harness/paired_blocks.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <optional>
+#include <tuple>
+
+#include "bench/harness/pace.hpp"
+#include "layouts/registry.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+struct measured_entry {
+  const captured_entry* entry;
+  double median;
+};
+
+std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
+  std::vector<measured_entry> found;
+  for (const auto& entry : book.entries()) {
+    if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
+    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
+  }
+  return found;
+}
+
+// From the layout registry: a shared layout whose writers share lines (the
+// false-sharing case), and a shared layout that gives each writer its own
+// aligned block (the padded cases).
+bool writers_share_lines(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation == 0;
+}
+bool writers_isolated(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation > 0;
+}
+
+void plan_false_sharing(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
+  // (sync, pin, threads) -> the sharing entry and the best isolating one
+  std::map<std::tuple<std::string, std::string, std::string>,
+           std::pair<std::optional<measured_entry>, std::optional<measured_entry>>>
+      groups;
+  for (const auto& step : steps) {
+    auto& [sharing, isolated] =
+        groups[{step.entry->field("sync"), step.entry->field("pin"), step.entry->field("threads")}];
+    const std::string layout = step.entry->field("layout");
+    if (writers_share_lines(layout) && !sharing) sharing = step;
+    if (writers_isolated(layout) && (!isolated || step.median < isolated->median)) isolated = step;
+  }
+  for (const auto& [key, sides] : groups) {
+    if (!sides.first || !sides.second) continue;
+    const auto& [sync, pin, threads] = key;
+    plan.push_back({comparison_kind::false_sharing, fmt::format("sync:{} pin:{} threads:{}", sync, pin, threads),
+                    sides.first->entry->name, sides.second->entry->name});
+  }
+}
+
+void plan_migration(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
+  // (sync, threads) -> layout -> pin -> entry
+  std::map<std::pair<std::string, std::string>, std::map<std::string, std::map<std::string, measured_entry>>> groups;
+  for (const auto& step : steps)
+    groups[{step.entry->field("sync"), step.entry->field("threads")}][step.entry->field("layout")].insert_or_assign(
+        step.entry->field("pin"), step);
+  for (const auto& [key, layouts] : groups) {
+    std::optional<std::pair<measured_entry, measured_entry>> best;  // (none, compact) on the best pinned layout
+    for (const auto& [layout, pins] : layouts) {
+      const auto compact = pins.find("compact");
+      const auto none = pins.find("none");
+      if (compact == pins.end() || none == pins.end()) continue;
+      if (!best || compact->second.median < best->second.median) best = {none->second, compact->second};
+    }
+    if (!best) continue;
+    plan.push_back({comparison_kind::migration,
+                    fmt::format("sync:{} threads:{} layout:{}", key.first, key.second,
+                                best->second.entry->field("layout")),
+                    best->first.entry->name, best->second.entry->name});
+  }
+}
+
+void plan_against_best_other(std::vector<comparison>& plan, const std::vector<measured_entry>& entries,
+                             const char* what) {
+  // (pin, threads) -> sync -> its best entry
+  std::map<std::pair<std::string, std::string>, std::map<std::string, measured_entry>> groups;
+  for (const auto& item : entries) {
+    auto& best = groups[{item.entry->field("pin"), item.entry->field("threads")}];
+    const auto found = best.find(item.entry->field("sync"));
+    if (found == best.end() || item.median < found->second.median)
+      best.insert_or_assign(item.entry->field("sync"), item);
+  }
+  for (const auto& [key, best] : groups) {
+    if (best.size() < 2) continue;
+    std::vector<measured_entry> ranked;
+    for (const auto& [sync, item] : best) ranked.push_back(item);
+    std::sort(ranked.begin(), ranked.end(),
+              [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
+    for (std::size_t index = 0; index < ranked.size(); ++index)
+      plan.push_back({comparison_kind::against_best_other,
+                      fmt::format("{} pin:{} threads:{}", what, key.first, key.second), ranked[index].entry->name,
+                      ranked[index == 0 ? 1 : 0].entry->name});
+  }
+}
+
+// A block of about block_ns from the entry's batch size (sized for
+// settings.target_batch_ns); at least one unit.
+std::uint64_t block_units(const harness_state& harness, const std::string& name, std::int64_t block_ns) {
+  const auto found = harness.units_per_batch.find(name);
+  const double units = found == harness.units_per_batch.end() ? 1.0 : static_cast<double>(found->second);
+  const double scaled =
+      std::round(units * static_cast<double>(block_ns) / static_cast<double>(harness.settings.target_batch_ns));
+  return static_cast<std::uint64_t>(std::clamp(scaled, 1.0, static_cast<double>(kMaxUnitsPerBatch)));
+}
+
+paired_result measure_one(harness_state& harness, const comparison& what, const pairing_settings& settings) {
+  paired_result result;
+  result.what = what;
+  const auto factory_a = harness.block_runners.find(what.a);
+  const auto factory_b = harness.block_runners.find(what.b);
+  if (factory_a == harness.block_runners.end() || factory_b == harness.block_runners.end()) {
+    result.failure = "not measured as a pair: no block runner for a side";
+    return result;
+  }
+  const std::unique_ptr<block_runner> side_a = factory_a->second();
+  const std::unique_ptr<block_runner> side_b = factory_b->second();
+  const std::uint64_t units_a = block_units(harness, what.a, settings.block_ns);
+  const std::uint64_t units_b = block_units(harness, what.b, settings.block_ns);
+  std::vector<double> block_ms;
+  const auto reading = [&] {
+    if (harness.pace != nullptr) result.readings.push_back(harness.pace->take());
+  };
+  reading();
+  for (unsigned pair = 0; pair < settings.pairs; ++pair) {
+    std::optional<double> a;
+    std::optional<double> b;
+    if (pair % 2 == 0) {
+      a = side_a->run_block(units_a);
+      b = side_b->run_block(units_b);
+    } else {
+      b = side_b->run_block(units_b);
+      a = side_a->run_block(units_a);
+    }
+    if (!a || !b || !(*a > 0.0) || !(*b > 0.0)) {
+      result.failure = fmt::format("not measured as a pair: a block of {} stalled", !a ? what.a : what.b);
+      result.ratios.clear();
+      return result;
+    }
+    result.ratios.push_back(*a / *b);
+    block_ms.push_back(*a * static_cast<double>(units_a) * 1e-6);
+    block_ms.push_back(*b * static_cast<double>(units_b) * 1e-6);
+    reading();
+  }
+  std::sort(block_ms.begin(), block_ms.end());
+  if (!block_ms.empty()) result.block_ms = block_ms[block_ms.size() / 2];
+  result.estimate = bootstrap_median(result.ratios);
+  result.verdict = verdict_of(result.estimate, settings.noise);
+  return result;
+}
+
+}  // namespace
+
+std::vector<comparison> plan_comparisons(const run_book& book) {
+  std::vector<comparison> plan;
+  const std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  plan_false_sharing(plan, steps);
+  plan_migration(plan, steps);
+  plan_against_best_other(plan, steps, "RK4 step");
+  plan_against_best_other(plan, measured_of(book, "barrier", "ns_per_episode"), "bare episode");
+  return plan;
+}
+
+void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, const pairing_settings& settings,
+                   const std::function<void(std::size_t, std::size_t)>& progress) {
+  harness.book->noise = settings.noise;
+  if (settings.pairs == 0) return;
+  std::size_t done = 0;
+  for (const comparison& what : plan) {
+    harness.book->pairs.push_back(measure_one(harness, what, settings));
+    if (progress) progress(++done, plan.size());
+  }
+}
+
+void assign_pace_modes(run_book& book, const pace_modes& modes) {
+  book.pace = modes;
+  book.for_each_repetition([&](std::map<std::string, double>& repetition) {
+    const auto before = repetition.find(std::string(kPaceBeforeCounter));
+    const auto after = repetition.find(std::string(kPaceAfterCounter));
+    if (before == repetition.end() || after == repetition.end()) return;
+    repetition["pace_mode"] = agreed_mode(modes, static_cast<std::size_t>(before->second),
+                                          static_cast<std::size_t>(after->second));
+    repetition.erase(std::string(kPaceBeforeCounter));
+    repetition.erase(std::string(kPaceAfterCounter));
+  });
+  for (paired_result& pair : book.pairs) {
+    pair.modes.clear();
+    for (std::size_t index = 0; index + 1 < pair.readings.size() && index < pair.ratios.size(); ++index)
+      pair.modes.push_back(agreed_mode(modes, pair.readings[index], pair.readings[index + 1]));
+  }
+}
+
+void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pace_probe* probe,
+                          const pace_modes& modes) {
+  for (auto& row : result["benchmarks"]) {
+    if (!row.is_object()) continue;
+    const bool iteration = row.value("run_type", std::string()) == "iteration";
+    const auto before = row.find(std::string(kPaceBeforeCounter));
+    const auto after = row.find(std::string(kPaceAfterCounter));
+    if (iteration && before != row.end() && after != row.end() && before->is_number() && after->is_number())
+      row["pace_mode"] = agreed_mode(modes, before->get<std::size_t>(), after->get<std::size_t>());
+    row.erase(std::string(kPaceBeforeCounter));
+    row.erase(std::string(kPaceAfterCounter));
+    // An aggregate of a mode index or of readings means nothing.
+    if (!iteration) {
+      row.erase("pace_mode");
+    }
+  }
+  if (probe != nullptr) result["lockstep_pace"] = pace_json(*probe, modes);
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const paired_result& pair : book.pairs) {
+    if (!pair.failure.empty() || pair.ratios.empty()) continue;
+    pairs.push_back({{"comparison", to_string(pair.what.kind)},
+                     {"group", pair.what.group},
+                     {"a", pair.what.a},
+                     {"b", pair.what.b},
+                     {"ratios", pair.ratios},
+                     {"modes", pair.modes},
+                     {"median", pair.estimate.median},
+                     {"ci_low", pair.estimate.low},
+                     {"ci_high", pair.estimate.high},
+                     {"confidence", kConfidence},
+                     {"noise", book.noise},
+                     {"verdict", to_string(pair.verdict)},
+                     {"block_ms", pair.block_ms}});
+  }
+  result["lockstep_pairs"] = pairs;
+}
+
+}  // namespace lockstep::bench

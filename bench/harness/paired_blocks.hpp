@@ -1,0 +1,61 @@
+#pragma once
+// The paired comparisons of a run (paired_ratio.hpp says why pairs): which
+// ratios the summary prints, and measuring each as alternating short blocks
+// after the matrix has run.
+//
+// Which (plan_comparisons, from the matrix's medians; one place, which the
+// summary reads too):
+//   false_sharing       per primitive, placement and thread count: the layout
+//                       whose writers share lines against the best layout
+//                       that isolates them (layouts/registry.hpp: writer_isolation)
+//   migration           per primitive and thread count, on its best pinned
+//                       layout: pin:none against pin:compact
+//   against_best_other  per placement and thread count, each primitive on its
+//                       best layout against the best other primitive on its
+//                       best layout; RK4 steps and bare episodes alike
+// How (measure_pairs): both sides are built once (block_runner), then
+// `pairs` times: a pace reading, block A and block B (the order alternates,
+// A B then B A, so that a drift within a pair cancels over pairs), ratio
+// A / B. A block is a warm-up batch and a timed batch of about `block_ns`
+// (from the entry's own batch size). A last reading closes the trace.
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/harness/paired_ratio.hpp"
+#include "bench/harness/run_book.hpp"
+#include "bench/harness/team_driver.hpp"
+
+namespace lockstep::bench {
+
+struct pairing_settings {
+  unsigned pairs = 10;               // 0: no paired comparisons
+  std::int64_t block_ns = 1'000'000;  // one timed block
+  double noise = kDefaultNoise;
+};
+
+// The comparisons the summary prints, from the run's medians (entries that
+// measured without error; a comparison needs both sides).
+std::vector<comparison> plan_comparisons(const run_book& book);
+
+// Measures every comparison whose sides have block runners; results go to
+// book.pairs (a side that stalls gives a result with its failure).
+// `progress(done, total)` is called after each comparison.
+void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, const pairing_settings& settings,
+                   const std::function<void(std::size_t, std::size_t)>& progress);
+
+// After the trace is analysed: every repetition in the book gets "pace_mode"
+// (the mode its before and after readings agree on, or -1), every pair its
+// modes; the reading-index counters are removed.
+void assign_pace_modes(run_book& book, const pace_modes& modes);
+
+// The same on Google Benchmark's result JSON (iteration rows get pace_mode;
+// the reading indices leave every row), plus the top-level "lockstep_pace"
+// and "lockstep_pairs" (the contract with reports/).
+void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pace_probe* probe,
+                          const pace_modes& modes);
+
+}  // namespace lockstep::bench

@@ -1,0 +1,76 @@
+#pragma once
+// A ratio that survives a machine changing pace: the two sides of a comparison
+// run in alternating short blocks (A B, then B A, ...), a ratio is taken per
+// adjacent pair, and the figure is the median ratio with a bootstrap
+// confidence interval, judged against a noise band.
+//
+// Why pairs: the development VM keeps a pace (core-to-core latency 25, 55 or
+// 120-270 ns, and every primitive's cost with it) for seconds to tens of
+// seconds, so two entries measured a minute apart can differ 3x for no reason
+// of their own. Two blocks a few milliseconds apart almost always share a
+// pace; their ratio keeps the effect and drops the pace.
+//
+// Why the median and a percentile bootstrap: a pair that straddles a change
+// of pace, or a block that was preempted, gives one wild ratio; the median
+// ignores it, and the bootstrap needs no assumption about the ratios'
+// distribution. The resampling is seeded, so a file's intervals can be
+// recomputed from its ratios.
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace lockstep::bench {
+
+struct ratio_estimate {
+  double median = 0.0;
+  double low = 0.0;   // the interval's ends
+  double high = 0.0;
+};
+
+enum class ratio_verdict { penalty, gain, within_noise };
+std::string_view to_string(ratio_verdict verdict) noexcept;
+
+// The default half-width of the noise band: a ratio within 5 % of 1 is no
+// effect (the harness's own cost and a quiet machine's repeatability are a
+// few percent).
+inline constexpr double kDefaultNoise = 0.05;
+inline constexpr double kConfidence = 0.95;
+inline constexpr unsigned kBootstrapResamples = 4000;
+
+// The median of `ratios` and its percentile-bootstrap interval at
+// `confidence` (deterministic for a given seed). One ratio: the interval is
+// that ratio. Empty input: all zero.
+ratio_estimate bootstrap_median(const std::vector<double>& ratios, double confidence = kConfidence,
+                                unsigned resamples = kBootstrapResamples, std::uint64_t seed = 0x5eed'1234);
+
+// penalty: the whole interval above 1 + noise; gain: the whole interval
+// below 1 / (1 + noise); else within noise (the interval reaches the band).
+ratio_verdict verdict_of(const ratio_estimate& estimate, double noise = kDefaultNoise);
+
+// What a comparison sets side by side (the summary's sections).
+// against_best_other compares RK4 steps (rk4/...) or bare episodes (barrier/...): the names say which.
+enum class comparison_kind { false_sharing, migration, against_best_other };
+std::string_view to_string(comparison_kind kind) noexcept;
+
+struct comparison {
+  comparison_kind kind = comparison_kind::false_sharing;
+  std::string group;  // "sync:futex_spin pin:compact threads:4", for people
+  std::string a;      // the numerator entry
+  std::string b;      // the denominator entry
+};
+
+// One comparison as measured: the per-pair ratios a/b and the pace readings
+// around them (readings[i] before pair i, readings[i + 1] after it).
+struct paired_result {
+  comparison what;
+  std::vector<double> ratios;
+  std::vector<std::size_t> readings;
+  std::vector<int> modes;  // per pair: the pace mode both readings agree on, or -1 (set after the run)
+  ratio_estimate estimate;
+  ratio_verdict verdict = ratio_verdict::within_noise;
+  double block_ms = 0.0;   // the median timed block, both sides
+  std::string failure;     // non-empty: not measured, and why
+};
+
+}  // namespace lockstep::bench
