@@ -140,6 +140,13 @@ std::vector<stride_cost> measure_false_sharing(const falseshare_settings& settin
     for (auto& cost : costs) {
       const auto samples = measure_stride(settings.cpus, cost.stride_bytes, settings.window_ns);
       cost.ns_per_write.insert(cost.ns_per_write.end(), samples.begin(), samples.end());
+      std::optional<double> mean;
+      if (!samples.empty()) {
+        double sum = 0.0;
+        for (double sample : samples) sum += sample;
+        mean = sum / static_cast<double>(samples.size());
+      }
+      cost.repeat_mean_ns.push_back(mean);
     }
   }
   return costs;

@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <vector>
 
 namespace lockstep::bench::probes {
@@ -34,6 +35,10 @@ struct stride_cost {
   // ns per write, one sample per writer per repeat; a writer that was not
   // scheduled during a window has no sample (its cost is unknown, not infinite).
   std::vector<double> ns_per_write;
+  // Per repeat: the mean over the writers that were scheduled (empty when
+  // none was). The strides of one repeat ran a few windows apart, so a
+  // ratio of two strides within a repeat is a pair (paired_ratio.hpp).
+  std::vector<std::optional<double>> repeat_mean_ns;
 };
 
 // Repeats outermost: a slow phase of a loaded machine spreads over every
