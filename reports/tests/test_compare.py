@@ -48,7 +48,7 @@ class SameMachine(unittest.TestCase):
         significant = [row.key.display for row in comparison.rows if row.significant(comparison.alpha)]
         self.assertEqual(significant, [FORCED])
         row = next(row for row in comparison.rows if row.key.display == FORCED)
-        self.assertEqual(row.verdict(comparison.alpha), "slower")
+        self.assertEqual(comparison.verdict(row), "slower")
         self.assertGreater(row.interval[0], 1.3)  # 1.4x forced
         self.assertLess(row.interval[1], 1.5)
         self.assertIn("futex_waits_per_step", row.counters)
@@ -105,11 +105,16 @@ class SameMachine(unittest.TestCase):
         self.assertEqual(comparison.removed, [])
 
     def test_few_repetitions_are_not_tested_and_say_so(self):
+        # 3 against 3: no 95 % interval exists (the widest, min to max ratio, covers 1 - 2/20 = 90 %).
+        comparison = compare_pair(load("few_repetitions.json"), load("few_repetitions.json"))
+        self.assertTrue(all(row.p_adjusted is None for row in comparison.rows))
+        self.assertTrue(all(comparison.verdict(row) == "untested" for row in comparison.rows))
+        self.assertTrue(any("too few repetitions for a 95 % interval" in warning for warning in comparison.warnings))
+        # 10 against 3: the exact interval exists (P(U = 0) = 1/286), the Mann-Whitney test does not.
         comparison = compare_pair(load("machine_a.json"), load("few_repetitions.json"))
         self.assertTrue(all(row.p_adjusted is None for row in comparison.rows))
-        self.assertTrue(all(row.verdict(0.05) == "untested" for row in comparison.rows))
-        self.assertTrue(any("fewer than 5 repetitions" in warning for warning in comparison.warnings))
-        status, _, _ = run_tool("compare", fixture("machine_a.json"), fixture("few_repetitions.json"),
+        self.assertTrue(all(row.interval is not None for row in comparison.rows))
+        status, _, _ = run_tool("compare", fixture("few_repetitions.json"), fixture("few_repetitions.json"),
                                 "--fail-above", "0")
         self.assertEqual(status, 0)
 
@@ -146,7 +151,7 @@ class AcrossMachines(unittest.TestCase):
         self.assertIn("cpu_model*", out)
         self.assertIn("AMD EPYC 7232P", out)
         self.assertIn("machines: 2 distinct", out)
-        self.assertIn("Holm", out)
+        self.assertIn("Benjamini-Hochberg", out)
 
     def test_normalisation_uses_each_machines_own_calibration(self):
         a, b = load("machine_a.json"), load("machine_b.json")
@@ -195,7 +200,7 @@ class Output(unittest.TestCase):
                 document = json.load(stream)
             second = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
         self.assertEqual(first[1], second[1])
-        self.assertEqual(document["comparisons"][0]["correction"], "holm")
+        self.assertEqual(document["comparisons"][0]["correction"], "benjamini-hochberg")
         self.assertEqual(document["comparisons"][0]["matched"], 36)
         self.assertEqual(document["comparisons"][0]["noise_pct"], 5.0)
         self.assertEqual(len(document["comparisons"][0]["calibrations"]), 2)
@@ -275,12 +280,12 @@ class NoiseThreshold(unittest.TestCase):
         self.assertTrue(row.significant(comparison.alpha))
         self.assertLess(row.p_adjusted, 0.001)
         self.assertEqual(comparison.verdict(row), "within noise")
-        self.assertEqual(comparison.verdict(self.row(comparison, STEADY)), "same")
+        self.assertEqual(comparison.verdict(self.row(comparison, STEADY)), "within noise")
         self.assertEqual(comparison.verdict_counts(),
-                         {"slower": 0, "faster": 0, "within noise": 1, "same": 2, "untested": 0})
+                         {"slower": 0, "faster": 0, "unsure": 0, "within noise": 3, "untested": 0})
         status, out, err = run_tool("compare", a, b, "--fail-above", "1")
         self.assertEqual(status, 0, err)  # within noise never fails the gate
-        self.assertIn("0 slower, 0 faster, 1 within noise", out)
+        self.assertIn("0 slower, 0 faster, 0 unsure, 3 within noise", out)
         self.assertIn("noise threshold: 5 % (the default", out)
 
     def test_a_lower_threshold_makes_the_same_shift_slower(self):
@@ -290,7 +295,7 @@ class NoiseThreshold(unittest.TestCase):
         status, out, err = run_tool("compare", a, b, "--noise", "1", "--fail-above", "1")
         self.assertEqual(status, 1)
         self.assertIn(SHIFTED, err)
-        self.assertIn("1 slower, 0 faster, 0 within noise", out)
+        self.assertIn("1 slower, 0 faster, 0 unsure, 2 within noise", out)
         self.assertIn("noise threshold: 1 %", out)
 
     def test_a_barrier_entry_is_compared_per_episode_not_per_batch(self):
@@ -306,7 +311,7 @@ class NoiseThreshold(unittest.TestCase):
         b = self.write("b.json", b_document)
         comparison = compare_pair(load_run_file(a), load_run_file(b))
         row = self.row(comparison, BARRIER)
-        self.assertEqual(comparison.verdict(row), "same")
+        self.assertEqual(comparison.verdict(row), "within noise")
         self.assertAlmostEqual(row.ratio, 1.0, places=6)
 
     def test_a_big_shift_is_slower_and_fails_the_gate(self):
@@ -382,7 +387,7 @@ class NoiseThreshold(unittest.TestCase):
         row = self.row(comparison, C2C)
         self.assertEqual(row.measure, "one_way_ns")
         self.assertAlmostEqual(row.ratio, 1.0)
-        self.assertEqual(comparison.verdict(row), "same")
+        self.assertEqual(comparison.verdict(row), "within noise")
         self.assertEqual(sorted(r.key.display for r in comparison.calibrations),
                          sorted([C2C, "rk4/serial", OVERHEAD.format("off"), OVERHEAD.format("on")]))
         self.assertEqual(len(comparison.rows), 3)
