@@ -687,7 +687,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
                f"calibrations apart): {format_number(geometric_mean, 3)}")
     raw_called, raw_discovered = comparison.discoveries(comparison.verdict)
     out.append(f"raw verdicts at the {noise:g} % noise band: {_counts_text(comparison.verdict_counts())} "
-               f"({raw_discovered} of the {raw_called} slower or faster also have BH q < {comparison.alpha:g})")
+               f"({raw_discovered} of the {raw_called} slower or faster also have BH q < alpha {comparison.alpha:g})")
     if comparison.paced:
         paced_rows = [row for row in comparison.rows if row.pace]
         pace_counts = {name: sum(comparison.pace_verdict(row) == name for row in paced_rows) for name in VERDICTS}
@@ -701,7 +701,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     what = ("beyond the pace (pace-aware verdicts; the raw one where an entry has no pace)" if comparison.paced
             else f"(raw verdicts: pace {UNAVAILABLE})")
     out.append(f"changed {what}: {headline['slower'] + headline['faster']} of {len(comparison.rows)} "
-               f"({headline['slower']} slower, {headline['faster']} faster; {discovered} of them with BH q < "
+               f"({headline['slower']} slower, {headline['faster']} faster; {discovered} of them with BH q < alpha "
                f"{comparison.alpha:g})")
     if comparison.calibrations:
         out.append("")
