@@ -7,16 +7,27 @@ and never counted as zero. Across files, each machine is shown by its
 fingerprint and normalised by its own in-run core-to-core latency and serial
 step time, so that effects can be read side by side.
 
-Verdicts (Criterion.rs's rule, with its noise threshold): an entry is
-"slower" or "faster" only when its Mann-Whitney test is significant after
-Holm's correction AND the whole confidence interval of its ratio lies beyond
-the noise threshold (above 1 + NOISE/100, or below 1 / (1 + NOISE/100)). A
-significant shift whose interval reaches inside the threshold is "within
-noise": real in the statistical sense, too small to tell from the machine
-drifting between runs. Repetitions inside one run share that run's state of
-the machine, so the test alone calls a between-run shift of a few percent
-"significant"; the threshold is what stands for the run-to-run variance the
-repetitions cannot see.
+Verdicts: the interval against the noise band. Each entry's B/A gets the
+exact distribution-free 95 % interval of the shift between its repetitions
+(statistics.shift_interval). "slower" / "faster" only when the whole interval
+lies beyond the noise band (above 1 + NOISE/100, or below 1 / (1 + NOISE/100));
+"within noise" when it lies wholly inside; "unsure" when it reaches across an
+edge of the band (more repetitions would tell); "untested" with too few
+repetitions for a 95 % interval. The Mann-Whitney p of each entry is shown
+Benjamini-Hochberg-adjusted (q) over the entries of the comparison, and the
+counts say how many calls also pass q < alpha. Repetitions inside one run
+share that run's state of the machine; the band stands for the run-to-run
+drift they cannot see.
+
+Pace (issue 12): when both files carry a pace trace, their modes are matched
+by c2c within MODE_TOLERANCE, compare says whether the runs ran in the same
+modes, and every entry also gets a pace-aware verdict: the raw one where all
+its repetitions ran in one matching mode; else within the matching modes
+(only the repetitions of the best-filled pair of matching modes) when each
+side keeps MIN_REPETITIONS there; else on the pace-normalised figure, each
+repetition's time divided by the c2c reading taken around it (pace_c2c_ns).
+The headline count of changed entries counts what changed beyond the pace:
+the pace-aware verdict where there is one, else the raw one.
 
 Calibrations: `rk4/serial`, `c2c/...` and the `overhead/...` pair measure the
 machine and the instrumentation, not a combination of primitive, layout and
@@ -46,11 +57,49 @@ NOISE_RATIONALE = (
     "whole interval beyond it keeps such drift out of the verdicts while a change of 10 % or more still "
     "shows; on a quiet bare-metal machine --noise 1 (Criterion.rs's default) or 2 fits")
 
+# Two pace modes of two runs are the same mode when their c2c medians (serial medians on a machine of one
+# CPU) are within this factor of each other. This VM's modes are 2x apart or more (c2c one-way about 25,
+# 55 and 120-270 ns), while one mode's median moves by 10-20 % from run to run; 1.5 keeps the second
+# inside a mode and the first apart.
+MODE_TOLERANCE = 1.5
+# How a pace-aware figure was made (PaceAware.method).
+PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_NORMALISED = "one mode", "matching modes", "pace-normalised"
+VERDICTS = ("slower", "faster", "unsure", "within noise", "untested")
+
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")
 # The in-run calibration entries: compared apart, and read when the context lacks the value.
 SERIAL_ENTRY = "rk4/serial"
 C2C_ENTRY = "c2c/pin:compact/threads:2"
+
+
+def verdict_of(interval: tuple[float, float] | None, noise_percent: float) -> str:
+    """The interval against the noise band: slower / faster (wholly beyond it), within noise (wholly inside
+    it), unsure (across an edge), untested (no interval)."""
+    if interval is None:
+        return "untested"
+    upper_limit = 1.0 + noise_percent / 100.0
+    low, high = interval
+    if low > upper_limit:
+        return "slower"
+    if high < 1.0 / upper_limit:
+        return "faster"
+    if low >= 1.0 / upper_limit and high <= upper_limit:
+        return "within noise"
+    return "unsure"
+
+
+@dataclass
+class PaceAware:
+    """An entry's comparison that the pace cannot explain: how it was made (PACE_ONE_MODE,
+    PACE_MATCHING_MODES, PACE_NORMALISED), which modes or figure, B/A of the medians and its interval."""
+
+    method: str
+    detail: str
+    ratio: float
+    interval: tuple[float, float] | None
+    repetitions_a: int
+    repetitions_b: int
 
 
 @dataclass
@@ -63,32 +112,28 @@ class Row:
     ratio: float
     interval: tuple[float, float] | None
     p_raw: float | None
-    p_adjusted: float | None = None
+    p_adjusted: float | None = None  # Benjamini-Hochberg q over the comparison's family
     counters: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
     measure: str = "time"  # what median_a / median_b are: "time", or a counter's name
+    pace: PaceAware | None = None  # None: a file without the pace trace, or a repetition without its pace
 
     def significant(self, alpha: float) -> bool:
         return self.p_adjusted is not None and self.p_adjusted < alpha
 
-    def beyond_noise(self, noise_percent: float) -> str | None:
-        """"slower" / "faster" when the whole interval (the ratio itself when there is none) lies beyond
-        the threshold, else None."""
-        upper_limit = 1.0 + noise_percent / 100.0
-        low, high = self.interval if self.interval else (self.ratio, self.ratio)
-        if low > upper_limit:
-            return "slower"
-        if high < 1.0 / upper_limit:
-            return "faster"
-        return None
+    def verdict(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str:
+        """The raw verdict: this entry's interval against the noise band."""
+        return verdict_of(self.interval, noise_percent)
 
-    def verdict(self, alpha: float, noise_percent: float = 0.0) -> str:
-        """untested, same (not significant), within noise (significant, interval reaches inside the
-        threshold), slower or faster (significant and beyond the threshold)."""
-        if self.p_adjusted is None:
-            return "untested"
-        if not self.significant(alpha):
-            return "same"
-        return self.beyond_noise(noise_percent) or "within noise"
+    def pace_verdict(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str | None:
+        """The pace-aware verdict, None where the pace is unavailable."""
+        return verdict_of(self.pace.interval, noise_percent) if self.pace else None
+
+    def beyond_pace(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str:
+        """What changed beyond the pace: the pace-aware verdict where there is one, else the raw one."""
+        return self.pace_verdict(noise_percent) or self.verdict(noise_percent)
+
+    def beyond_pace_ratio(self) -> float:
+        return self.pace.ratio if self.pace else self.ratio
 
 
 @dataclass
@@ -109,20 +154,46 @@ class Comparison:
     def geometric_mean(self) -> float | None:
         return statistics.geometric_mean([row.ratio for row in self.rows])
 
-    def verdict(self, row: Row) -> str:
-        return row.verdict(self.alpha, self.noise_percent)
+    different_modes: bool | None = None  # None: a file has no pace trace
 
-    def verdict_counts(self) -> dict[str, int]:
-        counts = {name: 0 for name in ("slower", "faster", "within noise", "same", "untested")}
+    def verdict(self, row: Row) -> str:
+        return row.verdict(self.noise_percent)
+
+    def pace_verdict(self, row: Row) -> str | None:
+        return row.pace_verdict(self.noise_percent)
+
+    def beyond_pace(self, row: Row) -> str:
+        return row.beyond_pace(self.noise_percent)
+
+    @property
+    def paced(self) -> bool:
+        """Both files carry the pace: the pace-aware verdicts are shown."""
+        return self.different_modes is not None
+
+    def _counts(self, verdict_of_row) -> dict[str, int]:
+        counts = {name: 0 for name in VERDICTS}
         for row in self.rows:
-            counts[self.verdict(row)] += 1
+            counts[verdict_of_row(row)] += 1
         return counts
 
+    def verdict_counts(self) -> dict[str, int]:
+        """The raw verdicts."""
+        return self._counts(self.verdict)
+
+    def pace_verdict_counts(self) -> dict[str, int]:
+        """The headline: what changed beyond the pace (pace-aware where available, else raw)."""
+        return self._counts(self.beyond_pace)
+
+    def discoveries(self, verdict_of_row) -> tuple[int, int]:
+        """(entries called slower or faster, how many of them also have Benjamini-Hochberg q < alpha)."""
+        called = [row for row in self.rows if verdict_of_row(row) in ("slower", "faster")]
+        return len(called), sum(row.significant(self.alpha) for row in called)
+
     def regressions_beyond(self, percent: float) -> list[Row]:
-        """Combinations that are "slower" (significant, whole interval beyond the noise threshold) with a
-        ratio above 1 + percent/100. Calibrations never count."""
+        """Combinations that are "slower" beyond the pace (whole interval above the noise band; pace-aware
+        where both files carry the pace) with a ratio above 1 + percent/100. Calibrations never count."""
         limit = 1.0 + percent / 100.0
-        return [row for row in self.rows if self.verdict(row) == "slower" and row.ratio > limit]
+        return [row for row in self.rows if self.beyond_pace(row) == "slower" and row.beyond_pace_ratio() > limit]
 
     def calibration_moves(self) -> list[tuple[str, str, float | None, float | None, float | None]]:
         """(name, unit, A, B, change B/A - 1 in percent) of the context's in-run calibrations (the entries'
@@ -182,10 +253,111 @@ def _calibration_sample(key: BenchmarkKey, run, time_kind: str) -> tuple[list[fl
     return times, repeated, "time"
 
 
+def _same_mode(mode_a, mode_b) -> bool:
+    if mode_a.c2c_ns is not None and mode_b.c2c_ns is not None:
+        a, b = mode_a.c2c_ns, mode_b.c2c_ns
+    elif mode_a.c2c_ns is None and mode_b.c2c_ns is None:
+        a, b = mode_a.serial_ns, mode_b.serial_ns
+    else:
+        return False
+    return max(a, b) / min(a, b) <= MODE_TOLERANCE
+
+
+def _mode_text(mode) -> str:
+    value = f"c2c {mode.c2c_ns:.0f} ns" if mode.c2c_ns is not None else f"serial {mode.serial_ns:.1f} ns"
+    return f"{value} ({mode.share * 100:.0f} %)"
+
+
+def matching_modes(baseline: RunFile, contender: RunFile) -> list[tuple[int, int]]:
+    """(mode of A, mode of B) for every two modes within MODE_TOLERANCE of each other."""
+    return [(mode_a.mode, mode_b.mode) for mode_a in baseline.pace.modes for mode_b in contender.pace.modes
+            if _same_mode(mode_a, mode_b)]
+
+
+def pace_note(baseline: RunFile, contender: RunFile, letter: str) -> tuple[list[str], bool | None]:
+    """Lines saying in which modes the two runs ran, and whether those differ (None: a file has no trace)."""
+    missing = [f.label for f in (baseline, contender) if f.pace is None]
+    if missing:
+        return ([f"pace: {UNAVAILABLE} in {' and '.join(missing)} (no lockstep_pace: written before the pace trace); "
+                 "raw verdicts only"], None)
+    matches = matching_modes(baseline, contender)
+    lines = [f"pace of {which}: {', '.join(_mode_text(m) for m in f.pace.modes)}; {f.pace.changes} "
+             f"change{'' if f.pace.changes == 1 else 's'} of mode (from its lockstep_pace: {f.pace.summary})"
+             for which, f in (("A", baseline), (letter, contender))]
+    unmatched_a = [m for m in baseline.pace.modes if all(m.mode != a for a, _ in matches)]
+    unmatched_b = [m for m in contender.pace.modes if all(m.mode != b for _, b in matches)]
+    different = bool(unmatched_a or unmatched_b)
+    rule = f"modes match when their c2c medians are within {MODE_TOLERANCE:g}x"
+    if not matches:
+        lines.append(f"the runs ran in different pace modes: no mode in common ({rule}); every entry's pace-aware "
+                     f"verdict is on the pace-normalised figure (time / the pace_c2c_ns read around each repetition)")
+    elif different:
+        only = ([f"only A: {', '.join(_mode_text(m) for m in unmatched_a)}"] if unmatched_a else []) + \
+               ([f"only {letter}: {', '.join(_mode_text(m) for m in unmatched_b)}"] if unmatched_b else [])
+        lines.append(f"the runs ran in different pace modes ({'; '.join(only)}; {rule})")
+    else:
+        lines.append(f"the runs ran in the same pace modes ({rule})")
+    return lines, different
+
+
+def _paced_values(run, time_kind: str) -> list[tuple[float, object]] | None:
+    """(time, pace) of each repetition, or None when a repetition has no pace."""
+    values = []
+    for repetition in run.repetitions:
+        if repetition.pace is None:
+            return None
+        values.append((repetition.real_ns if time_kind == "real" else repetition.cpu_ns, repetition.pace))
+    return values or None
+
+
+def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, time_kind: str) -> PaceAware | None:
+    """The entry compared beyond the pace (see the module's text), or None where the pace is unavailable."""
+    values_a, values_b = _paced_values(run_a, time_kind), _paced_values(run_b, time_kind)
+    if values_a is None or values_b is None:
+        return None
+
+    def in_mode(values, mode):
+        return [time for time, pace in values if pace.mode == mode]
+
+    modes_a, modes_b = {pace.mode for _, pace in values_a}, {pace.mode for _, pace in values_b}
+    if len(modes_a) == 1 and len(modes_b) == 1 and (next(iter(modes_a)), next(iter(modes_b))) in matches:
+        times_a, times_b = [t for t, _ in values_a], [t for t, _ in values_b]
+        mode_a, mode_b = (f.pace.modes[next(iter(m))] for f, m in ((baseline, modes_a), (contender, modes_b)))
+        detail = f"every repetition in one mode (c2c {_short(mode_a.c2c_ns)} / {_short(mode_b.c2c_ns)} ns)"
+        method = PACE_ONE_MODE
+    else:
+        best = max(matches, key=lambda pair: (min(len(in_mode(values_a, pair[0])), len(in_mode(values_b, pair[1]))),
+                                              -pair[0], -pair[1]), default=None)
+        filled = best and min(len(in_mode(values_a, best[0])), len(in_mode(values_b, best[1])))
+        if best and filled >= statistics.MIN_REPETITIONS:
+            times_a, times_b = in_mode(values_a, best[0]), in_mode(values_b, best[1])
+            detail = (f"the repetitions in matching modes A {best[0]} / B {best[1]} (c2c "
+                      f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / {_short(contender.pace.modes[best[1]].c2c_ns)} ns)")
+            method = PACE_MATCHING_MODES
+        else:
+            by_c2c = all(p.c2c_ns is not None for _, p in values_a + values_b)
+            by_serial = all(p.serial_ns is not None for _, p in values_a + values_b)
+            if not (by_c2c or by_serial):
+                return None
+            reading = "c2c_ns" if by_c2c else "serial_ns"
+            times_a = [time / getattr(pace, reading) for time, pace in values_a]
+            times_b = [time / getattr(pace, reading) for time, pace in values_b]
+            detail = f"time / pace_{reading} of each repetition"
+            method = PACE_NORMALISED
+    ratio = statistics.median(times_b) / statistics.median(times_a)
+    return PaceAware(method, detail, ratio, statistics.shift_interval(times_a, times_b), len(times_a), len(times_b))
+
+
+def _short(value: float | None) -> str:
+    return UNAVAILABLE if value is None else f"{value:.0f}"
+
+
 def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05,
                  noise_percent: float = DEFAULT_NOISE_PERCENT) -> Comparison:
     keys_a, keys_b = set(baseline.runs), set(contender.runs)
     rows, calibration_rows, errored, warnings = [], [], [], []
+    _, different_modes = pace_note(baseline, contender, "B")
+    matches = matching_modes(baseline, contender) if different_modes is not None else []
     untested = []
     for key in sorted(keys_a & keys_b, key=BenchmarkKey.sort_key):
         run_a, run_b = baseline.runs[key], contender.runs[key]
@@ -212,9 +384,9 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
             continue
         median_a, median_b = statistics.median(times_a), statistics.median(times_b)
         ratio = median_b / median_a  # inputs.py keeps every time within [SHORTEST_NS, LONGEST_NS]
-        interval = statistics.ratio_interval(times_a, times_b, key.display) if reps_a and reps_b else None
+        interval = statistics.shift_interval(times_a, times_b) if reps_a and reps_b else None
         p_raw = statistics.mann_whitney_p(times_a, times_b) if reps_a and reps_b else None
-        if p_raw is None and not calibrating:
+        if interval is None and not calibrating:
             untested.append(key)
         counters = {}
         for counter, _ in COUNTERS_SHOWN:
@@ -224,21 +396,13 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                                      statistics.median(values_b) if values_b else None)
         row = Row(key, median_a, median_b, len(times_a) if reps_a else 0, len(times_b) if reps_b else 0,
                   ratio, interval, p_raw, counters=counters, measure=measure_a)
+        if different_modes is not None and not calibrating and measure_a == "time":
+            row.pace = pace_aware(run_a, run_b, baseline, contender, matches, time_kind)
         (calibration_rows if calibrating else rows).append(row)
-    # Two families, each Holm-corrected on its own: the combinations, and the calibrations.
+    # Two families, each adjusted on its own: the combinations, and the calibrations.
     for family in (rows, calibration_rows):
-        for row, adjusted in zip(family, statistics.holm([row.p_raw for row in family])):
+        for row, adjusted in zip(family, statistics.benjamini_hochberg([row.p_raw for row in family])):
             row.p_adjusted = adjusted
-    tested = [row for row in rows if row.p_raw is not None]
-    powerless = [row for row in tested
-                 if statistics.smallest_p(row.repetitions_a, row.repetitions_b) * len(tested) >= alpha]
-    if powerless:
-        needed = statistics.MIN_REPETITIONS
-        while statistics.smallest_p(needed, needed) * len(tested) >= alpha:
-            needed += 1
-        warnings.append(f"{len(powerless)} of {len(tested)} tested entries have too few repetitions to ever be "
-                        f"significant after Holm's correction over {len(tested)} tests (smallest possible p "
-                        f"too large): use at least {needed} repetitions a side")
     for key in sorted(keys_a - keys_b, key=BenchmarkKey.sort_key):
         if baseline.runs[key].errored:
             errored.append((key, baseline.label, "; ".join(baseline.runs[key].errors)))
@@ -253,15 +417,21 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                         f"ran at that moment, with a tiny p; `lockstep run --interleave` spreads it over every "
                         f"entry")
     if untested:
-        warnings.append(f"{len(untested)} of {len(rows)} matched entries have fewer than "
-                        f"{statistics.MIN_REPETITIONS} repetitions on a side: no Mann-Whitney U test for them "
+        warnings.append(f"{len(untested)} of {len(rows)} matched entries have too few repetitions for a "
+                        f"{int(statistics.CONFIDENCE * 100)} % interval (fewer than 4 on a side, or fewer than "
+                        f"{statistics.MIN_REPETITIONS} repetitions on a side for the Mann-Whitney U test): untested "
                         f"(`lockstep run --repetitions {max(statistics.MIN_REPETITIONS, 10)}` or more)")
+    unpaced = [row for row in rows if different_modes is not None and row.pace is None]
+    if unpaced:
+        warnings.append(f"{len(unpaced)} of {len(rows)} matched entries have a repetition without its pace: their "
+                        f"pace-aware verdict is {UNAVAILABLE} (the raw one counts for them)")
     errored.sort(key=lambda item: item[0].sort_key())
     return Comparison(baseline, contender, rows,
                       added=sorted(keys_b - keys_a, key=BenchmarkKey.sort_key),
                       removed=sorted(keys_a - keys_b, key=BenchmarkKey.sort_key),
                       errored=errored, warnings=warnings, time_kind=time_kind, alpha=alpha,
-                      noise_percent=noise_percent, calibrations=calibration_rows)
+                      noise_percent=noise_percent, calibrations=calibration_rows,
+                      different_modes=different_modes)
 
 
 # ---------------------------------------------------------------- across machines
@@ -442,10 +612,28 @@ def calibration_move_line(comparison: Comparison, letter: str) -> str:
     return line + f": inside the ±{noise:g} % noise threshold."
 
 
+def _interval(interval) -> str:
+    return f"[{interval[0]:.3f}, {interval[1]:.3f}]" if interval else "-"
+
+
 def _row_cells(comparison: Comparison, row: Row) -> list[str]:
-    interval = f"[{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else "-"
-    return [format_ns(row.median_a), format_ns(row.median_b), f"{row.ratio:.3f}", interval,
+    return [format_ns(row.median_a), format_ns(row.median_b), f"{row.ratio:.3f}", _interval(row.interval),
             f"{row.repetitions_a}/{row.repetitions_b}", _p(row.p_adjusted), comparison.verdict(row)]
+
+
+PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_NORMALISED: "/ pace c2c"}
+
+
+def _pace_cells(comparison: Comparison, row: Row) -> list[str]:
+    if row.pace is None:
+        return [UNAVAILABLE, "-", "-", "-"]
+    how = PACE_HOW[row.pace.method] if "serial" not in row.pace.detail else "/ pace serial"
+    return [how, f"{row.pace.ratio:.3f}", _interval(row.pace.interval), comparison.pace_verdict(row)]
+
+
+def _counts_text(counts: dict[str, int]) -> str:
+    return (f"{counts['slower']} slower, {counts['faster']} faster, {counts['unsure']} unsure, "
+            f"{counts['within noise']} within noise, {counts['untested']} untested")
 
 
 def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
@@ -456,24 +644,35 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     out.append(calibration_move_line(comparison, b))
     out.append("")
     kind = "real" if comparison.time_kind == "real" else "CPU"
+    out += pace_note(comparison.baseline, comparison.contender, b)[0]
+    out.append("")
     out.append(f"time: {kind} time (the ns_per_step or ns_per_episode counter where an entry has it, else per iteration), median of "
-               f"the repetitions; ratio {b}/A of the medians (> 1: {b} is slower) with a "
-               f"{int(statistics.CONFIDENCE * 100)}% bootstrap interval ({statistics.BOOTSTRAP_RESAMPLES} resamples, "
-               f"fixed seed); p: two-sided Mann-Whitney U, Holm-corrected over the "
-               f"{sum(r.p_raw is not None for r in comparison.rows)} tests of this comparison's combinations; "
-               f"counters are medians, {a} -> {b}.")
-    out.append(f"verdict: slower / faster = Holm p < alpha {comparison.alpha:g} and the whole interval beyond "
-               f"the noise threshold of {noise:g} % ({b}/A above {limit:.3f} or below {1.0 / limit:.3f}; "
-               f"--noise PCT); within noise = significant, but the interval reaches inside the threshold (a shift "
-               f"the size of the machine's own run-to-run drift); same = not significant; untested = too few "
-               f"repetitions.")
+               f"the repetitions; ratio {b}/A of the medians (> 1: {b} is slower); interval: the exact "
+               f"distribution-free {int(statistics.CONFIDENCE * 100)}% interval of the shift {b}/A between the "
+               f"repetitions (Mann-Whitney U inverted on log time); q: two-sided Mann-Whitney U p, Benjamini-Hochberg "
+               f"adjusted (false discovery rate) over the {sum(r.p_raw is not None for r in comparison.rows)} tests of "
+               f"this comparison's combinations; counters are medians, {a} -> {b}.")
+    out.append(f"verdict: the interval against the noise band of {noise:g} % (--noise PCT): slower / faster = the "
+               f"whole interval beyond it ({b}/A above {limit:.3f} or below {1.0 / limit:.3f}); within noise = the "
+               f"whole interval inside it (a shift no larger than the machine's own run-to-run drift); unsure = the "
+               f"interval reaches across an edge of the band (more repetitions would tell); untested = too few "
+               f"repetitions for an interval.")
+    if comparison.paced:
+        out.append(f"pace-aware (pace columns): how = one mode (every repetition of both sides in one matching mode: "
+                   f"the raw comparison), matching modes (only the repetitions in the best-filled pair of matching "
+                   f"modes, when each side keeps {statistics.MIN_REPETITIONS}), or / pace c2c (each repetition's time "
+                   f"divided by the c2c reading around it, pace_c2c_ns: the pace-normalised figure); its ratio, "
+                   f"interval and verdict as above.")
     out.append("")
     counters_present = [(c, h) for c, h in COUNTERS_SHOWN if any(c in row.counters for row in comparison.rows)]
-    headings = ["benchmark", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps", "p (Holm)",
-                "verdict"] + [h for _, h in counters_present]
+    pace_headings = ["pace: how", f"{b}/A paced", "paced interval", "paced verdict"] if comparison.paced else []
+    headings = ["benchmark", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps", "q (BH)",
+                "verdict"] + pace_headings + [h for _, h in counters_present]
     rows = []
     for row in comparison.rows:
         cells = [row.key.display] + _row_cells(comparison, row)
+        if comparison.paced:
+            cells += _pace_cells(comparison, row)
         for counter, _ in counters_present:
             before, after = row.counters.get(counter, (None, None))
             # Absent on both sides: the entry cannot have it (lockstep omits, e.g., the futex waits
@@ -481,26 +680,40 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
             cells.append(UNAVAILABLE if before is None and after is None
                          else f"{format_number(before)} -> {format_number(after)}")
         rows.append(cells)
-    out += _table(headings, rows, right={1, 2, 3, 6})
+    out += _table(headings, rows, right={1, 2, 3, 6} | ({9} if comparison.paced else set()))
     out.append("")
     geometric_mean = comparison.geometric_mean
     out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
                f"calibrations apart): {format_number(geometric_mean, 3)}")
-    counts = comparison.verdict_counts()
-    out.append(f"verdicts at alpha {comparison.alpha:g} (Holm) and the {noise:g} % noise threshold: "
-               f"{counts['slower']} slower, {counts['faster']} faster, {counts['within noise']} within noise "
-               f"(significant, inside the threshold), {counts['same']} same, {counts['untested']} untested")
+    raw_called, raw_discovered = comparison.discoveries(comparison.verdict)
+    out.append(f"raw verdicts at the {noise:g} % noise band: {_counts_text(comparison.verdict_counts())} "
+               f"({raw_discovered} of the {raw_called} slower or faster also have BH q < alpha {comparison.alpha:g})")
+    if comparison.paced:
+        paced_rows = [row for row in comparison.rows if row.pace]
+        pace_counts = {name: sum(comparison.pace_verdict(row) == name for row in paced_rows) for name in VERDICTS}
+        methods = ", ".join(f"{sum(row.pace.method == method for row in paced_rows)} {method}"
+                            for method in (PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_NORMALISED))
+        unpaced = len(comparison.rows) - len(paced_rows)
+        out.append(f"pace-aware verdicts: {_counts_text(pace_counts)} ({methods}"
+                   + (f"; {unpaced} {UNAVAILABLE}" if unpaced else "") + ")")
+    headline = comparison.pace_verdict_counts()
+    called, discovered = comparison.discoveries(comparison.beyond_pace)
+    what = ("beyond the pace (pace-aware verdicts; the raw one where an entry has no pace)" if comparison.paced
+            else f"(raw verdicts: pace {UNAVAILABLE})")
+    out.append(f"changed {what}: {headline['slower'] + headline['faster']} of {len(comparison.rows)} "
+               f"({headline['slower']} slower, {headline['faster']} faster; {discovered} of them with BH q < alpha "
+               f"{comparison.alpha:g})")
     if comparison.calibrations:
         out.append("")
         out.append(f"calibrations ({len(comparison.calibrations)}): the machine and the instrumentation, not a "
                    f"combination; c2c compared by its {C2C_COUNTER} counter (its iteration time is thread start-up "
-                   f"plus the measurement), the overhead pair and rk4/serial by their time; Holm-corrected over "
-                   f"these {sum(r.p_raw is not None for r in comparison.calibrations)} tests on their own; not in "
-                   f"the geometric mean, the counts above or --fail-above.")
+                   f"plus the measurement), the overhead pair and rk4/serial by their time (they measure the pace: "
+                   f"raw only); q Benjamini-Hochberg over these {sum(r.p_raw is not None for r in comparison.calibrations)} "
+                   f"tests on their own; not in the geometric mean, the counts above or --fail-above.")
         calibration_rows = [[row.key.display, row.measure] + _row_cells(comparison, row)
                             for row in comparison.calibrations]
         out += _table(["calibration", "measure", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps",
-                       "p (Holm)", "verdict"], calibration_rows, right={2, 3, 4, 7})
+                       "q (BH)", "verdict"], calibration_rows, right={2, 3, 4, 7})
         for key, ratio_a, ratio_b in comparison.accounting_overheads():
             out.append(f"accounting overhead of {key.display} (time with accounting:on / off): "
                        f"A {_number(ratio_a, 3)}, {b} {_number(ratio_b, 3)}")

@@ -54,22 +54,27 @@ def compare_parser() -> argparse.ArgumentParser:
         "compare",
         "Compare Google Benchmark JSON results of `lockstep run` across runs and machines. "
                     "The first file is the baseline A; every other file is compared with it. An entry is "
-                    "slower or faster only when it is significant after Holm's correction AND the whole "
-                    "confidence interval of its ratio lies beyond the noise threshold; a significant shift "
-                    "inside it is 'within noise'. rk4/serial, c2c (by its one_way_ns counter) and the overhead "
+                    "slower or faster only when the whole exact 95% interval of its ratio lies beyond the noise "
+                    "band, 'within noise' when it lies inside, 'unsure' across an edge; the Mann-Whitney p-values "
+                    "are Benjamini-Hochberg adjusted (false discovery rate). When both files carry the pace trace, "
+                    "every entry also gets a pace-aware verdict (within matching pace modes, or on the time "
+                    "divided by the pace's c2c reading), and the headline counts what changed beyond the pace. "
+                    "rk4/serial, c2c (by its one_way_ns counter) and the overhead "
                     "pair are compared apart, as calibrations, and the context's calibrations say how far the "
                     "machine itself moved between the runs.",
         "RESULT.json", "two or more result files")
     parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
-                        help=f"noise threshold in percent (default {DEFAULT_NOISE_PERCENT:g}): a significant "
-                             f"entry is slower only when its whole interval of B/A lies above 1 + PCT/100, "
-                             f"faster only when below 1 / (1 + PCT/100), else within noise. Why "
+                        help=f"noise band in percent (default {DEFAULT_NOISE_PERCENT:g}): an entry is slower "
+                             f"only when its whole interval of B/A lies above 1 + PCT/100, faster only when below "
+                             f"1 / (1 + PCT/100), within noise when inside, unsure across an edge. Why "
                              f"{DEFAULT_NOISE_PERCENT:g}: {NOISE_RATIONALE}".replace("%", "%%"))
     parser.add_argument("--fail-above", type=percentage, metavar="PCT",
-                        help="exit 1 when a matched combination is slower than A (significant and beyond the "
-                             "noise threshold) by more than PCT percent")
+                        help="exit 1 when a matched combination is slower than A beyond the pace (its whole "
+                             "interval above the noise band; pace-aware where both files carry the pace) by more "
+                             "than PCT percent")
     parser.add_argument("--alpha", type=float, default=0.05,
-                        help="family-wise significance level after Holm's correction (default 0.05)")
+                        help="false discovery rate of the Benjamini-Hochberg q-values shown and counted beside "
+                             "the verdicts (default 0.05)")
     parser.add_argument("--time", choices=("real", "cpu"), default="real",
                         help="which time to compare (default: real, the wall-clock step time)")
     # --out, as in every lockstep command that writes a result; --json, its earlier name, still works.
@@ -122,11 +127,13 @@ def run_compare(argv: list[str]) -> int:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
         if failures:
             for comparison, row in failures:
-                interval = f", interval [{row.interval[0]:.3f}, {row.interval[1]:.3f}]" if row.interval else ""
+                shown = row.pace if row.pace else row
+                how = f"pace-aware, {row.pace.method}" if row.pace else "raw"
+                q = f", BH q {row.p_adjusted:.2g}" if row.p_adjusted is not None else ""
                 sys.stderr.write(f"lockstep compare: regression beyond {options.fail_above:g}%: "
-                                 f"{row.key.display} is {(row.ratio - 1) * 100:.1f}% slower in "
-                                 f"{comparison.contender.label} (Holm p {row.p_adjusted:.2g}{interval}, beyond "
-                                 f"the {options.noise:g}% noise threshold)\n")
+                                 f"{row.key.display} is {(shown.ratio - 1) * 100:.1f}% slower in "
+                                 f"{comparison.contender.label} ({how}: interval [{shown.interval[0]:.3f}, "
+                                 f"{shown.interval[1]:.3f}] beyond the {options.noise:g}% noise band{q})\n")
             return EXIT_REGRESSION
     return EXIT_OK
 
@@ -135,7 +142,13 @@ def row_json(comparison, row) -> dict:
     return {"name": row.key.display, "measure": row.measure, "median_a_ns": row.median_a,
             "median_b_ns": row.median_b, "ratio": row.ratio,
             "interval": list(row.interval) if row.interval else None,
-            "p": row.p_raw, "p_holm": row.p_adjusted, "verdict": comparison.verdict(row),
+            "p": row.p_raw, "q_bh": row.p_adjusted, "verdict": comparison.verdict(row),
+            "pace": None if row.pace is None else {
+                "method": row.pace.method, "detail": row.pace.detail, "ratio": row.pace.ratio,
+                "interval": list(row.pace.interval) if row.pace.interval else None,
+                "repetitions": [row.pace.repetitions_a, row.pace.repetitions_b],
+                "verdict": comparison.pace_verdict(row)},
+            "verdict_beyond_pace": comparison.beyond_pace(row),
             "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
 
 
@@ -144,10 +157,14 @@ def comparison_json(comparisons) -> str:
     for comparison in comparisons:
         document["comparisons"].append({
             "baseline": comparison.baseline.label, "contender": comparison.contender.label,
-            "time": comparison.time_kind, "alpha": comparison.alpha, "correction": "holm",
+            "time": comparison.time_kind, "alpha": comparison.alpha, "correction": "benjamini-hochberg",
+            "interval": "exact distribution-free shift interval (Mann-Whitney U inverted on log time)",
             "noise_pct": comparison.noise_percent,
             "geometric_mean": comparison.geometric_mean, "matched": len(comparison.rows),
             "verdicts": comparison.verdict_counts(),
+            "verdicts_beyond_pace": comparison.pace_verdict_counts(),
+            "pace": ("unavailable" if comparison.different_modes is None
+                     else "different modes" if comparison.different_modes else "same modes"),
             "rows": [row_json(comparison, row) for row in comparison.rows],
             "calibrations": [row_json(comparison, row) for row in comparison.calibrations],
             "calibration_moves": [{"name": name, "unit": unit, "a": before, "b": after, "change_pct": change}
