@@ -17,6 +17,12 @@ LONGEST_NS = 1e15
 LARGEST_AMOUNT = 1e15
 # CPU numbers (c2c pairs) lie below this.
 CPU_LIMIT = 1 << 20
+# A measured ratio (lockstep_pairs) lies in [SMALLEST_RATIO, LARGEST_AMOUNT]: positive, and finite when inverted.
+SMALLEST_RATIO = 1e-9
+# A noise band as a fraction (lockstep_pairs[].noise: 0.05 is 5 %) lies in [0, LARGEST_NOISE].
+LARGEST_NOISE = 10.0
+# The pace modes' shares of the run may add up to a little more than 1 where the writer rounded each.
+SHARE_SLACK = 0.01
 
 # What a table or a context value says where a value is missing or not a number.
 UNAVAILABLE = "unavailable"
@@ -61,6 +67,27 @@ DURATION_COUNTERS = UNIT_COUNTERS + (C2C_COUNTER,)  # ns, in [SHORTEST_NS, LONGE
 SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_NS
 AMOUNT_COUNTERS = tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
+
+# ---------------------------------------------------------------- the pace trace and the pairs (issue 12)
+
+# A cloud VM changes pace for seconds at a time; `lockstep run` records a pace trace between blocks of
+# measurement, tags every repetition with the pace around it, and measures each ratio it prints as a pair.
+# All of it is an addition: a file without these keys was written before it and reads as before.
+PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
+PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
+# Per-repetition counters (iteration rows only; an aggregate's median or mean of a mode index means nothing).
+PACE_C2C_COUNTER = "pace_c2c_ns"  # ns; NaN on a machine of one CPU (no pair to measure)
+PACE_SERIAL_COUNTER = "pace_serial_ns"  # ns
+PACE_MODE_COUNTER = "pace_mode"  # an index into lockstep_pace.modes, or OUTLIER_MODE
+PACE_COUNTERS = (PACE_C2C_COUNTER, PACE_SERIAL_COUNTER, PACE_MODE_COUNTER)
+# The mode of a reading that belongs to no mode, of a repetition whose readings before and after disagree
+# (it straddles a change), of a pair whose mode is unknown.
+OUTLIER_MODE = -1
+# Keys that hold a mode: -1 is a valid value of each (the fuzz test may turn a 0 into a valid -1).
+MODE_KEYS = ("mode", "modes", PACE_MODE_COUNTER)
+# What a pair compares (lockstep_pairs[].comparison) and what it concluded (verdict).
+PAIR_COMPARISONS = ("false_sharing", "migration", "against_best_other", "overhead")
+PAIR_VERDICTS = ("penalty", "gain", "within noise")
 
 # ---------------------------------------------------------------- the context of a run file
 

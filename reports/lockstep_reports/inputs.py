@@ -218,15 +218,32 @@ def parse_json(path: str, text: str):
 
 # ---------------------------------------------------------------- run files (Google Benchmark JSON)
 
+@dataclass(frozen=True)
+class RepetitionPace:
+    """The pace measured around one repetition (fields.PACE_COUNTERS): the mean of the readings before and
+    after it. None where the file says NaN (unavailable: c2c on a machine of one CPU); mode is an index into
+    the file's PaceTrace.modes, or fields.OUTLIER_MODE when the two readings disagree (a change of pace
+    during the repetition)."""
+
+    c2c_ns: float | None
+    serial_ns: float | None
+    mode: int | None
+
+    @property
+    def straddles(self) -> bool:
+        return self.mode == fields.OUTLIER_MODE
+
+
 @dataclass
 class Repetition:
     """One measured value set: real_ns is the per-unit counter (fields.UNIT_COUNTERS) where the entry has
     one, else Google Benchmark's real_time; cpu_ns is its cpu_time; counters holds the read counters that
-    are finite numbers."""
+    are finite numbers; pace the pace around it (None in a file written before the pace trace)."""
 
     real_ns: float
     cpu_ns: float
     counters: dict[str, float]
+    pace: RepetitionPace | None = None
 
 
 @dataclass
@@ -263,6 +280,61 @@ class Run:
         return values
 
 
+@dataclass(frozen=True)
+class PaceReading:
+    """One reference reading of the pace trace, taken between blocks of measurement."""
+
+    t_s: float  # seconds since the run started
+    c2c_ns: float | None  # one-way core-to-core latency on the pinned pair; None on a machine of one CPU
+    serial_ns: float  # the serial RK4 step
+    mode: int  # index into PaceTrace.modes, fields.OUTLIER_MODE for a reading that belongs to no mode
+
+
+@dataclass(frozen=True)
+class PaceMode:
+    """One pace the machine ran at: the medians of its readings, and its share of the run's time."""
+
+    mode: int
+    c2c_ns: float | None
+    serial_ns: float
+    share: float  # 0..1
+    readings: int
+
+
+@dataclass(frozen=True)
+class PaceTrace:
+    """The file's "lockstep_pace": the reference, the readings in time order, the modes fastest first."""
+
+    reference: str
+    cpus: tuple[int, ...]  # the pinned pair of the c2c reading; () on a machine of one CPU
+    readings: tuple[PaceReading, ...]
+    modes: tuple[PaceMode, ...]
+    changes: int
+    summary: str
+
+
+@dataclass(frozen=True)
+class PacePair:
+    """One entry of "lockstep_pairs": a ratio a/b measured as a pair, both sides in alternating short blocks,
+    one ratio per adjacent pair of blocks."""
+
+    comparison: str  # fields.PAIR_COMPARISONS
+    group: str
+    a: str  # the numerator entry's name, as written
+    b: str
+    a_key: BenchmarkKey
+    b_key: BenchmarkKey
+    ratios: tuple[float, ...]
+    modes: tuple[int, ...]  # the pace mode of each pair, fields.OUTLIER_MODE when unknown
+    median: float
+    ci_low: float
+    ci_high: float
+    confidence: float
+    noise: float  # a fraction: 0.05 is 5 %
+    verdict: str  # fields.PAIR_VERDICTS
+    block_ms: float
+
+
 @dataclass
 class RunFile:
     path: str
@@ -270,6 +342,8 @@ class RunFile:
     context: dict  # the context keys the tools read (fields.FINGERPRINT_KEYS), checked
     runs: dict[BenchmarkKey, Run]
     warnings: list[str] = field(default_factory=list)
+    pace: PaceTrace | None = None  # None: written before the pace trace
+    pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""
@@ -349,6 +423,138 @@ def _measured_values(entry: _Object, run: Run, scale: float, least: float) -> Re
     return Repetition(real, times["cpu_time"], finite)
 
 
+def _repetition_pace(entry: _Object, run: Run, trace: "PaceTrace | None") -> RepetitionPace | None:
+    """The pace counters of one repetition (iteration row), checked; None when it carries none. They come
+    together, only in a file with a pace trace, and a mode names one of its modes (or -1)."""
+    present = [name for name in fields.PACE_COUNTERS if name in entry.value]
+    if not present:
+        return None
+    if len(present) != len(fields.PACE_COUNTERS):
+        missing = [name for name in fields.PACE_COUNTERS if name not in present]
+        entry.fail(missing[0], f"is missing beside {', '.join(present)}: the pace counters come together")
+    if trace is None:
+        entry.fail(present[0], f"is there but the file has no {fields.PACE_KEY}: a repetition's pace names a "
+                               "mode of the file's pace trace")
+    values = {}
+    for name in (fields.PACE_C2C_COUNTER, fields.PACE_SERIAL_COUNTER):
+        value = entry.number(name, fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns", non_finite=True)
+        if not math.isfinite(value):
+            run.unavailable[f"{name} value"] += 1
+            value = None
+        values[name] = value
+    mode = entry.number(fields.PACE_MODE_COUNTER, -fields.LARGEST_AMOUNT, fields.LARGEST_AMOUNT, non_finite=True)
+    if not math.isfinite(mode):
+        run.unavailable[f"{fields.PACE_MODE_COUNTER} value"] += 1
+        mode = None
+    elif not mode.is_integer() or not fields.OUTLIER_MODE <= mode < len(trace.modes):
+        entry.fail(fields.PACE_MODE_COUNTER, f"is {_shown(mode)}, not one of the {len(trace.modes)} modes of "
+                                             f"{fields.PACE_KEY} (0..{len(trace.modes) - 1}) or -1 (a change of "
+                                             "pace during the repetition)")
+    return RepetitionPace(values[fields.PACE_C2C_COUNTER], values[fields.PACE_SERIAL_COUNTER],
+                          None if mode is None else int(mode))
+
+
+def _read_pace(path: str, document: dict) -> PaceTrace | None:
+    """The top-level "lockstep_pace", checked field by field; None when the file has none (an older file)."""
+    if fields.PACE_KEY not in document:
+        return None
+    trace = _Object(path, document[fields.PACE_KEY], fields.PACE_KEY)
+    reference = trace.text("reference", empty=False)
+    cpus = []
+    for index, cpu in enumerate(trace.array("cpus", nonempty=False)):
+        if isinstance(cpu, bool) or not isinstance(cpu, int) or not 0 <= cpu < fields.CPU_LIMIT:
+            trace.fail("cpus", f"holds {_shown(cpu)} at {index}: a CPU number is a whole number of 0 or more")
+        cpus.append(cpu)
+    if len(cpus) not in (0, 2) or len(set(cpus)) != len(cpus):
+        trace.fail("cpus", f"is {_shown(cpus)}: the pinned pair of two different CPUs, or [] on a machine of one")
+
+    raw_modes = trace.array("modes")
+    modes = []
+    for index, raw in enumerate(raw_modes):
+        mode = _Object(path, raw, f"{fields.PACE_KEY}: mode {index}")
+        number = mode.integer("mode", high=fields.CPU_LIMIT)
+        if number != index:
+            mode.fail("mode", f"is {number}, not {index}: the modes are listed in the order of their index")
+        c2c = mode.number("c2c_ns", fields.SHORTEST_NS, fields.LONGEST_NS, nullable=True, unit=" ns")
+        if modes and (c2c is None) != (modes[0].c2c_ns is None):
+            mode.fail("c2c_ns", "is null in some modes and a number in others: either the machine has a pair of "
+                                "CPUs to measure or it has not")
+        if modes and c2c is not None and c2c < modes[-1].c2c_ns:
+            mode.fail("c2c_ns", f"is {c2c:g} ns, below the {modes[-1].c2c_ns:g} ns of the mode before: the modes "
+                                "are sorted fastest first")
+        modes.append(PaceMode(index, c2c,
+                              mode.number("serial_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns"),
+                              mode.number("share", 0.0, 1.0), mode.integer("readings")))
+    if sum(mode.share for mode in modes) > 1.0 + fields.SHARE_SLACK:
+        trace.fail("modes", f"have shares adding up to {sum(mode.share for mode in modes):g}, more than the whole "
+                            "run")
+
+    readings = []
+    for index, raw in enumerate(trace.array("readings")):
+        reading = _Object(path, raw, f"{fields.PACE_KEY}: reading {index}")
+        t_s = reading.number("t_s", 0.0, fields.LONGEST_NS / 1e9, unit=" s")
+        if readings and t_s < readings[-1].t_s:
+            reading.fail("t_s", f"is {t_s:g} s, before the {readings[-1].t_s:g} s of the reading before: the "
+                                "readings are in time order")
+        readings.append(PaceReading(
+            t_s, reading.number("c2c_ns", fields.SHORTEST_NS, fields.LONGEST_NS, nullable=True, unit=" ns"),
+            reading.number("serial_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns"),
+            reading.integer("mode", low=fields.OUTLIER_MODE, high=len(modes) - 1)))
+    changes = trace.integer("changes", high=len(readings) - 1)
+    return PaceTrace(reference, tuple(cpus), tuple(readings), tuple(modes), changes, trace.text("summary"))
+
+
+def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[PacePair]:
+    """The top-level "lockstep_pairs", checked field by field; [] when the file has none (an older file)."""
+    if fields.PAIRS_KEY not in document:
+        return []
+    raw_pairs = document[fields.PAIRS_KEY]
+    if not isinstance(raw_pairs, list):
+        raise InputError(path, f"{fields.PAIRS_KEY} is {json_kind(raw_pairs)}, not a list")
+    pairs, seen = [], {}
+    highest_mode = len(trace.modes) - 1 if trace else fields.OUTLIER_MODE
+    for index, raw in enumerate(raw_pairs):
+        pair = _Object(path, raw, f"{fields.PAIRS_KEY} entry {index}")
+        comparison = pair.choice("comparison", fields.PAIR_COMPARISONS)
+        names = {}
+        for side in ("a", "b"):
+            name = pair.text(side, empty=False)
+            key = parse_name(name)
+            if not key.family:
+                pair.fail(side, f"is {_shown(name)}: no benchmark family")
+            names[side] = (name, key)
+        identity = (comparison, names["a"][1], names["b"][1])
+        if identity in seen:
+            raise InputError(path, f"{pair.where} repeats entry {seen[identity]} (the same {comparison} pair of "
+                                   f"{names['a'][0]} and {names['b'][0]}): a damaged or concatenated file")
+        seen[identity] = index
+        ratios = tuple(_checked_number(pair, f"ratios[{at}]", value, fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
+                       for at, value in enumerate(pair.array("ratios")))
+        raw_modes = pair.array("modes")
+        if len(raw_modes) != len(ratios):
+            pair.fail("modes", f"has {len(raw_modes)} values for {len(ratios)} ratios: one mode per pair")
+        modes = []
+        for at, value in enumerate(raw_modes):
+            if isinstance(value, bool) or not isinstance(value, int) or not fields.OUTLIER_MODE <= value <= highest_mode:
+                where = (f"one of the {highest_mode + 1} modes of {fields.PACE_KEY} or -1" if trace
+                         else f"-1: the file has no {fields.PACE_KEY}")
+                pair.fail("modes", f"holds {_shown(value)} at {at}, not {where}")
+            modes.append(value)
+        median = pair.number("median", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
+        ci_low = pair.number("ci_low", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
+        ci_high = pair.number("ci_high", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
+        if ci_low > ci_high:
+            pair.fail("ci_low", f"is {ci_low:g}, above ci_high {ci_high:g}")
+        confidence = pair.number("confidence", 0.0, 1.0)
+        if not 0.0 < confidence < 1.0:
+            pair.fail("confidence", f"is {confidence:g}: a confidence lies strictly between 0 and 1")
+        pairs.append(PacePair(comparison, pair.text("group"), names["a"][0], names["b"][0], names["a"][1],
+                              names["b"][1], ratios, tuple(modes), median, ci_low, ci_high, confidence,
+                              pair.number("noise", 0.0, fields.LARGEST_NOISE), pair.choice("verdict", fields.PAIR_VERDICTS),
+                              pair.number("block_ms", fields.SHORTEST_NS / 1e6, fields.LONGEST_NS / 1e6, unit=" ms")))
+    return pairs
+
+
 def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not isinstance(document, dict):
         raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
@@ -365,6 +571,8 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not benchmarks:
         raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
     context_values, warnings = _read_context(path, label, context)
+    pace = _read_pace(path, document)
+    pairs = _read_pairs(path, document, pace)
 
     runs: dict[BenchmarkKey, Run] = {}
     seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
@@ -416,15 +624,19 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
         # and a time per batch read as a time per step would be off by the batch size.
         present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
         if aggregate is None:
-            _same_counters(entry, present, first_repetition.setdefault(key, (index, present)))
+            paced = present | frozenset(name for name in fields.PACE_COUNTERS if name in entry.value)
+            _same_counters(entry, paced, first_repetition.setdefault(key, (index, paced)))
         units = present & frozenset(fields.UNIT_COUNTERS)
         _same_counters(entry, units, first_read.setdefault(key, (index, units)))
+        # An aggregate's pace counters (a median of mode indices) mean nothing: only repetitions carry a pace.
+        repetition_pace = _repetition_pace(entry, run, pace) if aggregate is None else None
         values = _measured_values(entry, run, scale, fields.SHORTEST_NS)
         if values is None:
             continue
         if aggregate is not None:
             run.aggregates[aggregate] = values
         else:
+            values.pace = repetition_pace
             run.repetitions.append(values)
     for key in sorted(runs, key=BenchmarkKey.sort_key):
         left_out = runs[key].unavailable
@@ -432,7 +644,8 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
             counts = ", ".join(f"{count} {what}(s)" for what, count in sorted(left_out.items()))
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
-    return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings)
+    return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
+                   pairs=pairs)
 
 
 def _same_counters(entry: _Object, counters: frozenset, first: tuple[int, frozenset]) -> None:

@@ -71,6 +71,7 @@ RUN_BASES = (  # (base, partner): the partner is the unmutated file of the compa
     (FIXTURES / "aggregates_only.json", FIXTURES / "machine_b.json"),
     (SAMPLES / "pair-a.json", SAMPLES / "pair-b.json"),
     (SAMPLES / "run.json", SAMPLES / "pair-a.json"),
+    (FIXTURES / "paced_a.json", FIXTURES / "paced_b.json"),  # issue 12's pace trace and pairs
 )
 OTHER_BASES = (FIXTURES / "c2c_a.json", FIXTURES / "c2c_b.json", SAMPLES / "c2c.json",
                FIXTURES / "delay_a.json", SAMPLES / "delay.json")
@@ -334,7 +335,9 @@ def mutate_json(rng, kind, base):
     text = dumped(mutated)
     if raw_token is not None:
         text = text.replace(json.dumps(MARKER), raw_token)
-    signed = kind == "negative number" and path[-1] in fields.SIGNED_COUNTERS
+    # A negative value a field may hold: a signed counter's, or a mode's -1 (outlier, straddling, unknown).
+    signed = kind == "negative number" and (path[-1] in fields.SIGNED_COUNTERS or path[-1] in fields.MODE_KEYS
+                                            or (len(path) > 1 and path[-2] in fields.MODE_KEYS))
     return Mutation(kind, text, "/".join(str(p) for p in path), other_value_allowed=signed)
 
 

@@ -1,4 +1,6 @@
 """Reading result files: Google Benchmark 1.7 and later, and one clear line for every unusable file."""
+import json
+import math
 import os
 import tempfile
 import unittest
@@ -132,6 +134,124 @@ class UnusableFiles(unittest.TestCase):
             with self.assertRaises(InputError) as caught:
                 load_any(path)
             self.assertIn(path, str(caught.exception))
+
+
+class PaceTraceAndPairs(unittest.TestCase):
+    """Issue 12's keys (briefs/pace-schema.md): lockstep_pace, lockstep_pairs and the per-repetition pace."""
+
+    @staticmethod
+    def document(name="paced_a.json"):
+        with open(fixture(name), encoding="utf-8") as stream:
+            return json.load(stream)
+
+    def load(self, document):
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "paced.json")
+            with open(path, "w", encoding="utf-8") as stream:
+                json.dump(document, stream)
+            return load_run_file(path), path
+
+    def assert_rejected(self, document, *words):
+        with self.assertRaises(InputError) as caught:
+            self.load(document)
+        text = str(caught.exception)
+        self.assertEqual(text.count("\n"), 0)
+        for word in words:
+            self.assertIn(word, text)
+        return text
+
+    def test_the_trace_the_pairs_and_each_repetitions_pace_are_read(self):
+        run_file = load_run_file(fixture("paced_a.json"))
+        pace = run_file.pace
+        self.assertEqual([mode.c2c_ns for mode in pace.modes], [25.0, 118.0])
+        self.assertEqual(pace.changes, 1)
+        self.assertEqual(pace.cpus, (0, 1))
+        self.assertEqual(len(pace.readings), 40)
+        self.assertIn(-1, [reading.mode for reading in pace.readings])  # the outlier reading
+        self.assertTrue(pace.summary.startswith("c2c 25 ns"))
+        self.assertEqual(len(run_file.pairs), 3)
+        pair = run_file.pairs[0]
+        self.assertEqual(pair.comparison, "false_sharing")
+        self.assertEqual(pair.a_key, parse_name(pair.a))
+        self.assertEqual(len(pair.ratios), len(pair.modes))
+        run = run_file.runs[parse_name("rk4/sync:futex_spin/layout:packed/pin:compact/threads:4")]
+        modes = [repetition.pace.mode for repetition in run.repetitions]
+        self.assertEqual(modes, [0] * 6 + [-1] + [1] * 3)
+        self.assertTrue(run.repetitions[6].pace.straddles)
+        self.assertGreater(run.repetitions[9].pace.c2c_ns, 100)
+        self.assertNotIn("pace_mode", run.repetitions[0].counters)  # the pace is not a counter shown
+
+    def test_an_old_file_has_no_pace_and_no_pairs(self):
+        run_file = load_run_file(fixture("machine_a.json"))
+        self.assertIsNone(run_file.pace)
+        self.assertEqual(run_file.pairs, [])
+        self.assertTrue(all(r.pace is None for run in run_file.runs.values() for r in run.repetitions))
+
+    def test_a_nan_pace_is_unavailable_and_counted(self):
+        document = self.document()
+        first = next(e for e in document["benchmarks"] if e["run_type"] == "iteration")
+        first["pace_c2c_ns"] = math.nan
+        run_file, _ = self.load(document)
+        self.assertTrue(any("pace_c2c_ns value" in warning for warning in run_file.warnings))
+
+    def test_aggregates_may_carry_a_meaningless_pace(self):
+        document = self.document()
+        for entry in document["benchmarks"]:
+            if entry["run_type"] == "aggregate":
+                entry["pace_mode"] = 0.4  # a mean of mode indices: ignored there
+        run_file, _ = self.load(document)
+        self.assertIsNotNone(run_file.pace)
+
+    def test_damaged_pace_keys_are_one_line(self):
+        def changed(change):
+            document = self.document()
+            change(document)
+            return document
+
+        def iteration(document, index=0):
+            return [e for e in document["benchmarks"] if e["run_type"] == "iteration"][index]
+
+        cases = [
+            (lambda d: d.__setitem__("lockstep_pace", []), "lockstep_pace is a list"),
+            (lambda d: d["lockstep_pace"]["modes"].reverse(), "mode 0: mode is 1"),
+            (lambda d: d["lockstep_pace"]["modes"][1].__setitem__("c2c_ns", 10.0), "sorted fastest first"),
+            (lambda d: d["lockstep_pace"]["modes"][0].__setitem__("share", 1.5), "share is 1.5"),
+            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("t_s", 0.0), "in time order"),
+            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("mode", 2), "reading 3: mode is 2"),
+            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("c2c_ns", -4.0), "c2c_ns is -4"),
+            (lambda d: d["lockstep_pace"].__setitem__("changes", 400), "changes is 400"),
+            (lambda d: d["lockstep_pace"].__setitem__("cpus", [1, 1]), "cpus"),
+            (lambda d: d["lockstep_pace"].pop("summary"), "summary is missing"),
+            (lambda d: iteration(d).__setitem__("pace_mode", 2), "pace_mode is 2"),
+            (lambda d: iteration(d).__setitem__("pace_mode", 0.5), "pace_mode is 0.5"),
+            (lambda d: iteration(d).__setitem__("pace_mode", "fast"), "pace_mode is text"),
+            (lambda d: iteration(d).pop("pace_serial_ns"), "pace_serial_ns"),
+            (lambda d: d.pop("lockstep_pace"), "no lockstep_pace"),
+            (lambda d: d.__setitem__("lockstep_pairs", {}), "lockstep_pairs is an object"),
+            (lambda d: d["lockstep_pairs"][0].__setitem__("comparison", "speed"), "comparison is 'speed'"),
+            (lambda d: d["lockstep_pairs"][0]["ratios"].__setitem__(2, -1.3), "ratios[2] is -1.3"),
+            (lambda d: d["lockstep_pairs"][0]["modes"].pop(), "one mode per pair"),
+            (lambda d: d["lockstep_pairs"][0]["modes"].__setitem__(0, 7), "holds 7 at 0"),
+            (lambda d: d["lockstep_pairs"][0].__setitem__("ci_low", 9.0), "above ci_high"),
+            (lambda d: d["lockstep_pairs"][0].__setitem__("verdict", "faster"), "verdict is 'faster'"),
+            (lambda d: d["lockstep_pairs"].append(d["lockstep_pairs"][0]), "repeats entry 0"),
+        ]
+        for change, words in cases:
+            with self.subTest(words):
+                self.assert_rejected(changed(change), words)
+
+    def test_the_pace_keys_are_additions_a_tool_that_ignores_them_reads_the_same(self):
+        document = self.document()
+        for key in ("lockstep_pace", "lockstep_pairs"):
+            document.pop(key)
+        for entry in document["benchmarks"]:
+            for key in ("pace_c2c_ns", "pace_serial_ns", "pace_mode"):
+                entry.pop(key, None)
+        plain, _ = self.load(document)
+        paced = load_run_file(fixture("paced_a.json"))
+        self.assertIsNone(plain.pace)
+        self.assertEqual({key: run.times_ns() for key, run in plain.runs.items()},
+                         {key: run.times_ns() for key, run in paced.runs.items()})
 
 
 if __name__ == "__main__":
