@@ -93,8 +93,10 @@ def _syncs_layouts(run_file):
     return syncs, layouts
 
 
-def heatmap(run_file, pin: str, threads: int) -> str:
-    """Median step time, sync (rows) x layout (columns), for one placement and thread count."""
+def heatmap(run_file, pin: str, threads: int, within_noise=frozenset()) -> str:
+    """Median step time, sync (rows) x layout (columns), for one placement and thread count. within_noise:
+    (sync, layout) cells whose paired comparison (lockstep_pairs) was within noise: hatched, their value
+    marked with "≈"."""
     syncs, layouts = _syncs_layouts(run_file)
     grid = np.full((len(syncs), len(layouts)), np.nan)
     for row, sync in enumerate(syncs):
@@ -112,8 +114,16 @@ def heatmap(run_file, pin: str, threads: int) -> str:
         for column in range(len(layouts)):
             value = grid[row, column]
             text = format_ns(value, CELL_DIGITS) if math.isfinite(value) else "n/a"
-            axes.text(column, row, text, ha="center", va="center", fontsize=8,
-                      color="white" if math.isfinite(value) and norm and norm(value) > 0.55 else "black")
+            dark = math.isfinite(value) and norm is not None and norm(value) > 0.55
+            noisy = (syncs[row], layouts[column]) in within_noise
+            if noisy:
+                axes.add_patch(matplotlib.patches.Rectangle((column - 0.5, row - 0.5), 1.0, 1.0, fill=False,
+                                                            hatch="///", edgecolor="white" if dark else "#444444",
+                                                            lw=0.5))
+                text = "≈ " + text
+            axes.text(column, row, text, ha="center", va="center", fontsize=8, color="white" if dark else "black",
+                      bbox=dict(boxstyle="round,pad=0.2", fc="black" if dark else "white", ec="none", alpha=0.75)
+                      if noisy else None)
     axes.set_title(f"step time (median), pin:{pin} threads:{threads}")
     figure.colorbar(image, ax=axes, label="ns per step (log)")
     return to_svg(figure)
@@ -255,7 +265,7 @@ def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
     threads_list = sorted({row.threads for row in rows})
     kinds = sorted({row.kind for row in rows})
     height = max(2.6, 0.24 * len(syncs) * max(1, len(threads_list)) ** 0.6 + 1.3)
-    figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.3 * len(kinds) + 1.2, height), squeeze=False,
+    figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.3 * len(kinds) + 2.2, height), squeeze=False,
                                      sharey=True)
     colors = plt.get_cmap("tab10")
     span = [row.ratio for row in rows] + [v for row in rows for v in (row.ci_low, row.ci_high) if v]
@@ -285,7 +295,8 @@ def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
             if any(row.verdict == "within noise" for row in rows):
                 handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="gray", hatch="////",
                                                         label="within noise"))
-            axes.legend(handles=handles, fontsize=7, loc="lower right", frameon=True)
+            axes_list[0][-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                                    frameon=False)
     return to_svg(figure)
 
 
@@ -492,4 +503,79 @@ def period_search(search) -> str:
     axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     axes.set_title("find-period: periods tried against their miss rate"
                    + (" (cut by the search budget)" if search.budget_cut else ""), fontsize=9)
+    return to_svg(figure)
+
+
+def mode_colors(count: int):
+    """One colour per pace mode, fastest first; outliers (mode -1) are grey."""
+    palette = plt.get_cmap("tab10")
+    return {mode: palette(mode % 10) for mode in range(count)} | {-1: (0.6, 0.6, 0.6, 1.0)}
+
+
+def pace_trace(readings, modes, title: str) -> str:
+    """The pace trace as a time line: each reference reading's core-to-core latency (and serial step, in a
+    second panel) against the time since the run started, coloured by the pace mode it was put in, each
+    mode's median as a line. readings: objects with t_s, c2c_ns (None on one CPU), serial_ns, mode; modes:
+    objects with mode, c2c_ns, serial_ns, share."""
+    colors = mode_colors(len(modes))
+    has_c2c = any(r.c2c_ns is not None for r in readings)
+    panels = [("c2c_ns", "core-to-core one-way")] if has_c2c else []
+    panels.append(("serial_ns", "serial RK4 step"))
+    figure, axes_list = plt.subplots(len(panels), 1, figsize=(7.2, 1.9 * len(panels) + 0.7), squeeze=False,
+                                     sharex=True)
+    for (key, name), axes in zip(panels, axes_list[:, 0]):
+        values = [getattr(r, key) for r in readings if getattr(r, key) is not None]
+        for mode in sorted({r.mode for r in readings}):
+            points = [(r.t_s, getattr(r, key)) for r in readings if r.mode == mode and getattr(r, key) is not None]
+            if points:
+                xs, ys = zip(*points)
+                label = "outlier" if mode < 0 else f"mode {mode}"
+                axes.scatter(xs, ys, s=7, color=colors.get(mode, colors[-1]), label=label, zorder=3, lw=0)
+        for mode in modes:
+            value = getattr(mode, key, None)
+            if value is not None:
+                axes.axhline(value, color=colors.get(mode.mode, colors[-1]), lw=0.8, ls="--")
+        if values and max(values) / min(values) > 3.0:
+            axes.set_yscale("log")
+            axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
+            duration_axis(axes.yaxis)
+        else:
+            axes.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: format_ns(value, 2)))
+        axes.set_ylabel(name, fontsize=8)
+        axes.grid(axis="y", color="#eeeeee", lw=0.6)
+    axes_list[-1, 0].set_xlabel("time since the run started (s)")
+    handles, labels = axes_list[0, 0].get_legend_handles_labels()
+    if handles:
+        axes_list[0, 0].legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                               frameon=False, markerscale=1.6)
+    axes_list[0, 0].set_title(title, fontsize=9)
+    return to_svg(figure)
+
+
+def paired_ratios(pairs, title: str) -> str:
+    """Paired ratios (lockstep_pairs) as horizontal bars from 1 on a logarithmic ratio axis: the median per
+    adjacent pair, the whisker its confidence interval, the noise band shaded, a bar within noise hatched
+    and pale. pairs: objects with group, median, ci_low, ci_high, noise, verdict."""
+    pairs = list(pairs)
+    figure, axes = plt.subplots(figsize=(7.2, 0.26 * len(pairs) + 1.3))
+    noise = max((p.noise for p in pairs if p.noise is not None), default=None)
+    _ratio_axis(axes, [v for p in pairs for v in (p.median, p.ci_low, p.ci_high)], noise)
+    verdict_color = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c"}
+    for y, pair in enumerate(pairs):
+        style = VERDICT_STYLE.get(pair.verdict, VERDICT_STYLE["penalty"])
+        color = verdict_color.get(pair.verdict, "#4c72b0")
+        axes.barh(y, pair.median - 1.0, 0.7, left=1.0, color=color, alpha=style["alpha"], hatch=style["hatch"],
+                  edgecolor=color if style["hatch"] else None, lw=0.0)
+        axes.errorbar(pair.median, y, xerr=[[pair.median - pair.ci_low], [pair.ci_high - pair.median]],
+                      color="black", capsize=2, lw=0.8)
+    axes.set_yticks(range(len(pairs)), [p.group for p in pairs], fontsize=7)
+    axes.set_ylim(len(pairs) - 0.5, -0.5)
+    axes.set_xlabel("paired time ratio a / b (log; median per adjacent pair, whisker: confidence interval)")
+    handles = [matplotlib.patches.Patch(color=color, alpha=VERDICT_STYLE[verdict]["alpha"],
+                                        hatch=VERDICT_STYLE[verdict]["hatch"], label=verdict)
+               for verdict, color in verdict_color.items() if any(p.verdict == verdict for p in pairs)]
+    if noise:
+        handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
+    axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    axes.set_title(title, fontsize=9)
     return to_svg(figure)

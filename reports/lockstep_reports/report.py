@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import figures, paper
+from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, rank_tables
 from .fields import (CPU_LIMIT, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
                      SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
@@ -93,15 +93,25 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     bars = Section(f"Spread per primitive: {run_file.label}",
                    paragraphs=["Bars at the median over repetitions, whiskers over the interquartile range, one "
                                "dot per repetition."])
+    noisy_cells = within_noise_cells(run_file)
+    if noisy_cells:
+        heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
+                               "padded layout was within noise (its confidence interval reaches into the noise "
+                               "band): the two cells do not differ measurably.")
     for pin, threads in groups:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
-                                   figures.heatmap(run_file, pin, threads)))
+                                   figures.heatmap(run_file, pin, threads,
+                                                   noisy_cells.get((pin, threads), frozenset()))))
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
                                    figures.bars_with_spread(run_file, pin, threads)))
     sections += [heat, bars]
+    if run_file.pace is not None:
+        sections.append(pace_section(run_file, counter))
     penalty = penalty_section(run_file, counter)
     if penalty:
         sections.append(penalty)
+    if run_file.pairs:
+        sections.append(pairs_section(run_file, counter))
     rank_rows = []
     for (pin, threads), per_file in rank_tables([run_file], top=5).items():
         for rank, (name, step, vs_serial) in enumerate(per_file[0], start=1):
@@ -136,17 +146,144 @@ def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
     return Table(["sync", "threads"] + kinds, lines)
 
 
+PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): packed / padded",
+                    "migration": "migration (paired): pin:{pin} / pin:compact"}
+
+
+def within_noise_cells(run_file: RunFile) -> dict[tuple[str, int], frozenset]:
+    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair was within noise."""
+    cells: dict[tuple[str, int], set] = {}
+    for pair in run_file.pairs:
+        if pair.comparison == "false_sharing" and pair.verdict == "within noise":
+            key = pair.a_key
+            cells.setdefault((key.get("pin"), key.threads), set()).add((key.get("sync"), key.get("layout")))
+    return {group: frozenset(members) for group, members in cells.items()}
+
+
+def paired_penalty_rows(run_file: RunFile) -> list[figures.PenaltyRow]:
+    """The false-sharing and migration penalties measured as pairs (lockstep_pairs), with their intervals."""
+    rows = []
+    for pair in run_file.pairs:
+        if pair.comparison in PAIRED_PENALTIES and pair.a_key.get("sync") and pair.a_key.threads is not None:
+            kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"))
+            rows.append(figures.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
+                                           pair.ci_low, pair.ci_high, pair.verdict))
+    return rows
+
+
 def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
-    rows = figures.penalty_rows(run_file)
+    paired = paired_penalty_rows(run_file)
+    # A kind of penalty the file measured as pairs is drawn from its pairs; the others from the medians.
+    covered = {row.kind.split(" (paired)")[0] for row in paired}
+    rows = paired + [row for row in figures.penalty_rows(run_file)
+                     if not any(row.kind.startswith(kind) for kind in covered)]
     if not rows:
         return None
-    return Section(f"False-sharing and migration penalties: {run_file.label}",
-                   paragraphs=["False sharing: the packed layout's step time over the padded one's, threads pinned "
-                               "compactly. Migration: the step time when threads are moved on purpose (pin:migrate) "
-                               "or left to the OS (pin:none), over compact pinning. 1.0x is no penalty; the ratio "
-                               "axis is logarithmic, so a 2x penalty and a 2x gain lie equally far from 1."],
-                   figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows))],
+    paragraphs = ["False sharing: the packed layout's step time over the padded one's, threads pinned compactly. "
+                  "Migration: the step time when threads are moved on purpose (pin:migrate) or left to the OS "
+                  "(pin:none), over compact pinning. 1.0x is no penalty; the ratio axis is logarithmic, so a 2x "
+                  "penalty and a 2x gain lie equally far from 1."]
+    noise = None
+    if paired:
+        noise = max(pair.noise for pair in run_file.pairs)
+        confidence = max(pair.confidence for pair in run_file.pairs)
+        paragraphs.append(f"Measured as pairs: both sides in alternating short blocks, one ratio per adjacent pair; "
+                          f"the bar is the median ratio, the whisker its {100 * confidence:g} % bootstrap interval, "
+                          f"[low, high] in the table. Hatched: within noise (the interval reaches into the "
+                          f"±{100 * noise:g} % band shaded grey).")
+    return Section(f"False-sharing and migration penalties: {run_file.label}", paragraphs=paragraphs,
+                   figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows, noise))],
                    tables=[penalty_table(rows)])
+
+
+COMPARISON_TITLES = {"false_sharing": "false sharing: packed against its best padded layout",
+                     "migration": "migration: unpinned against pinned compactly",
+                     "against_best_other": "each primitive against the best other primitive",
+                     "overhead": "the harness's own cost (accounting on against off)"}
+
+
+def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
+    """Every paired ratio of the file (lockstep_pairs): one figure per kind of comparison, one table."""
+    kinds = [kind for kind in COMPARISON_TITLES if any(pair.comparison == kind for pair in run_file.pairs)]
+    section_figures = [Figure(f"pairs-{counter[0]}-{_slug(kind)}", COMPARISON_TITLES[kind],
+                              figures.paired_ratios([p for p in run_file.pairs if p.comparison == kind],
+                                                    COMPARISON_TITLES[kind]))
+                       for kind in kinds]
+    rows = []
+    for kind in kinds:
+        for pair in (p for p in run_file.pairs if p.comparison == kind):
+            modes = sorted({mode for mode in pair.modes if mode >= 0})
+            rows.append([kind.replace("_", " "), pair.group, pair.a_key.display, pair.b_key.display,
+                         format_count(len(pair.ratios)), format_number(pair.median, 3, "x"),
+                         f"[{format_number(pair.ci_low, 3)}, {format_number(pair.ci_high, 3)}]", pair.verdict,
+                         format_number(pair.block_ms, 1, " ms"),
+                         ", ".join(str(mode) for mode in modes) if modes else UNAVAILABLE])
+    blocks = sorted(pair.block_ms for pair in run_file.pairs)
+    return Section(f"Paired ratios: {run_file.label}",
+                   paragraphs=["Each ratio the summary prints, measured as a pair: a and b run in alternating short "
+                               f"blocks (median block {format_number(blocks[len(blocks) // 2], 1, ' ms')}), one ratio "
+                               "a / b per adjacent pair of blocks; the median ratio with its bootstrap interval, and "
+                               "the verdict: penalty (interval above the noise band), gain (below it) or within "
+                               "noise."],
+                   figures=section_figures,
+                   tables=[Table(["comparison", "group", "a", "b", "pairs", "median a/b", "interval", "verdict",
+                                  "block", "pace modes"], rows)])
+
+
+def per_mode_rows(run_file: RunFile) -> tuple[list[list[str]], int]:
+    """The entries whose repetitions ran in more than one pace mode: each mode's median (and its count of
+    repetitions), the slowest mode's median over the fastest's; and how many entries had a repetition that
+    straddled a change of pace."""
+    modes = run_file.pace.modes if run_file.pace else ()
+    rows, straddling = [], 0
+    for key in sorted(run_file.runs, key=lambda key: key.sort_key()):
+        run = run_file.runs[key]
+        if run.errored:
+            continue
+        paced = [(r.pace.mode, r.real_ns) for r in run.repetitions if r.pace is not None and r.pace.mode is not None]
+        if any(mode < 0 for mode, _ in paced):
+            straddling += 1
+        by_mode: dict[int, list[float]] = {}
+        for mode, value in paced:
+            if mode >= 0:
+                by_mode.setdefault(mode, []).append(value)
+        if len(by_mode) < 2:
+            continue
+        medians = {mode: statistics.median(values) for mode, values in by_mode.items()}
+        cells = [key.display]
+        for mode in modes:
+            values = by_mode.get(mode.mode)
+            cells.append(f"{format_ns(medians[mode.mode])} ({len(values)})" if values else "")
+        fastest, slowest = medians[min(medians)], medians[max(medians)]
+        straddles = sum(1 for mode, _ in paced if mode < 0)
+        cells += [format_number(slowest / fastest, 2, "x"), str(straddles) if straddles else ""]
+        rows.append(cells)
+    return rows, straddling
+
+
+def pace_section(run_file: RunFile, counter: list[int]) -> Section:
+    pace = run_file.pace
+    paragraphs = [f"The machine's pace during the run: {pace.summary}. Between blocks of measurement the harness "
+                  f"took a short reference reading ({pace.reference}); each reading is a dot, coloured by the pace "
+                  "mode it falls in (grey: an outlier that belongs to no mode); dashed: each mode's median."]
+    modes_table = Table(["mode", "c2c one-way", "serial step", "share of the run", "readings"],
+                        [[str(mode.mode), format_ns(mode.c2c_ns), format_ns(mode.serial_ns),
+                          format_number(100 * mode.share, 0, " %"), format_count(mode.readings)]
+                         for mode in pace.modes], caption=f"{pace.changes} change(s) of mode")
+    tables = [modes_table]
+    rows, straddling = per_mode_rows(run_file)
+    if rows:
+        paragraphs.append(f"{len(rows)} entr{'y' if len(rows) == 1 else 'ies'} ran in more than one mode: their "
+                          "median per mode (repetitions in brackets) instead of one median that mixes them.")
+        tables.append(Table(["entry"] + [f"mode {mode.mode} (c2c {format_ns(mode.c2c_ns, 3)})" for mode in pace.modes]
+                            + ["slowest / fastest", "straddling"], rows,
+                            caption="Per-mode medians; straddling: repetitions whose pace changed while they ran"))
+    if straddling:
+        paragraphs.append(f"{straddling} entr{'y' if straddling == 1 else 'ies'} had a repetition that straddled a "
+                          "change of pace (its readings before and after disagree).")
+    figure = Figure(f"pace-{counter[0]}", f"pace trace, {run_file.label}",
+                    figures.pace_trace(pace.readings, pace.modes, f"pace trace ({run_file.label}): {pace.summary}"))
+    return Section(f"Pace of the machine: {run_file.label}", paragraphs=paragraphs, tables=tables, figures=[figure])
 
 
 def c2c_section(item: C2cFile, counter: list[int]) -> Section:
