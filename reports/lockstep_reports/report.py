@@ -23,7 +23,7 @@ import markupsafe
 
 from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, rank_tables
-from .fields import (CPU_LIMIT, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
+from .fields import (CPU_LIMIT, DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
                      SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, _Object, load_any, parse_json, read_text, unique_labels
@@ -184,6 +184,10 @@ def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
                   "(pin:none), over compact pinning. 1.0x is no penalty; the ratio axis is logarithmic, so a 2x "
                   "penalty and a 2x gain lie equally far from 1."]
     noise = None
+    if run_file.pace is not None and not paired:
+        paragraphs.append(f"Paired ratios {UNAVAILABLE}: this file has a pace trace but no false-sharing or "
+                          "migration pairs (lockstep_pairs); the ratios below are of the entries' medians, which "
+                          "a change of pace can move.")
     if paired:
         noise = max(pair.noise for pair in run_file.pairs)
         confidence = max(pair.confidence for pair in run_file.pairs)
@@ -213,7 +217,7 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
     for kind in kinds:
         for pair in (p for p in run_file.pairs if p.comparison == kind):
             modes = sorted({mode for mode in pair.modes if mode >= 0})
-            rows.append([kind.replace("_", " "), pair.group, pair.a_key.display, pair.b_key.display,
+            rows.append([kind.replace("_", " "), pair.group, _difference(pair.a_key, pair.b_key),
                          format_count(len(pair.ratios)), format_number(pair.median, 3, "x"),
                          f"[{format_number(pair.ci_low, 3)}, {format_number(pair.ci_high, 3)}]", pair.verdict,
                          format_number(pair.block_ms, 1, " ms"),
@@ -226,8 +230,22 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
                                "the verdict: penalty (interval above the noise band), gain (below it) or within "
                                "noise."],
                    figures=section_figures,
-                   tables=[Table(["comparison", "group", "a", "b", "pairs", "median a/b", "interval", "verdict",
+                   tables=[Table(["comparison", "group", "a / b", "pairs", "median a/b", "interval", "verdict",
                                   "block", "pace modes"], rows)])
+
+
+def _difference(a, b) -> str:
+    """What tells two entries apart ("layout:packed / layout:padded128"): the segments where they differ, or
+    both names whole when their families differ."""
+    if a.family != b.family:
+        return f"{a.display} / {b.display}"
+    a_segments, b_segments = dict(a.segments), dict(b.segments)
+    keys = sorted(set(a_segments) | set(b_segments))
+    differing = [key for key in keys if a_segments.get(key) != b_segments.get(key)]
+    def side(segments):
+        return " ".join(f"{key}:{segments[key]}" if segments.get(key) else key for key in differing
+                        if key in segments) or a.family
+    return f"{side(a_segments)} / {side(b_segments)}"
 
 
 def per_mode_rows(run_file: RunFile) -> tuple[list[list[str]], int]:
@@ -336,6 +354,11 @@ def figure5_table(rows_measured, title: str) -> Table:
                  rows, caption=title)
 
 
+# What each of fields.DELAY_SETTINGS is called where the report says it is missing.
+SETTING_WORDS = {"period_ns": "period", "periods": "number of periods", "duration_s": "duration",
+                 "fifo_priority": "scheduling policy", "mlock": "memory locking"}
+
+
 def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
     """A delay run's settings as a person writes them ("SCHED_FIFO priority 80", "memory not locked",
     "period 1 ms"), never as program values; a setting the file does not say is left out."""
@@ -390,6 +413,9 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
                                   "later wake-ups counted as overflow"])
     if extras.settings.get("stop_above_ns"):
         rows.append(["stop above", format_duration(extras.settings["stop_above_ns"])])
+    missing = [SETTING_WORDS.get(key, key) for key, _ in DELAY_SETTINGS if key not in settings]
+    if missing:
+        rows.append(["not in the file", ", ".join(missing) + f": {UNAVAILABLE}"])
     return rows
 
 # ---------------------------------------------------------------- delay keys that inputs.py does not read yet
