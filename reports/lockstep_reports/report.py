@@ -415,7 +415,7 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
         rows.append(["stop above", format_duration(extras.settings["stop_above_ns"])])
     missing = [SETTING_WORDS.get(key, key) for key, _ in DELAY_SETTINGS if key not in settings]
     if missing:
-        rows.append(["not in the file", ", ".join(missing) + f": {UNAVAILABLE}"])
+        rows.append(["not in the file", ", ".join(f"{word}: {UNAVAILABLE}" for word in missing)])
     return rows
 
 # ---------------------------------------------------------------- delay keys that inputs.py does not read yet
