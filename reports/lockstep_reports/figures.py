@@ -10,11 +10,14 @@ from __future__ import annotations
 import io
 import math
 import re
+from dataclasses import dataclass
 
 import matplotlib
 
 matplotlib.use("svg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.patches  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
@@ -90,8 +93,10 @@ def _syncs_layouts(run_file):
     return syncs, layouts
 
 
-def heatmap(run_file, pin: str, threads: int) -> str:
-    """Median step time, sync (rows) x layout (columns), for one placement and thread count."""
+def heatmap(run_file, pin: str, threads: int, within_noise=frozenset()) -> str:
+    """Median step time, sync (rows) x layout (columns), for one placement and thread count. within_noise:
+    (sync, layout) cells whose paired comparison (lockstep_pairs) was within noise: hatched, their value
+    marked with "≈"."""
     syncs, layouts = _syncs_layouts(run_file)
     grid = np.full((len(syncs), len(layouts)), np.nan)
     for row, sync in enumerate(syncs):
@@ -109,20 +114,52 @@ def heatmap(run_file, pin: str, threads: int) -> str:
         for column in range(len(layouts)):
             value = grid[row, column]
             text = format_ns(value, CELL_DIGITS) if math.isfinite(value) else "n/a"
-            axes.text(column, row, text, ha="center", va="center", fontsize=8,
-                      color="white" if math.isfinite(value) and norm and norm(value) > 0.55 else "black")
+            dark = math.isfinite(value) and norm is not None and norm(value) > 0.55
+            noisy = (syncs[row], layouts[column]) in within_noise
+            if noisy:
+                axes.add_patch(matplotlib.patches.Rectangle((column - 0.5, row - 0.5), 1.0, 1.0, fill=False,
+                                                            hatch="///", edgecolor="white" if dark else "#444444",
+                                                            lw=0.5))
+                text = "≈ " + text
+            axes.text(column, row, text, ha="center", va="center", fontsize=8, color="white" if dark else "black",
+                      bbox=dict(boxstyle="round,pad=0.2", fc="black" if dark else "white", ec="none", alpha=0.75)
+                      if noisy else None)
     axes.set_title(f"step time (median), pin:{pin} threads:{threads}")
     figure.colorbar(image, ax=axes, label="ns per step (log)")
     return to_svg(figure)
 
 
+def log_floor(value: float) -> float:
+    """The power of ten at or below a positive value: where a log axis starts so that its smallest bar shows."""
+    return 10.0 ** math.floor(math.log10(value))
+
+
+def log_ceiling(value: float) -> float:
+    return 10.0 ** math.ceil(math.log10(value))
+
+
+def duration_axis(axis, unit_ns: float = 1.0) -> None:
+    """A logarithmic axis of durations (its values in units of unit_ns) labelled as people write them
+    ("100 ns", "1 us", "10 ms"): at the powers of ten, and at 2 and 5 times them too when the axis spans
+    less than two decades (call it after the limits are set)."""
+    low, high = axis.get_view_interval()
+    narrow = low > 0 and high / low < 100.0
+    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 5.0) if narrow else (1.0,)))
+    axis.set_major_formatter(matplotlib.ticker.FuncFormatter(
+        lambda value, _: format_ns(value * unit_ns, 1) if value > 0 else ""))
+    axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+
+
 def bars_with_spread(run_file, pin: str, threads: int) -> str:
     """Per primitive, one bar per layout at the median; the whisker spans the interquartile range
-    and each dot is one repetition."""
+    and each dot is one repetition. The time axis is logarithmic: the primitives' step times span
+    decades (a spinning barrier's hundreds of ns beside a sleeping one's 100 us)."""
     syncs, layouts = _syncs_layouts(run_file)
-    figure, axes = plt.subplots(figsize=(max(5.0, 1.4 * len(syncs) + 1.5), 3.2))
+    figure, axes = plt.subplots(figsize=(min(10.0, max(6.0, 0.62 * len(syncs) + 1.6)), 3.8))
+    axes.set_yscale("log")
     width = 0.8 / max(1, len(layouts))
     colors = plt.get_cmap("tab10")
+    drawn = []
     for column, layout in enumerate(layouts):
         for row, sync in enumerate(syncs):
             run = run_file.runs.get(_rk4_key(sync, layout, pin, threads))
@@ -134,22 +171,45 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
             x = row + (column - (len(layouts) - 1) / 2) * width
             center = statistics.median(times)
             low, high = np.percentile(times, [25, 75])
-            axes.bar(x, center, width * 0.9, color=colors(column), label=layout if row == 0 else None)
+            drawn += list(times)
+            axes.bar(x, center, width * 0.9, color=colors(column), label=layout if not any(
+                label == layout for label in axes.get_legend_handles_labels()[1]) else None)
             axes.errorbar(x, center, yerr=[[center - low], [high - center]], color="black", capsize=2, lw=0.8)
             offsets = np.linspace(-width * 0.3, width * 0.3, len(times)) if len(times) > 1 else [0.0]
-            axes.scatter(np.asarray(offsets) + x, sorted(times), s=4, color="black", zorder=3)
-    axes.set_xticks(range(len(syncs)), syncs)
-    axes.set_ylabel("ns per step")
-    axes.set_title(f"step time per primitive, pin:{pin} threads:{threads} (bar median, whisker IQR, dot repetition)")
+            axes.scatter(np.asarray(offsets) + x, sorted(times), s=3, color="black", zorder=3)
+    if drawn:
+        axes.set_ylim(log_floor(min(drawn) * 0.9), log_ceiling(max(drawn) * 1.1))
+    duration_axis(axes.yaxis)
+    axes.set_xticks(range(len(syncs)), syncs, rotation=35, ha="right", rotation_mode="anchor")
+    axes.set_xlim(-0.6, len(syncs) - 0.4)
+    axes.set_ylabel("step time (log)")
+    axes.grid(axis="y", which="major", color="#dddddd", lw=0.6)
+    axes.set_axisbelow(True)
+    axes.set_title(f"step time per primitive, pin:{pin} threads:{threads}")
     handles, labels = axes.get_legend_handles_labels()
     if handles:
-        axes.legend(title="layout", fontsize=7, ncol=min(4, len(labels)))
+        axes.legend(title="layout", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                    frameon=False)
     return to_svg(figure)
 
 
-def penalty_rows(run_file) -> list[tuple[str, str, int, float]]:
-    """False sharing (packed / padded) and migration (migrate or none / compact), per primitive:
-    (kind, sync, threads, time ratio)."""
+@dataclass(frozen=True)
+class PenaltyRow:
+    """One penalty: kind ("false sharing: packed / padded128"), primitive, thread count, time ratio; from a
+    paired measurement (lockstep_pairs) also its interval and verdict."""
+
+    kind: str
+    sync: str
+    threads: int
+    ratio: float
+    ci_low: float | None = None
+    ci_high: float | None = None
+    verdict: str | None = None
+
+
+def penalty_rows(run_file) -> list[PenaltyRow]:
+    """False sharing (packed / padded) and migration (migrate or none / compact), per primitive, from the
+    entries' medians (a file without lockstep_pairs)."""
     syncs, layouts = _syncs_layouts(run_file)
     padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
     groups = rk4_groups(run_file)
@@ -161,39 +221,82 @@ def penalty_rows(run_file) -> list[tuple[str, str, int, float]]:
                 packed_time = run_median(run_file, _rk4_key(sync, "packed", "compact", threads))
                 padded_time = run_median(run_file, _rk4_key(sync, padded, "compact", threads))
                 if packed_time and padded_time:
-                    rows.append((f"false sharing: packed / {padded}", sync, threads, packed_time / padded_time))
+                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads,
+                                           packed_time / padded_time))
             base_layout = padded or (layouts[0] if layouts else None)
             for moved in ("migrate", "none"):
                 compact = run_median(run_file, _rk4_key(sync, base_layout, "compact", threads))
                 other = run_median(run_file, _rk4_key(sync, base_layout, moved, threads))
                 if compact and other:
-                    rows.append((f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
-                                 other / compact))
+                    rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
+                                           other / compact))
     return rows
 
 
-def penalties(rows: list[tuple[str, str, int, float]]) -> str:
-    """The penalty_rows as bars: one panel per kind, one bar per primitive and thread count."""
-    syncs = sorted({row[1] for row in rows})
-    threads_list = sorted({row[2] for row in rows})
-    kinds = sorted({row[0] for row in rows})
-    figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.2 * len(kinds), 3.2), squeeze=False)
+# Where a verdict of a paired ratio is drawn: the bar's fill (hatched when the interval reaches into the noise band).
+VERDICT_STYLE = {"penalty": {"hatch": None, "alpha": 1.0}, "gain": {"hatch": None, "alpha": 1.0},
+                 "within noise": {"hatch": "////", "alpha": 0.35}}
+
+
+def _ratio_axis(axes, values, noise: float | None) -> None:
+    """A logarithmic ratio axis centred on 1 (a 2x penalty and a 2x gain lie equally far from it), the noise
+    band shaded."""
+    axes.set_xscale("log")
+    finite = [v for v in values if v and v > 0]
+    reach = max([abs(math.log10(v)) for v in finite] + [math.log10(1.25)]) * 1.15
+    axes.set_xlim(10 ** -reach, 10 ** reach)
+    axes.axvline(1.0, color="black", lw=0.8)
+    if noise:
+        axes.axvspan(1.0 / (1.0 + noise), 1.0 + noise, color="#bbbbbb", alpha=0.35, lw=0,
+                     label=f"noise band ±{100 * noise:g} %")
+    ticks = [t for t in ((0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0) if reach > math.log10(2.5) else (0.5, 0.8, 1.0, 1.25, 2.0))
+             if 10 ** -reach <= t <= 10 ** reach]
+    axes.set_xticks(ticks, [f"{t:g}x" for t in ticks])
+    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    axes.grid(axis="x", which="major", color="#dddddd", lw=0.6)
+    axes.set_axisbelow(True)
+
+
+def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
+    """The penalties as horizontal bars from 1 (primitive names read across, never into each other): one
+    panel per kind, one bar per primitive and thread count, on a logarithmic ratio axis; a paired row
+    carries its confidence interval as a whisker and is hatched when that interval is within noise."""
+    syncs = sorted({row.sync for row in rows})
+    threads_list = sorted({row.threads for row in rows})
+    kinds = sorted({row.kind for row in rows})
+    height = max(2.6, 0.24 * len(syncs) * max(1, len(threads_list)) ** 0.6 + 1.3)
+    figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.3 * len(kinds) + 2.2, height), squeeze=False,
+                                     sharey=True)
     colors = plt.get_cmap("tab10")
-    for axes, kind in zip(axes_list[0], kinds):
-        width = 0.8 / max(1, len(threads_list))
+    span = [row.ratio for row in rows] + [v for row in rows for v in (row.ci_low, row.ci_high) if v]
+    for panel, (axes, kind) in enumerate(zip(axes_list[0], kinds)):
+        _ratio_axis(axes, span, noise)
+        height_each = 0.8 / max(1, len(threads_list))
         for index, threads in enumerate(threads_list):
-            xs, ys = [], []
-            for position, sync in enumerate(syncs):
-                for row in rows:
-                    if row[0] == kind and row[1] == sync and row[2] == threads:
-                        xs.append(position + (index - (len(threads_list) - 1) / 2) * width)
-                        ys.append(row[3])
-            axes.bar(xs, ys, width * 0.9, color=colors(index), label=f"threads:{threads}")
-        axes.axhline(1.0, color="black", lw=0.8)
-        axes.set_xticks(range(len(syncs)), syncs, rotation=20)
-        axes.set_ylabel("time ratio (> 1: penalty)")
+            for row in rows:
+                if row.kind != kind or row.threads != threads:
+                    continue
+                y = syncs.index(row.sync) + (index - (len(threads_list) - 1) / 2) * height_each
+                style = VERDICT_STYLE.get(row.verdict, VERDICT_STYLE["penalty"])
+                axes.barh(y, row.ratio - 1.0, height_each * 0.9, left=1.0, color=colors(index), alpha=style["alpha"],
+                          hatch=style["hatch"], edgecolor=colors(index) if style["hatch"] else None, lw=0.0)
+                if row.ci_low is not None and row.ci_high is not None:
+                    axes.errorbar(row.ratio, y, xerr=[[row.ratio - row.ci_low], [row.ci_high - row.ratio]],
+                                  color="black", capsize=2, lw=0.8)
+        axes.set_yticks(range(len(syncs)), syncs)
+        axes.set_ylim(len(syncs) - 0.5, -0.5)
+        axes.set_xlabel("time ratio (log; > 1: penalty, < 1: gain)")
         axes.set_title(kind, fontsize=9)
-        axes.legend(fontsize=7, loc="lower right")
+        if panel == 0:
+            handles = [matplotlib.patches.Patch(color=colors(index), label=f"threads:{threads}")
+                       for index, threads in enumerate(threads_list)]
+            if noise:
+                handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
+            if any(row.verdict == "within noise" for row in rows):
+                handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="gray", hatch="////",
+                                                        label="within noise"))
+            axes_list[0][-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
+                                    frameon=False)
     return to_svg(figure)
 
 
@@ -292,4 +395,187 @@ def trajectory(verify, deviation: float) -> str:
     axes.set_ylabel("displacement")
     axes.set_title(f"trajectory (the paper's Figure 2), {label}; max |lockstep - analytic| = {deviation:.2e}")
     axes.legend(fontsize=7, ncol=3, loc="upper center", bbox_to_anchor=(0.5, -0.18))
+    return to_svg(figure)
+
+
+def wakeup_histograms(histograms, panels, title: str, marks=None) -> str:
+    """Wake-up latency histograms in 1 us buckets (report.LatencyHistograms) on a logarithmic latency axis
+    and a logarithmic count axis: the body (a few us) and the tail (hundreds of us) both show, and the tail
+    is the point. panels: (title, counts, overflow, highlighted) each; side by side, sharing both axes.
+    The wake-ups beyond the bound stand as one hatched overflow bar at its right. marks: {name: ns} drawn
+    as vertical lines (p50, p99, p99.9) on a single panel."""
+    per_row = min(len(panels), 4)
+    rows = math.ceil(len(panels) / per_row)
+    width = 6.4 if len(panels) == 1 else 2.9 * per_row + 0.6
+    figure, axes_grid = plt.subplots(rows, per_row, figsize=(width, 2.6 * rows + 0.6), squeeze=False,
+                                     sharex=True, sharey=True)
+    bucket = histograms.bucket_us
+    bound = histograms.bound_us
+    used = [i for _, counts, _, _ in panels for i, c in enumerate(counts) if c]
+    first = max(min(used) * bucket, bucket / 2) if used else bucket / 2
+    last = (max(used) + 1) * bucket if used else bound
+    overflowing = any(overflow for _, _, overflow, _ in panels)
+    right = bound if overflowing else last
+    overflow_edges = (right, right * 1.5)
+    highest = max([max(list(counts) + [overflow]) for _, counts, overflow, _ in panels] + [1])
+    for index, axes in enumerate(axes_grid.flat):
+        if index >= len(panels):
+            axes.set_visible(False)
+            continue
+        name, counts, overflow, highlighted = panels[index]
+        counts = np.asarray(counts, dtype=float)
+        edges = bucket * np.arange(counts.size + 1)
+        edges[0] = min(first, edges[1] / 2)  # a log axis has no 0: the first bucket starts half way to its end
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.stairs(counts, edges, fill=True, color="#4c72b0")
+        if overflow:
+            axes.stairs([overflow], overflow_edges, fill=True, color="#c44e52", hatch="////", lw=0,
+                        label=f"later than {format_ns(bound * 1e3, 3)}: {overflow}")
+        for (label, value), style in zip(sorted((marks or {}).items(), key=lambda item: item[1]), ("-", "--", ":")):
+            axes.axvline(value / 1e3, color="black", ls=style, lw=0.9, label=f"{label} {format_ns(value, 3)}")
+        if axes.get_legend_handles_labels()[0]:
+            if len(panels) == 1:
+                axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+            else:
+                axes.legend(fontsize=6, loc="upper right", frameon=False)
+        axes.set_ylim(0.8, highest * 3.0)
+        if len(panels) > 1:
+            axes.set_title(name + (" (noisiest)" if highlighted else ""), fontsize=8,
+                           color="#c44e52" if highlighted else "black")
+        if index % per_row == 0:
+            axes.set_ylabel("wake-ups (log)")
+        if index >= len(panels) - per_row:
+            axes.set_xlabel("wake-up latency (log)")
+    axes_grid.flat[0].set_xlim(first / 1.5, (overflow_edges[1] if overflowing else last) * 1.1)
+    for axes in axes_grid.flat:
+        duration_axis(axes.xaxis, unit_ns=1e3)
+    figure.suptitle(title, fontsize=9)
+    return to_svg(figure)
+
+
+def period_search(search) -> str:
+    """The find-period search (report.PeriodSearch): each trial's period against its observed miss rate
+    (whisker up to the upper bound that decided it), the target rate and the answer marked, the trials
+    numbered in the order they ran. A trial without a miss sits on the axis's floor, marked as zero."""
+    trials = list(search.trials)
+    figure, axes = plt.subplots(figsize=(6.4, 3.4))
+    axes.set_xscale("log")
+    axes.set_yscale("log")
+    rates = [t.miss_rate for t in trials + ([search.confirm] if search.confirm else []) if t.miss_rate > 0]
+    bounds = [t.upper_bound for t in trials if t.upper_bound]
+    low = min(rates + bounds + [search.miss_rate]) / 10.0 if (rates or bounds or search.miss_rate) else 1e-6
+    low = log_floor(low) if low > 0 else 1e-6
+    high = log_ceiling(max(rates + bounds + [search.miss_rate]) * 1.5) if (rates or bounds) else 1.0
+    floor = low * 1.6  # where a trial without a miss is drawn
+    for number, trial in enumerate(trials, start=1):
+        x = trial.period_ns
+        y = trial.miss_rate if trial.miss_rate > 0 else floor
+        color = "#55a868" if trial.holds else "#c44e52"
+        if trial.upper_bound and trial.upper_bound > y:
+            axes.plot([x, x], [y, trial.upper_bound], color=color, lw=0.9)
+            axes.plot([x], [trial.upper_bound], marker="_", color=color, ms=7)
+        axes.plot([x], [y], marker="o" if trial.holds else "X", color=color, ms=6 if trial.holds else 7,
+                  mfc=color if trial.miss_rate > 0 else "white", ls="none")
+        axes.annotate(str(number), (x, y), textcoords="offset points", xytext=(5, -9), fontsize=7)
+    if search.confirm is not None:
+        y = search.confirm.miss_rate if search.confirm.miss_rate > 0 else floor
+        axes.plot([search.confirm.period_ns], [y], marker="*", color="black", ms=10, ls="none",
+                  label="confirming run")
+    axes.axhline(search.miss_rate, color="black", ls="--", lw=0.9, label=f"target rate {search.miss_rate:g}")
+    if search.found_period_ns:
+        axes.axvline(search.found_period_ns, color="#55a868", lw=1.2,
+                     label=f"answer {format_ns(search.found_period_ns, 3)}")
+    if search.failed_period_ns:
+        axes.axvline(search.failed_period_ns, color="#c44e52", lw=0.9, ls=":",
+                     label=f"failed {format_ns(search.failed_period_ns, 3)}")
+    axes.axhspan(low, floor * 1.5, color="#eeeeee", lw=0)
+    axes.text(0.01, floor, " no miss", transform=axes.get_yaxis_transform(), fontsize=7, va="center", color="#555555")
+    axes.set_ylim(low, high)
+    periods = [t.period_ns for t in trials] + ([search.confirm.period_ns] if search.confirm else [])
+    if periods:
+        axes.set_xlim(min(periods) / 1.6, max(periods) * 1.6)
+    duration_axis(axes.xaxis)
+    axes.set_xlabel("period (log)")
+    axes.set_ylabel("observed miss rate (log)")
+    axes.plot([], [], marker="o", color="#55a868", ls="none", label="holds")
+    axes.plot([], [], marker="X", color="#c44e52", ls="none", label="fails")
+    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    axes.set_title("find-period: periods tried against their miss rate"
+                   + (" (cut by the search budget)" if search.budget_cut else ""), fontsize=9)
+    return to_svg(figure)
+
+
+def mode_colors(count: int):
+    """One colour per pace mode, fastest first; outliers (mode -1) are grey."""
+    palette = plt.get_cmap("tab10")
+    return {mode: palette(mode % 10) for mode in range(count)} | {-1: (0.6, 0.6, 0.6, 1.0)}
+
+
+def pace_trace(readings, modes, title: str) -> str:
+    """The pace trace as a time line: each reference reading's core-to-core latency (and serial step, in a
+    second panel) against the time since the run started, coloured by the pace mode it was put in, each
+    mode's median as a line. readings: objects with t_s, c2c_ns (None on one CPU), serial_ns, mode; modes:
+    objects with mode, c2c_ns, serial_ns, share."""
+    colors = mode_colors(len(modes))
+    has_c2c = any(r.c2c_ns is not None for r in readings)
+    panels = [("c2c_ns", "core-to-core one-way")] if has_c2c else []
+    panels.append(("serial_ns", "serial RK4 step"))
+    figure, axes_list = plt.subplots(len(panels), 1, figsize=(7.2, 1.9 * len(panels) + 0.7), squeeze=False,
+                                     sharex=True)
+    for (key, name), axes in zip(panels, axes_list[:, 0]):
+        values = [getattr(r, key) for r in readings if getattr(r, key) is not None]
+        for mode in sorted({r.mode for r in readings}):
+            points = [(r.t_s, getattr(r, key)) for r in readings if r.mode == mode and getattr(r, key) is not None]
+            if points:
+                xs, ys = zip(*points)
+                label = "outlier" if mode < 0 else f"mode {mode}"
+                axes.scatter(xs, ys, s=7, color=colors.get(mode, colors[-1]), label=label, zorder=3, lw=0)
+        for mode in modes:
+            value = getattr(mode, key, None)
+            if value is not None:
+                axes.axhline(value, color=colors.get(mode.mode, colors[-1]), lw=0.8, ls="--")
+        if values and max(values) / min(values) > 3.0:
+            axes.set_yscale("log")
+            axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
+            duration_axis(axes.yaxis)
+        else:
+            axes.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: format_ns(value, 2)))
+        axes.set_ylabel(name, fontsize=8)
+        axes.grid(axis="y", color="#eeeeee", lw=0.6)
+    axes_list[-1, 0].set_xlabel("time since the run started (s)")
+    handles, labels = axes_list[0, 0].get_legend_handles_labels()
+    if handles:
+        axes_list[0, 0].legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                               frameon=False, markerscale=1.6)
+    axes_list[0, 0].set_title(title, fontsize=9)
+    return to_svg(figure)
+
+
+def paired_ratios(pairs, title: str) -> str:
+    """Paired ratios (lockstep_pairs) as horizontal bars from 1 on a logarithmic ratio axis: the median per
+    adjacent pair, the whisker its confidence interval, the noise band shaded, a bar within noise hatched
+    and pale. pairs: objects with group, median, ci_low, ci_high, noise, verdict."""
+    pairs = list(pairs)
+    figure, axes = plt.subplots(figsize=(7.2, 0.26 * len(pairs) + 1.3))
+    noise = max((p.noise for p in pairs if p.noise is not None), default=None)
+    _ratio_axis(axes, [v for p in pairs for v in (p.median, p.ci_low, p.ci_high)], noise)
+    verdict_color = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c"}
+    for y, pair in enumerate(pairs):
+        style = VERDICT_STYLE.get(pair.verdict, VERDICT_STYLE["penalty"])
+        color = verdict_color.get(pair.verdict, "#4c72b0")
+        axes.barh(y, pair.median - 1.0, 0.7, left=1.0, color=color, alpha=style["alpha"], hatch=style["hatch"],
+                  edgecolor=color if style["hatch"] else None, lw=0.0)
+        axes.errorbar(pair.median, y, xerr=[[pair.median - pair.ci_low], [pair.ci_high - pair.median]],
+                      color="black", capsize=2, lw=0.8)
+    axes.set_yticks(range(len(pairs)), [p.group for p in pairs], fontsize=7)
+    axes.set_ylim(len(pairs) - 0.5, -0.5)
+    axes.set_xlabel("paired time ratio a / b (log; median per adjacent pair, whisker: confidence interval)")
+    handles = [matplotlib.patches.Patch(color=color, alpha=VERDICT_STYLE[verdict]["alpha"],
+                                        hatch=VERDICT_STYLE[verdict]["hatch"], label=verdict)
+               for verdict, color in verdict_color.items() if any(p.verdict == verdict for p in pairs)]
+    if noise:
+        handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
+    axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    axes.set_title(title, fontsize=9)
     return to_svg(figure)

@@ -6,6 +6,7 @@ it is written as fields.UNAVAILABLE (or the caller's own word for a table cell).
 from __future__ import annotations
 
 import math
+import re
 
 from .fields import UNAVAILABLE
 
@@ -48,3 +49,29 @@ def format_number(value, digits: int = 2, suffix: str = "", missing: str = UNAVA
     if isinstance(value, int):
         return f"{value}{suffix}"
     return f"{value:.{digits}f}{suffix}"
+
+
+def format_duration(value) -> str:
+    """A duration given in ns, as a person writes a setting: the largest unit that keeps it at 1 or
+    more, without trailing zeros ("1 ms", "250 us", "1.5 ms", "10 s")."""
+    if not is_number(value):
+        return UNAVAILABLE
+    unit, size = next(((unit, size) for unit, size in DURATION_UNITS if abs(value) >= size), DURATION_UNITS[-1])
+    text = f"{value / size:.3f}".rstrip("0").rstrip(".")
+    return f"{text} {unit}"
+
+
+def format_count(value, missing: str = UNAVAILABLE) -> str:
+    """A whole count with thousands separators ("10,000"); `missing` when it is not a number."""
+    if not is_number(value):
+        return missing
+    if isinstance(value, float) and not value.is_integer():
+        return f"{value:,.1f}"
+    return f"{int(value):,}"
+
+
+def format_rate(value, missing: str = UNAVAILABLE) -> str:
+    """A small rate (a miss rate), three significant digits: "0", "0.001", "0.00025", "3e-6"."""
+    if not is_number(value):
+        return missing
+    return re.sub(r"e([+-])0*(\d)", r"e\1\2", f"{value:.3g}")

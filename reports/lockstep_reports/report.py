@@ -21,11 +21,13 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import figures, paper
+from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, rank_tables
-from .fields import DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, SERIAL_CONTEXT, UNAVAILABLE
-from .formatting import format_ns, format_number
-from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, load_any, unique_labels
+from .fields import (CPU_LIMIT, DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
+                     SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
+from .formatting import format_count, format_duration, format_ns, format_number, format_rate
+from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, _Object, load_any, parse_json, read_text, unique_labels
+from .inputs import _distribution as inputs_distribution
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
@@ -91,23 +93,25 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     bars = Section(f"Spread per primitive: {run_file.label}",
                    paragraphs=["Bars at the median over repetitions, whiskers over the interquartile range, one "
                                "dot per repetition."])
+    noisy_cells = within_noise_cells(run_file)
+    if noisy_cells:
+        heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
+                               "padded layout was within noise (its confidence interval reaches into the noise "
+                               "band): the two cells do not differ measurably.")
     for pin, threads in groups:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
-                                   figures.heatmap(run_file, pin, threads)))
+                                   figures.heatmap(run_file, pin, threads,
+                                                   noisy_cells.get((pin, threads), frozenset()))))
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
                                    figures.bars_with_spread(run_file, pin, threads)))
     sections += [heat, bars]
-    rows = figures.penalty_rows(run_file)
-    if rows:
-        table = Table(["penalty", "sync", "threads", "time ratio"],
-                      [[kind, sync, str(threads), format_number(ratio, 2, "x")] for kind, sync, threads, ratio in rows])
-        sections.append(Section(f"False-sharing and migration penalties: {run_file.label}",
-                                paragraphs=["False sharing: the packed layout's step time over the padded one's, "
-                                            "threads pinned compactly. Migration: the step time when threads are "
-                                            "moved on purpose (pin:migrate) or left to the OS (pin:none), over "
-                                            "compact pinning. 1.0 is no penalty."],
-                                figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows))],
-                                tables=[table]))
+    if run_file.pace is not None:
+        sections.append(pace_section(run_file, counter))
+    penalty = penalty_section(run_file, counter)
+    if penalty:
+        sections.append(penalty)
+    if run_file.pairs:
+        sections.append(pairs_section(run_file, counter))
     rank_rows = []
     for (pin, threads), per_file in rank_tables([run_file], top=5).items():
         for rank, (name, step, vs_serial) in enumerate(per_file[0], start=1):
@@ -119,6 +123,185 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                             tables=[Table(["group", "rank", "sync/layout", "step (median)", "x serial"], rank_rows)]))
     counter[0] += 1
     return sections
+
+
+def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
+    """One line per primitive and thread count, one column per kind of penalty (a paired row with its
+    interval and verdict)."""
+    kinds = sorted({row.kind for row in rows})
+    by_place = {(row.sync, row.threads, row.kind): row for row in rows}
+    lines = []
+    for sync, threads in sorted({(row.sync, row.threads) for row in rows}):
+        cells = [sync, str(threads)]
+        for kind in kinds:
+            row = by_place.get((sync, threads, kind))
+            if row is None:
+                cells.append("")
+            elif row.ci_low is not None and row.ci_high is not None:
+                cells.append(f"{format_number(row.ratio, 2, 'x')} [{format_number(row.ci_low, 2)}, "
+                             f"{format_number(row.ci_high, 2)}] {row.verdict or ''}".rstrip())
+            else:
+                cells.append(format_number(row.ratio, 2, "x"))
+        lines.append(cells)
+    return Table(["sync", "threads"] + kinds, lines)
+
+
+PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): packed / padded",
+                    "migration": "migration (paired): pin:{pin} / pin:compact"}
+
+
+def within_noise_cells(run_file: RunFile) -> dict[tuple[str, int], frozenset]:
+    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair was within noise."""
+    cells: dict[tuple[str, int], set] = {}
+    for pair in run_file.pairs:
+        if pair.comparison == "false_sharing" and pair.verdict == "within noise":
+            key = pair.a_key
+            cells.setdefault((key.get("pin"), key.threads), set()).add((key.get("sync"), key.get("layout")))
+    return {group: frozenset(members) for group, members in cells.items()}
+
+
+def paired_penalty_rows(run_file: RunFile) -> list[figures.PenaltyRow]:
+    """The false-sharing and migration penalties measured as pairs (lockstep_pairs), with their intervals."""
+    rows = []
+    for pair in run_file.pairs:
+        if pair.comparison in PAIRED_PENALTIES and pair.a_key.get("sync") and pair.a_key.threads is not None:
+            kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"))
+            rows.append(figures.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
+                                           pair.ci_low, pair.ci_high, pair.verdict))
+    return rows
+
+
+def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
+    paired = paired_penalty_rows(run_file)
+    # A kind of penalty the file measured as pairs is drawn from its pairs; the others from the medians.
+    covered = {row.kind.split(" (paired)")[0] for row in paired}
+    rows = paired + [row for row in figures.penalty_rows(run_file)
+                     if not any(row.kind.startswith(kind) for kind in covered)]
+    if not rows:
+        return None
+    paragraphs = ["False sharing: the packed layout's step time over the padded one's, threads pinned compactly. "
+                  "Migration: the step time when threads are moved on purpose (pin:migrate) or left to the OS "
+                  "(pin:none), over compact pinning. 1.0x is no penalty; the ratio axis is logarithmic, so a 2x "
+                  "penalty and a 2x gain lie equally far from 1."]
+    noise = None
+    if run_file.pace is not None and not paired:
+        paragraphs.append(f"Paired ratios {UNAVAILABLE}: this file has a pace trace but no false-sharing or "
+                          "migration pairs (lockstep_pairs); the ratios below are of the entries' medians, which "
+                          "a change of pace can move.")
+    if paired:
+        noise = max(pair.noise for pair in run_file.pairs)
+        confidence = max(pair.confidence for pair in run_file.pairs)
+        paragraphs.append(f"Measured as pairs: both sides in alternating short blocks, one ratio per adjacent pair; "
+                          f"the bar is the median ratio, the whisker its {100 * confidence:g} % bootstrap interval, "
+                          f"[low, high] in the table. Hatched: within noise (the interval reaches into the "
+                          f"±{100 * noise:g} % band shaded grey).")
+    return Section(f"False-sharing and migration penalties: {run_file.label}", paragraphs=paragraphs,
+                   figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows, noise))],
+                   tables=[penalty_table(rows)])
+
+
+COMPARISON_TITLES = {"false_sharing": "false sharing: packed against its best padded layout",
+                     "migration": "migration: unpinned against pinned compactly",
+                     "against_best_other": "each primitive against the best other primitive",
+                     "overhead": "the harness's own cost (accounting on against off)"}
+
+
+def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
+    """Every paired ratio of the file (lockstep_pairs): one figure per kind of comparison, one table."""
+    kinds = [kind for kind in COMPARISON_TITLES if any(pair.comparison == kind for pair in run_file.pairs)]
+    section_figures = [Figure(f"pairs-{counter[0]}-{_slug(kind)}", COMPARISON_TITLES[kind],
+                              figures.paired_ratios([p for p in run_file.pairs if p.comparison == kind],
+                                                    COMPARISON_TITLES[kind]))
+                       for kind in kinds]
+    rows = []
+    for kind in kinds:
+        for pair in (p for p in run_file.pairs if p.comparison == kind):
+            modes = sorted({mode for mode in pair.modes if mode >= 0})
+            rows.append([kind.replace("_", " "), pair.group, _difference(pair.a_key, pair.b_key),
+                         format_count(len(pair.ratios)), format_number(pair.median, 3, "x"),
+                         f"[{format_number(pair.ci_low, 3)}, {format_number(pair.ci_high, 3)}]", pair.verdict,
+                         format_number(pair.block_ms, 1, " ms"),
+                         ", ".join(str(mode) for mode in modes) if modes else UNAVAILABLE])
+    blocks = sorted(pair.block_ms for pair in run_file.pairs)
+    return Section(f"Paired ratios: {run_file.label}",
+                   paragraphs=["Each ratio the summary prints, measured as a pair: a and b run in alternating short "
+                               f"blocks (median block {format_number(blocks[len(blocks) // 2], 1, ' ms')}), one ratio "
+                               "a / b per adjacent pair of blocks; the median ratio with its bootstrap interval, and "
+                               "the verdict: penalty (interval above the noise band), gain (below it) or within "
+                               "noise."],
+                   figures=section_figures,
+                   tables=[Table(["comparison", "group", "a / b", "pairs", "median a/b", "interval", "verdict",
+                                  "block", "pace modes"], rows)])
+
+
+def _difference(a, b) -> str:
+    """What tells two entries apart ("layout:packed / layout:padded128"): the segments where they differ, or
+    both names whole when their families differ."""
+    if a.family != b.family:
+        return f"{a.display} / {b.display}"
+    a_segments, b_segments = dict(a.segments), dict(b.segments)
+    keys = sorted(set(a_segments) | set(b_segments))
+    differing = [key for key in keys if a_segments.get(key) != b_segments.get(key)]
+    def side(segments):
+        return " ".join(f"{key}:{segments[key]}" if segments.get(key) else key for key in differing
+                        if key in segments) or a.family
+    return f"{side(a_segments)} / {side(b_segments)}"
+
+
+def per_mode_rows(run_file: RunFile) -> tuple[list[list[str]], int]:
+    """The entries whose repetitions ran in more than one pace mode: each mode's median (and its count of
+    repetitions), the slowest mode's median over the fastest's; and how many entries had a repetition that
+    straddled a change of pace."""
+    modes = run_file.pace.modes if run_file.pace else ()
+    rows, straddling = [], 0
+    for key in sorted(run_file.runs, key=lambda key: key.sort_key()):
+        run = run_file.runs[key]
+        if run.errored:
+            continue
+        paced = [(r.pace.mode, r.real_ns) for r in run.repetitions if r.pace is not None and r.pace.mode is not None]
+        if any(mode < 0 for mode, _ in paced):
+            straddling += 1
+        by_mode: dict[int, list[float]] = {}
+        for mode, value in paced:
+            if mode >= 0:
+                by_mode.setdefault(mode, []).append(value)
+        if len(by_mode) < 2:
+            continue
+        medians = {mode: statistics.median(values) for mode, values in by_mode.items()}
+        cells = [key.display]
+        for mode in modes:
+            values = by_mode.get(mode.mode)
+            cells.append(f"{format_ns(medians[mode.mode])} ({len(values)})" if values else "")
+        fastest, slowest = medians[min(medians)], medians[max(medians)]
+        straddles = sum(1 for mode, _ in paced if mode < 0)
+        cells += [format_number(slowest / fastest, 2, "x"), str(straddles) if straddles else ""]
+        rows.append(cells)
+    return rows, straddling
+
+
+def pace_section(run_file: RunFile, counter: list[int]) -> Section:
+    pace = run_file.pace
+    paragraphs = [f"The machine's pace during the run: {pace.summary}. Between blocks of measurement the harness "
+                  f"took a short reference reading ({pace.reference}); each reading is a dot, coloured by the pace "
+                  "mode it falls in (grey: an outlier that belongs to no mode); dashed: each mode's median."]
+    modes_table = Table(["mode", "c2c one-way", "serial step", "share of the run", "readings"],
+                        [[str(mode.mode), format_ns(mode.c2c_ns), format_ns(mode.serial_ns),
+                          format_number(100 * mode.share, 0, " %"), format_count(mode.readings)]
+                         for mode in pace.modes], caption=f"{pace.changes} change(s) of mode")
+    tables = [modes_table]
+    rows, straddling = per_mode_rows(run_file)
+    if rows:
+        paragraphs.append(f"{len(rows)} entr{'y' if len(rows) == 1 else 'ies'} ran in more than one mode: their "
+                          "median per mode (repetitions in brackets) instead of one median that mixes them.")
+        tables.append(Table(["entry"] + [f"mode {mode.mode} (c2c {format_ns(mode.c2c_ns, 3)})" for mode in pace.modes]
+                            + ["slowest / fastest", "straddling"], rows,
+                            caption="Per-mode medians; straddling: repetitions whose pace changed while they ran"))
+    if straddling:
+        paragraphs.append(f"{straddling} entr{'y' if straddling == 1 else 'ies'} had a repetition that straddled a "
+                          "change of pace (its readings before and after disagree).")
+    figure = Figure(f"pace-{counter[0]}", f"pace trace, {run_file.label}",
+                    figures.pace_trace(pace.readings, pace.modes, f"pace trace ({run_file.label}): {pace.summary}"))
+    return Section(f"Pace of the machine: {run_file.label}", paragraphs=paragraphs, tables=tables, figures=[figure])
 
 
 def c2c_section(item: C2cFile, counter: list[int]) -> Section:
@@ -171,18 +354,220 @@ def figure5_table(rows_measured, title: str) -> Table:
                  rows, caption=title)
 
 
-def _setting(settings: dict, key: str) -> str:
-    if key not in settings:
-        return UNAVAILABLE
-    value = settings[key]
-    if value is None:
-        return "none"  # fifo_priority: SCHED_OTHER
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    return str(value)
+# What each of fields.DELAY_SETTINGS is called where the report says it is missing.
+SETTING_WORDS = {"period_ns": "period", "periods": "number of periods", "duration_s": "duration",
+                 "fifo_priority": "scheduling policy", "mlock": "memory locking"}
+
+
+def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
+    """A delay run's settings as a person writes them ("SCHED_FIFO priority 80", "memory not locked",
+    "period 1 ms"), never as program values; a setting the file does not say is left out."""
+    rows = []
+    if "period_ns" in settings:
+        rows.append(["period", format_duration(settings["period_ns"])])
+    length = []
+    if "periods" in settings:
+        length.append(f"{format_count(settings['periods'])} periods")
+    if "duration_s" in settings:
+        length.append(format_duration(settings["duration_s"] * 1e9))
+    if length:
+        rows.append(["length", ", ".join(length)])
+    step = [f"{settings[key]} {word}" for key, word in (("sync", "sync"), ("layout", "layout")) if key in settings]
+    if "threads" in settings:
+        step.append(f"{settings['threads']} thread{'s' if settings['threads'] != 1 else ''}")
+    if step:
+        rows.append(["step", ", ".join(step)])
+    if extras.settings.get("view"):
+        rows.append(["view", extras.settings["view"]])
+    if "pin" in settings or "placement" in settings:
+        pin = f"pin {settings['pin']}" if "pin" in settings else ""
+        rows.append(["placement", f"{pin}: {settings['placement']}" if pin and "placement" in settings
+                     else pin or settings["placement"]])
+    if "fifo_priority" in settings:
+        priority = settings["fifo_priority"]
+        rows.append(["scheduling", "SCHED_OTHER (the default time-sharing policy; no real-time priority)"
+                     if priority is None else f"SCHED_FIFO, priority {priority}"])
+    if "mlock" in settings:
+        rows.append(["memory", "locked (mlockall: no page faults while paced)" if settings["mlock"]
+                     else "not locked (no mlockall)"])
+    idle = extras.idle
+    if idle or "dma_latency_us" in extras.settings:
+        path = idle.get("path", "/dev/cpu_dma_latency")
+        requested = idle.get("requested_us", extras.settings.get("dma_latency_us"))
+        if requested is None:
+            words = f"{path} left alone: the CPUs may enter deep idle states between periods"
+        elif idle and not idle.get("held"):
+            words = f"{path} could not be held at {requested} us ({idle.get('problem') or 'no reason given'}): " \
+                    "idle states not limited"
+        else:
+            words = f"{path} held at {requested} us" + (", as cyclictest does by default" if requested == 0 else "")
+            if idle.get("in_force_us") is not None and idle["in_force_us"] != requested:
+                words += f" (in force: {idle['in_force_us']} us)"
+        governor = [f"{name} {idle[key]}" for key, name in (("cpuidle_driver", "cpuidle driver"),
+                                                             ("cpuidle_governor", "governor")) if idle.get(key)]
+        rows.append(["idle states", "; ".join([words] + ([", ".join(governor)] if governor else []))])
+    if idle.get("clocksource"):
+        rows.append(["clock source", idle["clocksource"]])
+    if extras.settings.get("histogram_bound_us"):
+        rows.append(["histogram", f"1 us buckets up to {format_duration(extras.settings['histogram_bound_us'] * 1e3)}, "
+                                  "later wake-ups counted as overflow"])
+    if extras.settings.get("stop_above_ns"):
+        rows.append(["stop above", format_duration(extras.settings["stop_above_ns"])])
+    missing = [SETTING_WORDS.get(key, key) for key, _ in DELAY_SETTINGS if key not in settings]
+    if missing:
+        rows.append(["not in the file", ", ".join(f"{word}: {UNAVAILABLE}" for word in missing)])
+    return rows
+
+# ---------------------------------------------------------------- delay keys that inputs.py does not read yet
+# `lockstep delay --out` writes latency_histogram, per_cpu, find_period and idle (bench/cli/delay.cpp);
+# inputs.DelayFile does not carry them yet. Until it does, the report reads them here from the same file,
+# with inputs.py's own checks (a wrong value is InputError: one line, exit 2), and only what it draws.
+# The place for this is inputs.read_delay (the report's final note lists what it needs).
+
+@dataclass(frozen=True)
+class HistogramColumn:
+    name: str
+    cpu: int | None
+    counts: list[int]  # counts[i]: wake-ups in [i, i + 1) buckets of bucket_us
+    overflow: int  # wake-ups at bound_us or later
+
+
+@dataclass(frozen=True)
+class LatencyHistograms:
+    bucket_us: float
+    bound_us: float
+    columns: list[HistogramColumn]
+
+
+@dataclass(frozen=True)
+class CpuLatency:
+    cpu: int | None
+    wakeup: object  # inputs.Distribution
+    deadline_misses: int | None
+
+
+@dataclass(frozen=True)
+class PeriodTrial:
+    period_ns: float
+    periods: int
+    misses: int
+    miss_rate: float
+    upper_bound: float | None
+    holds: bool
+
+
+@dataclass(frozen=True)
+class PeriodSearch:
+    miss_rate: float
+    confidence: float | None
+    trials: list[PeriodTrial]
+    confirm: PeriodTrial | None
+    found_period_ns: float | None
+    failed_period_ns: float | None
+    budget_cut: bool
+    stopped_because: str | None
+    rule: str | None
+
+
+@dataclass(frozen=True)
+class DelayExtras:
+    histograms: LatencyHistograms | None = None
+    per_cpu: list[CpuLatency] = field(default_factory=list)
+    noisiest: tuple[int, str] | None = None  # (cpu, the rule that named it)
+    search: PeriodSearch | None = None
+    idle: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)  # the settings fields.DELAY_SETTINGS does not name
+
+
+def _counts(owner: _Object, key: str) -> list[int]:
+    counts = owner.array(key, nonempty=False)
+    for index, count in enumerate(counts):
+        if isinstance(count, bool) or not isinstance(count, int) or not 0 <= count <= LARGEST_AMOUNT:
+            owner.fail(key, f"holds {count!r:.40} at {index}: a count is a whole number of 0 or more")
+    return counts
+
+
+def _trial(raw, where: str, path: str) -> PeriodTrial:
+    trial = _Object(path, raw, where)
+    periods = trial.integer("periods")
+    misses = trial.integer("misses", high=periods)
+    return PeriodTrial(period_ns=trial.number("period_ns", SHORTEST_NS, LONGEST_NS, unit=" ns"), periods=periods,
+                       misses=misses, miss_rate=trial.number("miss_rate", 0.0, 1.0),
+                       upper_bound=trial.number("upper_bound", 0.0, 1.0, required=False, nullable=True),
+                       holds=trial.flag("holds"))
+
+
+def read_delay_extras(item: DelayFile) -> DelayExtras:
+    document = _Object(item.path, parse_json(item.path, read_text(item.path)), "")
+    histograms = None
+    raw = document.object("latency_histogram", required=False)
+    if raw is not None:
+        bucket = raw.number("bucket_us", 1e-3, 1e9, unit=" us")
+        bound = raw.number("bound_us", 1e-3, 1e9, unit=" us")
+        columns = []
+        for index, value in enumerate(raw.array("columns", nonempty=False)):
+            column = _Object(item.path, value, f"latency_histogram column {index}")
+            counts = _counts(column, "counts")
+            if abs(len(counts) * bucket - bound) > bucket:
+                column.fail("counts", f"has {len(counts)} buckets of {bucket:g} us, not the {bound:g} us of bound_us")
+            columns.append(HistogramColumn(column.text("name"), column.integer("cpu", required=False, nullable=True,
+                                                                              high=CPU_LIMIT - 1),
+                                           counts, column.integer("overflow", required=False) or 0))
+        histograms = LatencyHistograms(bucket, bound, columns)
+    per_cpu, noisiest = [], None
+    raw = document.object("per_cpu", required=False, nullable=True)
+    if raw is not None:
+        for index, value in enumerate(raw.array("cpus", nonempty=False)):
+            row = _Object(item.path, value, f"per_cpu row {index}")
+            per_cpu.append(CpuLatency(row.integer("cpu", nullable=True, high=CPU_LIMIT - 1),
+                                      inputs_distribution(row, "wakeup_latency_ns", required=True),
+                                      row.integer("deadline_misses", required=False)))
+        worst = raw.object("noisiest", required=False, nullable=True)
+        if worst is not None:
+            noisiest = (worst.integer("cpu", high=CPU_LIMIT - 1), worst.text("rule", required=False) or "")
+    search = None
+    raw = document.object("find_period", required=False, nullable=True)
+    if raw is not None:
+        confirm = raw.value.get("confirm")
+        search = PeriodSearch(
+            miss_rate=raw.number("miss_rate", 0.0, 1.0), confidence=raw.number("confidence", 0.0, 1.0, required=False),
+            trials=[_trial(value, f"find_period trial {index}", item.path)
+                    for index, value in enumerate(raw.array("trials", nonempty=False))],
+            confirm=_trial(confirm, "find_period confirm", item.path) if confirm is not None else None,
+            found_period_ns=raw.number("found_period_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True),
+            failed_period_ns=raw.number("failed_period_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True),
+            budget_cut=raw.flag("budget_cut"), stopped_because=raw.text("stopped_because", required=False),
+            rule=raw.text("rule", required=False))
+    idle = {}
+    raw = document.object("idle", required=False, nullable=True)
+    if raw is not None:
+        idle = {"requested_us": raw.integer("requested_us", required=False, nullable=True, high=10 ** 9),
+                "held": raw.flag("held"),
+                "in_force_us": raw.integer("in_force_us", required=False, nullable=True, high=10 ** 9)}
+        for key in ("path", "problem", "cpuidle_driver", "cpuidle_governor", "clocksource"):
+            value = raw._get(key, required=False, nullable=True)
+            if value is not None:
+                idle[key] = raw.text(key)
+    settings = {}
+    raw = document.object("settings", required=False)
+    if raw is not None:
+        if "per_cpu" in raw.value:
+            settings["per_cpu"] = raw.flag("per_cpu")
+        for key in ("dma_latency_us", "histogram_bound_us"):
+            value = raw.integer(key, required=False, nullable=True, high=10 ** 9)
+            if value is not None:
+                settings[key] = value
+        stop = raw.number("stop_above_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True)
+        if stop is not None:
+            settings["stop_above_ns"] = stop
+        view = raw.text("view", required=False)
+        if view:
+            settings["view"] = view
+    return DelayExtras(histograms, per_cpu, noisiest, search, idle, settings)
 
 
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
+    extras = read_delay_extras(item)
     runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
     summary_rows = []
     for which, run in runs:
@@ -190,23 +575,74 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
             statistics = summary.statistics if summary else {}
             count = summary.count if summary else None
             summary_rows.append([name + which] + [format_ns(statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
-                                + [format_number(count)])
-    misses = [f"{format_number(run.deadline_misses)}{which}" for which, run in runs]
-    paragraphs = [
-        "Settings: " + ", ".join(f"{key} {_setting(item.settings, key)}" for key, _ in sorted(DELAY_SETTINGS)) + ".",
-        f"Deadline misses: {', '.join(misses)}.",
-        "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
-        f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
-        "per-thread accounting.",
-    ]
-    tables = [Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"], summary_rows),
-              figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper")]
+                                + [format_count(count)])
+    misses = [f"{format_count(run.deadline_misses)}{which}" for which, run in runs]
+    paragraphs = [f"Deadline misses: {', '.join(misses)}.",
+                  "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
+                  f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
+                  "per-thread accounting."]
+    tables = [Table(["setting", "value"], delay_settings_rows(item.settings, extras)),
+              Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"], summary_rows)]
+    section_figures = []
+    histograms = extras.histograms if extras.histograms and extras.histograms.columns else None
+    period = format_duration(item.settings.get("period_ns"))
+    if histograms is None:  # a file from before latency_histogram: the covering histogram, as before
+        section_figures.append(Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(item)))
+    else:
+        summed = [sum(column.counts[i] for column in histograms.columns if i < len(column.counts))
+                  for i in range(max(len(column.counts) for column in histograms.columns))]
+        marks = {name: value for name, value in (("p50", item.pinned.wakeup.statistics.get("p50")),
+                                                 ("p99", item.pinned.wakeup.statistics.get("p99")),
+                                                 ("p99.9", item.pinned.wakeup.statistics.get("p999")))
+                 if value is not None}
+        section_figures.append(Figure(
+            f"delay-{counter[0]}", item.label, figures.wakeup_histograms(
+                histograms, [("all threads", summed, sum(column.overflow for column in histograms.columns), False)],
+                f"paced wake-up latency, every thread ({item.label}; period {period})", marks)))
+    if extras.per_cpu:
+        noisy = f" Noisiest CPU: {extras.noisiest[0]} ({extras.noisiest[1]})." if extras.noisiest else ""
+        paragraphs.append("Per CPU: one paced thread on each CPU, each computing the step alone (cyclictest -S)."
+                          + noisy)
+        tables.append(Table(["cpu", "min", "p50", "p99", "p99.9", "max", "count", "deadline misses"],
+                            [[UNAVAILABLE if row.cpu is None else str(row.cpu)]
+                             + [format_ns(row.wakeup.statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
+                             + [format_count(row.wakeup.count), format_count(row.deadline_misses)]
+                             for row in extras.per_cpu], caption="Wake-up latency per CPU"))
+        if histograms is not None:
+            noisiest = extras.noisiest[0] if extras.noisiest else None
+            panels = [(column.name, column.counts, column.overflow, column.cpu is not None and column.cpu == noisiest)
+                      for column in histograms.columns]
+            section_figures.append(Figure(f"delay-{counter[0]}-per-cpu", f"{item.label}, per CPU",
+                                          figures.wakeup_histograms(histograms, panels,
+                                                                    f"wake-up latency per CPU (period {period})")))
+    if extras.search is not None:
+        search = extras.search
+        answer = (f"{format_duration(search.found_period_ns)}" if search.found_period_ns is not None
+                  else "none (no period tried held)")
+        failed = f"; {format_duration(search.failed_period_ns)} failed" if search.failed_period_ns is not None else ""
+        cut = " The search budget cut the search: the bracket did not close." if search.budget_cut else ""
+        paragraphs.append(f"Shortest period that holds at miss rate {format_rate(search.miss_rate)}: {answer}{failed} "
+                          f"(stopped: {search.stopped_because or UNAVAILABLE}).{cut}"
+                          + (f" Rule: {search.rule}." if search.rule else ""))
+        trial_rows = [[str(index), format_duration(trial.period_ns), format_count(trial.periods),
+                       format_count(trial.misses), format_rate(trial.miss_rate), format_rate(trial.upper_bound),
+                       "holds" if trial.holds else "fails"]
+                      for index, trial in enumerate(search.trials, start=1)]
+        if search.confirm is not None:
+            trial = search.confirm
+            trial_rows.append(["confirming run", format_duration(trial.period_ns), format_count(trial.periods),
+                               format_count(trial.misses), format_rate(trial.miss_rate),
+                               format_rate(trial.upper_bound), "holds" if trial.holds else "fails"])
+        tables.append(Table(["trial", "period", "periods", "misses", "miss rate", "upper bound", "verdict"],
+                            trial_rows, caption="find-period: the trials in the order they ran"))
+        section_figures.append(Figure(f"delay-{counter[0]}-find-period", f"{item.label}, find-period search",
+                                      figures.period_search(search)))
+    tables.append(figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper"))
     if item.unpinned:
         tables.append(figure5_table(item.unpinned.figure5,
                                     "Figure 5: this machine unpinned (the paper's OpenMP case) beside the paper"))
-    figure = Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(item))
     counter[0] += 1
-    return Section(f"Multi-core delay: {item.label}", paragraphs=paragraphs, tables=tables, figures=[figure])
+    return Section(f"Multi-core delay: {item.label}", paragraphs=paragraphs, tables=tables, figures=section_figures)
 
 
 def trajectory_section(item: VerifyFile, counter: list[int]) -> Section:

@@ -23,6 +23,9 @@ FIXTURES = os.path.join(HERE, "fixtures")
 CHROMIUM = "/usr/bin/chromium"
 INPUTS = [os.path.join(FIXTURES, name)
           for name in ("machine_a.json", "machine_b.json", "c2c_b.json", "delay_a.json", "verify_a.csv")]
+# issue 12's pace keys and issue 14's delay keys (per CPU, find-period)
+PACED_INPUTS = [os.path.join(FIXTURES, name)
+                for name in ("paced_every_pair.json", "delay_per_cpu.json", "delay_find_period.json")]
 SAMPLES = [os.path.join(REPORTS_DIR, "samples", name) for name in ("run.json", "c2c.json", "delay.json", "verify.csv")]
 
 
@@ -117,7 +120,7 @@ def main() -> int:
     work = options.keep or tempfile.mkdtemp(prefix="lockstep-browser-")
     os.makedirs(work, exist_ok=True)
     failures = []
-    input_sets = [("fixtures", INPUTS)]
+    input_sets = [("fixtures", INPUTS), ("paced", PACED_INPUTS)]
     if all(os.path.exists(path) for path in SAMPLES):  # reports/samples/, once make_samples.sh has run
         input_sets.append(("samples", SAMPLES))
     try:

@@ -13,6 +13,7 @@ from lockstep_reports.inputs import load_any
 ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "delay_a.json", "verify_a.csv"]
 
 
+
 def digest_tree(directory):
     digests = {}
     for root, _, files in os.walk(directory):
@@ -116,6 +117,85 @@ class Report(unittest.TestCase):
             self.assertEqual(status, 2)
             self.assertEqual(err.count("\n"), 1)
             self.assertIn(name, err)
+
+
+class PaceAndDelayReport(unittest.TestCase):
+    """The report of a file with issue 12's pace keys and of delay files with issue 14's keys: the sections and
+    figures they add, checked by structure (which figures, which table columns), never by pixels."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.directory = tempfile.TemporaryDirectory()
+        cls.out = os.path.join(cls.directory.name, "paced")
+        status, _, err = run_tool("report", fixture("paced_every_pair.json"), fixture("delay_per_cpu.json"),
+                                  fixture("delay_find_period.json"), "--out", cls.out)
+        assert status == 0, err
+        with open(os.path.join(cls.out, "report.html"), encoding="utf-8") as stream:
+            cls.html = stream.read()
+        with open(os.path.join(cls.out, "report.md"), encoding="utf-8") as stream:
+            cls.markdown = stream.read()
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.directory.cleanup()
+
+    def test_pace_trace_and_modes(self):
+        self.assertIn('<figure id="pace-0"', self.html)
+        self.assertIn("Pace of the machine: paced_every_pair.json", self.markdown)
+        self.assertIn("| mode | c2c one-way | serial step | share of the run | readings |", self.markdown)
+        self.assertIn("c2c 25 ns for 57 % of the run, 118 ns for 40 %; 1 change", self.markdown)
+
+    def test_per_mode_medians_for_entries_in_two_modes(self):
+        self.assertIn("| entry | mode 0 (c2c 25.0 ns) | mode 1 (c2c 118 ns) | slowest / fastest | straddling |",
+                      self.markdown)
+        self.assertRegex(self.markdown, r"\| rk4/sync:futex_spin/layout:packed/pin:compact/threads:4 \| [0-9.]+ us \(6\) "
+                                        r"\| [0-9.]+ us \(3\) \| 2\.[0-9]+x \| 1 \|")
+
+    def test_paired_penalties_carry_their_interval_and_verdict(self):
+        self.assertRegex(self.markdown, r"\| seqlock \| 2 \| 1\.0[0-9]x \[[0-9.]+, [0-9.]+\] within noise \|")
+        self.assertIn("false sharing (paired): packed / padded", self.markdown)
+        self.assertIn("migration (paired): pin:migrate / pin:compact", self.markdown)
+        for kind in ("false-sharing", "migration", "against-best-other", "overhead"):
+            self.assertIn(f'<figure id="pairs-0-{kind}"', self.html)
+
+    def test_within_noise_cells_are_said(self):
+        self.assertIn("Hatched, marked ≈", self.markdown)
+
+    def test_delay_figures(self):
+        for slug in ('delay-1"', 'delay-1-per-cpu"', 'delay-2"', 'delay-2-find-period"'):
+            self.assertIn(f'<figure id="{slug}', self.html)
+        self.assertIn("Noisiest CPU: 1", self.markdown)
+        self.assertIn("| cpu | min | p50 | p99 | p99.9 | max | count | deadline misses |", self.markdown)
+        self.assertIn("| confirming run | 420.448 us |", self.markdown)
+        self.assertIn("The search budget cut the search", self.markdown)
+
+    def test_delay_settings_are_written_for_people(self):
+        self.assertIn("| scheduling | SCHED_FIFO, priority 80 |", self.markdown)
+        self.assertIn("| memory | locked (mlockall: no page faults while paced) |", self.markdown)
+        self.assertIn("| period | 1 ms |", self.markdown)
+        self.assertIn("/dev/cpu_dma_latency held at 0 us, as cyclictest does by default", self.markdown)
+        for program_value in ("fifo_priority", "mlock False", "period_ns", "None"):
+            self.assertNotIn(program_value, self.markdown)
+
+    def test_every_figure_is_linked_from_the_markdown(self):
+        figure_files = os.listdir(os.path.join(self.out, "figures"))
+        self.assertEqual(len(figure_files), self.html.count("<figure "))
+        for name in figure_files:
+            self.assertIn(f"](figures/{name})", self.markdown)
+
+
+class WithoutPaceKeys(unittest.TestCase):
+    def test_an_older_file_reports_as_before(self):
+        with tempfile.TemporaryDirectory() as directory:
+            out = os.path.join(directory, "old")
+            status, _, err = run_tool("report", fixture("machine_a.json"), fixture("delay_a.json"), "--out", out)
+            self.assertEqual(status, 0, err)
+            with open(os.path.join(out, "report.md"), encoding="utf-8") as stream:
+                markdown = stream.read()
+        for added in ("Pace of the machine", "Paired ratios", "(paired)", "per CPU", "find-period", "≈"):
+            self.assertNotIn(added, markdown)
+        self.assertIn("| scheduling | SCHED_OTHER", markdown)
+        self.assertIn("| memory | not locked (no mlockall) |", markdown)
 
 
 class Pieces(unittest.TestCase):
