@@ -827,7 +827,8 @@ def _settings(document: _Object) -> dict:
             value = settings.number(key, fields.SHORTEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
             value = int(value) if value is not None and value.is_integer() else value
         elif kind == "seconds":
-            value = settings.number(key, 0.0, fields.LONGEST_NS / 1e9, required=False, unit=" s")
+            # null: the run had no fixed length (`lockstep delay --find-period` writes duration_s null)
+            value = settings.number(key, 0.0, fields.LONGEST_NS / 1e9, required=False, nullable=True, unit=" s")
         elif kind == "count":
             value = settings.integer(key, required=False)
         elif kind == "priority":
