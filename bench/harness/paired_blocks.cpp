@@ -17,19 +17,6 @@ namespace lockstep::bench {
 
 namespace {
 
-struct measured_entry {
-  const captured_entry* entry;
-  double median;
-};
-
-std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
-  std::vector<measured_entry> found;
-  for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
-    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
-  }
-  return found;
-}
 
 // From the layout registry: a shared layout whose writers share lines (the
 // false-sharing case), and a shared layout that gives each writer its own
@@ -164,6 +151,15 @@ paired_result measure_one(harness_state& harness, const comparison& what, const 
 }
 
 }  // namespace
+
+std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
+  std::vector<measured_entry> found;
+  for (const auto& entry : book.entries()) {
+    if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
+    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
+  }
+  return found;
+}
 
 std::vector<comparison> plan_comparisons(const run_book& book) {
   std::vector<comparison> plan;

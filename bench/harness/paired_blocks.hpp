@@ -37,6 +37,15 @@ struct pairing_settings {
   double noise = kDefaultNoise;
 };
 
+// An entry that measured a counter, with its median over repetitions.
+struct measured_entry {
+  const captured_entry* entry;
+  double median;
+};
+// Entries of one kind ("rk4", "barrier"; rk4/serial left out) that measured
+// `counter` without error.
+std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter);
+
 // The comparisons the summary prints, from the run's medians (entries that
 // measured without error; a comparison needs both sides).
 std::vector<comparison> plan_comparisons(const run_book& book);

@@ -35,20 +35,6 @@ std::string optional_number(const captured_entry& entry, const std::string& coun
   return fmt::format(fmt::runtime(format_spec), *value);
 }
 
-struct measured {
-  const captured_entry* entry;
-  double median;
-};
-
-// Entries of one kind that measured the counter, with its median.
-std::vector<measured> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
-  std::vector<measured> found;
-  for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != kind || !entry.error.empty()) continue;
-    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
-  }
-  return found;
-}
 
 // The pace modes an entry's repetitions ran in: mode -> their values of `counter`.
 std::map<int, std::vector<double>> by_mode(const captured_entry& entry, const std::string& counter) {
@@ -208,11 +194,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
                        book.pace->mode_of.size(), book.pace->summary());
   }
 
-  std::vector<measured> steps = measured_of(book, "rk4", "ns_per_step");
-  steps.erase(std::remove_if(steps.begin(), steps.end(),
-                             [](const measured& step) { return step.entry->field("variant") == "serial"; }),
-              steps.end());
-  std::sort(steps.begin(), steps.end(), [](const measured& a, const measured& b) { return a.median < b.median; });
+  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  std::sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
   if (!steps.empty()) {
     out += "\nRK4 step, ranked by median step time (spread: half the min..max range over repetitions):\n";
     out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}\n", "rank", "step", "spread", "vs_serial",
@@ -251,9 +234,9 @@ std::string render_summary(const run_book& book, const std::string& result_path)
     }
   }
 
-  std::vector<measured> episodes = measured_of(book, "barrier", "ns_per_episode");
+  std::vector<measured_entry> episodes = measured_of(book, "barrier", "ns_per_episode");
   if (!episodes.empty()) {
-    std::sort(episodes.begin(), episodes.end(), [](const measured& a, const measured& b) {
+    std::sort(episodes.begin(), episodes.end(), [](const measured_entry& a, const measured_entry& b) {
       return std::tuple(a.entry->field("threads"), a.entry->field("pin"), a.median) <
              std::tuple(b.entry->field("threads"), b.entry->field("pin"), b.median);
     });

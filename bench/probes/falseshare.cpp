@@ -134,7 +134,7 @@ std::vector<double> measure_stride(const std::vector<int>& cpus, std::size_t str
 std::vector<stride_cost> measure_false_sharing(const falseshare_settings& settings) {
   std::vector<stride_cost> costs;
   for (std::size_t stride : settings.strides)
-    costs.push_back({stride, stride < platform::kCacheLine, stride < platform::kPrefetchPair, {}});
+    costs.push_back({stride, stride < platform::kCacheLine, stride < platform::kPrefetchPair, {}, {}});
   for (int repeat = 0; repeat < settings.repeats; ++repeat) {
     if (settings.on_repeat) settings.on_repeat(repeat);
     for (auto& cost : costs) {
