@@ -72,6 +72,11 @@ constexpr int kDefaultPairs = 10;
 constexpr int kQuickPairs = 6;
 constexpr std::int64_t kDefaultBlockNs = 1'000'000;
 constexpr std::int64_t kQuickBlockNs = 500'000;
+// A comparison's time budget (after its first kMinPairs pairs): about 60 ms
+// buys the default pairs of two fast sides; 174 comparisons of the default
+// matrix then fit in about half a minute.
+constexpr std::int64_t kDefaultPairBudgetNs = 150'000'000;
+constexpr std::int64_t kQuickPairBudgetNs = 50'000'000;
 
 // The thread counts: the paper's four and this machine's core count by
 // default, each a count the model can split (the 2-mass model has four
@@ -254,6 +259,7 @@ int execute(const run_options& options) {
   pairing.pairs = static_cast<unsigned>(options.pairs >= 0 ? options.pairs : options.quick ? kQuickPairs : kDefaultPairs);
   pairing.block_ns = options.quick ? kQuickBlockNs : kDefaultBlockNs;
   pairing.noise = options.noise_pct / 100.0;
+  pairing.budget_ns = options.quick ? kQuickPairBudgetNs : kDefaultPairBudgetNs;
   const std::vector<bench::comparison> plan = bench::plan_comparisons(book);
   if (pairing.pairs > 0 && !plan.empty()) {
     fmt::print(stderr, "lockstep run: {} paired comparisons, {} pairs of blocks of about {} each\n", plan.size(),

@@ -12,6 +12,7 @@
 
 #include "bench/harness/pace.hpp"
 #include "layouts/registry.hpp"
+#include "platform/clock.hpp"
 
 namespace lockstep::bench {
 
@@ -123,7 +124,12 @@ paired_result measure_one(harness_state& harness, const comparison& what, const 
     if (harness.pace != nullptr) result.readings.push_back(harness.pace->take());
   };
   reading();
+  const std::int64_t start_ns = platform::now_ns();
   for (unsigned pair = 0; pair < settings.pairs; ++pair) {
+    if (pair >= kMinPairs && platform::now_ns() - start_ns > settings.budget_ns) {
+      result.budget_cut = true;
+      break;
+    }
     std::optional<double> a;
     std::optional<double> b;
     if (pair % 2 == 0) {
@@ -232,7 +238,8 @@ void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pa
                      {"confidence", kConfidence},
                      {"noise", book.noise},
                      {"verdict", to_string(pair.verdict)},
-                     {"block_ms", pair.block_ms}});
+                     {"block_ms", pair.block_ms},
+                     {"budget_cut", pair.budget_cut}});
   }
   result["lockstep_pairs"] = pairs;
 }

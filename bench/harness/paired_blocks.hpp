@@ -35,7 +35,13 @@ struct pairing_settings {
   unsigned pairs = 10;               // 0: no paired comparisons
   std::int64_t block_ns = 1'000'000;  // one timed block
   double noise = kDefaultNoise;
+  // A comparison stops taking pairs after this long, once it has
+  // kMinPairs: a side whose one unit lasts a scheduler quantum (a pure
+  // spinner with more threads than CPUs: tens of ms a step) would otherwise
+  // take seconds per comparison. Its interval is wide, and says so.
+  std::int64_t budget_ns = 200'000'000;
 };
+inline constexpr unsigned kMinPairs = 3;
 
 // An entry that measured a counter, with its median over repetitions.
 struct measured_entry {

@@ -70,6 +70,7 @@ struct paired_result {
   ratio_estimate estimate;
   ratio_verdict verdict = ratio_verdict::within_noise;
   double block_ms = 0.0;   // the median timed block, both sides
+  bool budget_cut = false; // fewer pairs than asked: the comparison's time budget ran out
   std::string failure;     // non-empty: not measured, and why
 };
 

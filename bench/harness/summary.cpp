@@ -105,18 +105,19 @@ std::string comparison_figure(const run_book& book, const comparison& what) {
   if (pair != book.pairs.end() && pair->failure.empty() && !pair->ratios.empty()) {
     std::size_t straddling = 0;
     for (int mode : pair->modes) straddling += mode < 0 ? 1 : 0;
-    return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{})", pair->estimate.median, pair->estimate.low,
+    return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})", pair->estimate.median, pair->estimate.low,
                        pair->estimate.high, to_string(pair->verdict), pair->ratios.size(),
+                       pair->budget_cut ? ", cut by the time budget: slow blocks" : "",
                        straddling > 0 ? fmt::format(", {} straddling a pace change", straddling) : "");
   }
   const captured_entry* a = book.find(what.a);
   const captured_entry* b = book.find(what.b);
   const char* counter = what.a.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
-  const auto median_a = a != nullptr ? a->median(counter) : std::nullopt;
-  const auto median_b = b != nullptr ? b->median(counter) : std::nullopt;
+  const double median_a = a != nullptr ? a->median(counter).value_or(0.0) : 0.0;
+  const double median_b = b != nullptr ? b->median(counter).value_or(0.0) : 0.0;
   std::string why = pair != book.pairs.end() ? pair->failure : std::string("not measured as a pair");
-  if (!median_a || !median_b || *median_b <= 0.0) return why;
-  return fmt::format("{:.2f}x (medians, unpaired: no interval; {})", *median_a / *median_b, why);
+  if (!(median_a > 0.0) || !(median_b > 0.0)) return why;
+  return fmt::format("{:.2f}x (medians, unpaired: no interval; {})", median_a / median_b, why);
 }
 
 std::string median_of(const run_book& book, const std::string& name) {
