@@ -414,8 +414,8 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     if back_to_back:
         warnings.append(f"{' and '.join(back_to_back)} measured every entry's repetitions back to back "
                         f"(context lockstep_order): a drift of the machine during the run shifts the entries that "
-                        f"ran at that moment, with a tiny p; `lockstep run --interleave` spreads it over every "
-                        f"entry")
+                        f"ran at that moment, with a tiny p; `lockstep run` without --no-interleave (its default) "
+                        f"spreads it over every entry")
     if untested:
         warnings.append(f"{len(untested)} of {len(rows)} matched entries have too few repetitions for a "
                         f"{int(statistics.CONFIDENCE * 100)} % interval (fewer than 4 on a side, or fewer than "

@@ -74,6 +74,9 @@ const bad_input kBadInputs[] = {
     {{"delay", "--period", "1000"}, "--period"},
     {{"delay", "--duration", "soon"}, "--duration"},
     {{"falseshare", "--window", "100"}, "--window"},
+    {{"run", "--pairs", "-1", "--out", "@/r.json"}, "--pairs"},
+    {{"run", "--noise", "abc", "--out", "@/r.json"}, "--noise"},
+    {{"run", "--noise", "150", "--out", "@/r.json"}, "--noise"},
     {{"verify", "--dt", "0.001"}, "--dt"},
     // Thread counts the model cannot split, and empty lists.
     {{"run", "--threads", "8", "--out", "@/r.json"}, "--threads"},

@@ -178,6 +178,78 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
   }
 }
 
+// The pace trace and the paired comparisons (bench/harness: pace.hpp,
+// paired_blocks.hpp), as reports/ reads them: a reading per repetition with
+// its mode, the trace's modes and changes, and each summary ratio as pairs
+// with an interval around its median and a verdict.
+TEST(RunCli, RunWritesThePaceTraceAndThePairedRatios) {
+  watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a paired lockstep run did not finish");
+  scratch_directory scratch("lockstep-run-test");
+  const fs::path out = scratch.path() / "paired.json";
+  const auto result = run_command(run_args({"--quick", "--sync", "futex_spin,seqlock", "--layout", "per_thread,packed",
+                                            "--threads", "2", "--pin", "compact", "--repetitions", "2", "--pairs", "4",
+                                            "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("Pace of the machine"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("Paired ratios"), std::string::npos) << result.out;
+  std::ifstream file(out);
+  const nlohmann::json document = nlohmann::json::parse(file);
+  EXPECT_EQ(document["context"].value("lockstep_order", "").rfind("random interleaving", 0), 0u);
+
+  ASSERT_TRUE(document.contains("lockstep_pace"));
+  const nlohmann::json& pace = document["lockstep_pace"];
+  ASSERT_FALSE(pace["readings"].empty());
+  ASSERT_FALSE(pace["modes"].empty());
+  const auto modes = static_cast<int>(pace["modes"].size());
+  double last_t = 0.0;
+  for (const auto& reading : pace["readings"]) {
+    EXPECT_GE(reading["t_s"].get<double>(), last_t);
+    last_t = reading["t_s"].get<double>();
+    EXPECT_GT(reading["serial_ns"].get<double>(), 0.0);
+    EXPECT_GE(reading["mode"].get<int>(), -1);
+    EXPECT_LT(reading["mode"].get<int>(), modes);
+  }
+  EXPECT_EQ(document["context"].value("pace_summary", ""), pace["summary"].get<std::string>());
+
+  std::size_t paced_rows = 0;
+  for (const auto& row : document["benchmarks"]) {
+    EXPECT_FALSE(row.contains("pace_reading_before")) << row.dump();
+    EXPECT_FALSE(row.contains("pace_reading_after")) << row.dump();
+    const std::string name = row["name"];
+    const bool measured = name.rfind("rk4/sync:", 0) == 0 || name.rfind("barrier/", 0) == 0;
+    if (!measured || row.value("error_occurred", false)) continue;
+    if (row.value("run_type", "") == "iteration") {
+      ++paced_rows;
+      ASSERT_TRUE(row.contains("pace_mode")) << row.dump();
+      EXPECT_TRUE(row["pace_mode"].is_number_integer()) << row.dump();
+      EXPECT_GT(row["pace_serial_ns"].get<double>(), 0.0);
+    } else {
+      EXPECT_FALSE(row.contains("pace_mode")) << "an aggregate of mode indices means nothing: " << row.dump();
+    }
+  }
+  EXPECT_GT(paced_rows, 0u);
+
+  ASSERT_TRUE(document.contains("lockstep_pairs"));
+  ASSERT_FALSE(document["lockstep_pairs"].empty());
+  for (const auto& pair : document["lockstep_pairs"]) {
+    const auto& ratios = pair["ratios"];
+    ASSERT_GE(ratios.size(), 3u);
+    EXPECT_LE(ratios.size(), 4u);
+    EXPECT_EQ(pair["modes"].size(), ratios.size());
+    EXPECT_LE(pair["ci_low"].get<double>(), pair["median"].get<double>());
+    EXPECT_GE(pair["ci_high"].get<double>(), pair["median"].get<double>());
+    const std::string verdict = pair["verdict"];
+    EXPECT_TRUE(verdict == "penalty" || verdict == "gain" || verdict == "within noise") << verdict;
+    if (verdict == "penalty") {
+      EXPECT_GT(pair["ci_low"].get<double>(), 1.05);
+    }
+    if (verdict == "gain") {
+      EXPECT_LT(pair["ci_high"].get<double>(), 1.0 / 1.05);
+    }
+    EXPECT_NE(pair["a"], pair["b"]);
+  }
+}
+
 // With the repetitions shuffled over the run, a calibration may finish after
 // the entries that divide by it: the ratios are derived after the run, so
 // every repetition and every aggregate of every rk4 entry still has them, and
