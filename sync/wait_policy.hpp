@@ -44,20 +44,27 @@
 
 namespace lockstep::sync {
 
-// Measured on the development VM (2-vCPU KVM guest, Intel Xeon, Linux 6.x)
-// with a two-thread probe, pinned one per vCPU:
-//  * PAUSE: 14-19 ns per instruction in a loop of a million (issue 11 saw
-//    about 25 ns in a slower pace); kPauseNs takes the slow end, so the spin
-//    below lasts 15-25 us.
-//  * a futex sleep and wake-up: FUTEX_WAKE to a sleeper on an idle vCPU costs
-//    the waker 15-17 us of syscall (the IPI exits to the hypervisor), and the
-//    sleeper runs 20-25 us (quiet pace, issue 11) to 40-50 us (busy pace,
-//    p50) after the wake. kFutexRoundTripNs is the quiet figure: spinning
-//    longer than one round trip cannot win back more than it risks.
-inline constexpr std::uint32_t kPauseNs = 25;
-inline constexpr std::uint32_t kFutexRoundTripNs = 25'000;
-// About 1000 pauses: far longer than a stage of RK4 work (~0.2-0.5 us), so a
-// participant whose producer has its own CPU never blocks in steady state.
+// Measured on the development VM (2-vCPU KVM guest, Intel Xeon) with a
+// two-thread probe, one thread pinned per vCPU, in its usual (slow) pace:
+//  * PAUSE: 14-19 ns per instruction over a loop of a million (issue 11 saw
+//    about 25 ns). kPauseNs takes the fast end, so that the spin below never
+//    lasts less than the round trip it is meant to cover.
+//  * a futex round trip: FUTEX_WAKE to a sleeper on an idle vCPU keeps the
+//    waker in the syscall 14-15 us (the IPI exits to the hypervisor) and the
+//    sleeper runs 40-42 us after the call began (p50; p10 32-35, p90 45-50);
+//    issue 11 saw 20-25 us in a quieter pace. kFutexRoundTripNs is the slow
+//    pace's p50 and p90 rounded up.
+// Why the whole round trip: with two participants, once one sleeps, its
+// partner pays the wake-up syscall and then waits for it; if its own spin is
+// shorter than the sleeper's wake-up it runs out and sleeps too, and the two
+// take turns sleeping every stage (seen with a 20-25 us spin: 2-3x slower
+// steps, a futex wait every few hundred steps). A spin that covers the round
+// trip ends the cascade at the first wake-up.
+inline constexpr std::uint32_t kPauseNs = 15;
+inline constexpr std::uint32_t kFutexRoundTripNs = 50'000;
+// About 3300 pauses (50-80 us): far longer than a stage of RK4 work (~0.2-0.5
+// us), so a participant whose producer has its own CPU never sleeps in
+// steady state, only when that producer is descheduled.
 inline constexpr std::uint32_t kDedicatedSpins = kFutexRoundTripNs / kPauseNs;
 // Oversubscribed: no spin (every pause is stolen from the producer queued on
 // this CPU), then a few yields. A yield hands the CPU to a queued participant
