@@ -93,6 +93,8 @@ class basic_mailbox {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
+  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then sleeps
+  static constexpr bool kVisibleToTsan = true;  // C++ atomics and futexes
   static constexpr std::size_t kDepth = Depth;
   static_assert(Depth >= 2, "a producer and a consumer that depend on each other need two slots (see the header)");
   static_assert(Depth % 2 == 0,
