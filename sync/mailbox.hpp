@@ -28,7 +28,10 @@
 // acknowledgement before it reuses the slot (as seqlock does). So an overrun
 // is impossible for contract-keeping callers, and a slot holding any stage
 // but the expected one or its predecessor is reported (stderr, abort): never
-// a torn read.
+// a torn read. (Prevention, not a re-check after the payload reads: the word
+// changes only after the payload stores (P2 after P1), so a re-check could
+// not see an overwrite still in progress; a seqlock's odd store would, at the
+// price of a second write to the line per stage.)
 //   RK4, two masses on four participants (D1 <- x3, D2 <- x4, D3 and D4 <- x1,
 //   x2): the longest such path is 3 (3 -> 1 -> 2 -> 0 for the edge 0 -> 3),
 //   so kDepth = 4 needs no acknowledgement; two participants, and
@@ -37,9 +40,11 @@
 //   (checked for 2..24 masses on 2..min(2s, 48) participants: 575 graphs,
 //   d <= 3 everywhere); any graph that does is still correct, through them.
 // Progress: blocking. A consumer polls its producer's epoch word by the
-// regime policy of wait_policy.hpp (dedicated: spin about one futex round
-// trip; oversubscribed: a few yields), then sleeps on that word (FUTEX_WAIT);
-// the producer wakes it. A producer held back by an acknowledgement waits by
+// regime policy of wait_policy.hpp (dedicated: spin about one measured futex
+// round trip, kDedicatedSpins; oversubscribed: no spin, kOversubscribedYields
+// yields), then sleeps on that word (FUTEX_WAIT): the word of the first
+// producer it still misses, since it receives its producers one by one. The
+// producer wakes it. A producer held back by an acknowledgement waits by
 // the same policy, then yields (it has no word to sleep on; the RK4 and
 // barrier graphs never make it wait).
 // Memory ordering (numbered edges in the bodies): receive() of (p, s)

@@ -67,13 +67,20 @@ inline constexpr std::uint32_t kFutexRoundTripNs = 50'000;
 // steady state, only when that producer is descheduled.
 inline constexpr std::uint32_t kDedicatedSpins = kFutexRoundTripNs / kPauseNs;
 // Oversubscribed: no spin (every pause is stolen from the producer queued on
-// this CPU), then a few yields. A yield hands the CPU to a queued participant
-// for the price of a syscall and a context switch (~1 us here) where a sleep
-// costs a futex round trip on both sides; after kOversubscribedYields the
-// producer is evidently not on this CPU (or not runnable), and sleeping frees
-// the CPU for whoever is.
+// this CPU), then yields. A yield hands the CPU to a queued participant for
+// the price of a syscall and a context switch (~0.3-1 us here) where a sleep
+// costs a futex round trip, and the producer's FUTEX_WAKE alone keeps it in
+// the kernel 14-15 us; after kOversubscribedYields (tens of microseconds) the
+// producer is evidently not runnable soon (preempted on the other CPU, or
+// blocked), and sleeping frees the CPU for whoever is. Why 64 and not fewer:
+// with 8, mailbox's RK4 step at 4 threads on 2 CPUs slept 0.017-0.035 times
+// per step (the producer was preempted on the other CPU for longer than 8
+// yields) and took 3.4 us; with 64 it slept 0.000 times per step and took
+// 3.0-3.8 us, 0.92-1.06x seqlock's (which never sleeps) in the same run
+// (release, interleaved, one run each; issue 11's notes). futex_spin yields
+// as many times before it sleeps.
 inline constexpr std::uint32_t kOversubscribedSpins = 0;
-inline constexpr std::uint32_t kOversubscribedYields = 8;
+inline constexpr std::uint32_t kOversubscribedYields = 64;
 
 enum class wait_regime : std::uint8_t { dedicated, oversubscribed };
 

@@ -252,7 +252,9 @@ TEST(MailboxOversubscribed, FourParticipantsOnOneCpuSleepAndKeepThePhaseInvarian
             mine.pinned = true;
           }
           invariant.before_arrival(self, phase);
-          if (mine.random() % 32 == 0) std::this_thread::sleep_for(50us);
+          // 1 ms: far longer than the waiters' bounded yields (64, about
+          // 20-60 us on one CPU), so they must sleep on its word.
+          if (mine.random() % 32 == 0) std::this_thread::sleep_for(1ms);
         });
     EXPECT_EQ(result.phases, kPhases);
     EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
