@@ -49,14 +49,17 @@
 // sense word with the sleepers count on another (split_lines). Both are
 // registered: `futex_spin` is basic_futex_spin<kDefaultPhaseLines> =
 // split_lines, `futex_spin_one_line` the other. Why split: measured side by
-// side inside the RK4 step (lockstep run --interleave, release, 2-vCPU VM,
-// three runs each, best layout of each), split / one_line was 0.76
-// (0.68..0.80) at 2 threads pinned one per core and 0.93 (0.86..0.97) at 4
-// threads on 2 CPUs, pinned or not. With one line, every arrival's
-// fetch_sub takes the line the others spin on, so each arrival costs the
-// spinners a miss; split, the spinners' line changes once per phase. (Bare
-// episodes, with no work between phases, could not tell them apart:
-// 0.85..1.21 over the same runs.) An earlier note here preferred one line
+// side inside the RK4 step (release preset, `lockstep run --interleave
+// --threads 2,4 --repetitions 6` with both in the --sync list, 2-vCPU KVM VM,
+// c2c one-way 60-74 ns; five runs; best layout of each, median step time):
+// split / one_line was 0.78 (0.76..0.86) at 2 threads unpinned, 0.77
+// (0.74..0.90) at 2 threads pinned one per core, 0.91 (0.87..0.92) at 4
+// threads on 2 CPUs pinned and 0.95 (0.87..1.21) unpinned. With one line,
+// every arrival's fetch_sub takes the line the others spin on, so each
+// arrival costs the spinners a miss; split, the spinners' line changes once
+// per phase. Bare episodes (no work between phases) tell them apart less:
+// 0.84 (0.81..0.86) at 2 threads unpinned, 0.93 (0.83..0.98) pinned, about
+// 1.0 at 4 threads (three of those runs). An earlier version kept one line
 // from bare episodes alone; the step is what the suite measures.
 #include <sched.h>
 
