@@ -12,8 +12,10 @@
 // With more participants than CPUs a phase completes only when the scheduler
 // preempts spinners, typically a timeslice (milliseconds) per phase: bounded
 // by the scheduler, not by the primitive. kPureSpin says so to the harness.
-// Memory ordering: ck's barriers fence around each phase (ck_pr_fence_*):
-// writes before arrive_and_wait are visible to every participant after it.
+// Memory ordering: writes before arrive_and_wait are visible to every
+// participant after it: on x86-64 by ck alone (TSO); on AArch64 because the
+// shim adds a release fence before dispatching into ck and an acquire fence
+// after (ck issues neither). ck_shim.h states the promise per architecture.
 // Counters: none. Spinning is all they do, and the shim does not count loop
 // turns (that would change what is measured): every counter stays 0. That 0
 // is exact for futex waits (kCountsFutexWaits): a ck barrier never sleeps.

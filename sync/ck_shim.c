@@ -8,6 +8,7 @@
 #include "sync/ck_shim.h"
 
 #include <ck_barrier.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -161,23 +162,45 @@ fail:
   return NULL;
 }
 
+/* ck's barriers issue no release before a participant's arrival (the
+ * dissemination flag, the tournament opponent's flag, the MCS parent's flag,
+ * the centralized and combining counters' fetch-and-add) and the
+ * dissemination and tournament barriers no acquire after the spin that ends a
+ * phase. On x86-64 (TSO) stores are not reordered with earlier accesses, nor
+ * loads with later ones, so ck is right without fences there; on AArch64 a
+ * data write before the wait could become visible after the arrival flag,
+ * and a read after the wait could be satisfied before the flag was seen. The
+ * shim adds both fences (ck_shim.h states the promise per architecture). */
 void lockstep_ck_barrier_wait(lockstep_ck_barrier* barrier, unsigned id) {
   struct lockstep_ck_slot* slot = &barrier->slots[id];
+#if !defined(__SANITIZE_THREAD__) /* TSan does not model fences (GCC warns); ck is left out of TSan anyway */
+  /* (1) release: the caller's writes before ck's arrival store or RMW; pairs
+   * with (2) in every participant that sees that arrival (directly, or
+   * through the flags other participants set after seeing it). x86-64: a
+   * compiler barrier, no instruction. AArch64: dmb ish. */
+  atomic_thread_fence(memory_order_release);
+#endif
   switch (barrier->kind) {
     case LOCKSTEP_CK_CENTRALIZED:
       ck_barrier_centralized(&barrier->centralized, &slot->state.centralized, barrier->participants);
-      return;
+      break;
     case LOCKSTEP_CK_DISSEMINATION:
       ck_barrier_dissemination(barrier->dissemination, &slot->state.dissemination);
-      return;
+      break;
     case LOCKSTEP_CK_TOURNAMENT:
       ck_barrier_tournament(&barrier->tournament, &slot->state.tournament);
-      return;
+      break;
     case LOCKSTEP_CK_MCS:
       ck_barrier_mcs(barrier->mcs, &slot->state.mcs);
-      return;
+      break;
     case LOCKSTEP_CK_COMBINING:
       ck_barrier_combining(&barrier->combining, slot->group, &slot->state.combining);
-      return;
+      break;
   }
+#if !defined(__SANITIZE_THREAD__)
+  /* (2) acquire: pairs with (1): the caller's reads after the wait see what
+   * every participant wrote before its wait. x86-64: a compiler barrier, no
+   * instruction. AArch64: dmb ishld. */
+  atomic_thread_fence(memory_order_acquire);
+#endif
 }

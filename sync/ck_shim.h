@@ -11,8 +11,21 @@
  * Progress: ck's barriers are pure spin (ck_pr_stall, the CPU's pause, in a
  * loop): no participant ever yields or sleeps, so when participants outnumber
  * CPUs a phase lasts until the scheduler preempts the spinners (milliseconds).
- * Memory ordering: ck issues ck_pr_fence_memory around each phase: writes
- * before a wait are visible to every participant after it. */
+ * Memory ordering: writes before a wait are visible to every participant
+ * after it, per architecture:
+ *  - x86-64: holds. ck's flag stores and loads are plain moves, which TSO
+ *    keeps in order with the data accesses around them; the shim's fences
+ *    (ck_shim.c) compile to nothing but a compiler barrier (free).
+ *  - AArch64: holds because of the shim: ck issues no release before an
+ *    arrival (nor, in dissemination and tournament, an acquire after the
+ *    final spin), so the shim puts a release fence before each wait and an
+ *    acquire fence after it. With two participants that is the whole edge;
+ *    with more, dissemination and tournament relay a phase through other
+ *    participants' flags with no fence in between, which AArch64 still orders
+ *    (the relaying store depends on the spin's load by control, and ARMv8 is
+ *    other-multi-copy atomic), though the C11 model alone would not promise it.
+ *  - elsewhere: as AArch64, to the extent ck's port makes its flag accesses
+ *    single-copy atomic. */
 #ifndef LOCKSTEP_SYNC_CK_SHIM_H
 #define LOCKSTEP_SYNC_CK_SHIM_H
 

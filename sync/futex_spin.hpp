@@ -42,11 +42,31 @@
 // fed itself (the woken thread arrives late, so its partner's short spin runs
 // out and it sleeps too), settling into sleeping every phase even with a core
 // per participant.
+//
+// Phase-word layout (template parameter, phase_lines): the arrival counter,
+// the sense word and the sleepers count on one line (one_line, as in ck's
+// centralized barrier), or the counter on a prefetch pair of its own and the
+// sense word with the sleepers count on another (split_lines). Both are
+// registered: `futex_spin` is basic_futex_spin<kDefaultPhaseLines> =
+// split_lines, `futex_spin_one_line` the other. Why split: measured side by
+// side inside the RK4 step (release preset, `lockstep run --interleave
+// --threads 2,4 --repetitions 6` with both in the --sync list, 2-vCPU KVM VM,
+// c2c one-way 60-74 ns; five runs; best layout of each, median step time):
+// split / one_line was 0.78 (0.76..0.86) at 2 threads unpinned, 0.77
+// (0.74..0.90) at 2 threads pinned one per core, 0.91 (0.87..0.92) at 4
+// threads on 2 CPUs pinned and 0.95 (0.87..1.21) unpinned. With one line,
+// every arrival's fetch_sub takes the line the others spin on, so each
+// arrival costs the spinners a miss; split, the spinners' line changes once
+// per phase. Bare episodes (no work between phases) tell them apart less:
+// 0.84 (0.81..0.86) at 2 threads unpinned, 0.93 (0.83..0.98) pinned, about
+// 1.0 at 4 threads (three of those runs). An earlier version kept one line
+// from bare episodes alone; the step is what the suite measures.
 #include <sched.h>
 
 #include <atomic>
 #include <cassert>
 #include <climits>
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <string_view>
@@ -59,12 +79,60 @@
 
 namespace lockstep::sync {
 
-class futex_spin {
+// Where the phase's words live (the template parameter of basic_futex_spin).
+//  * one_line: the arrival counter, the sense word every spinner reads and
+//    the sleepers count share one line, as in ck's centralized barrier.
+//  * split_lines: the arrival counter on a prefetch pair of its own; the
+//    sense word and the sleepers count on another (the releaser reads
+//    sleepers right after writing the sense: a hit on the line it owns).
+enum class phase_lines { one_line, split_lines };
+// The layout `futex_spin` (the registry's name) uses; the other is registered
+// too, under its own name. Why this one: see the header.
+inline constexpr phase_lines kDefaultPhaseLines = phase_lines::split_lines;
+
+namespace detail {
+template <phase_lines Lines>
+struct futex_spin_phase;
+
+template <>
+struct alignas(platform::kCacheLine) futex_spin_phase<phase_lines::one_line> {
+  static constexpr std::string_view kAlternativeName = "futex_spin_one_line";
+  std::atomic<std::uint32_t> remaining{0};  // arrivals still missing in this phase
+  std::atomic<std::uint32_t> sense{0};      // the futex word: 0/1, flips every phase
+  std::atomic<std::uint32_t> sleepers{0};
+};
+static_assert(sizeof(futex_spin_phase<phase_lines::one_line>) == platform::kCacheLine,
+              "one_line: the whole phase is exactly one line");
+
+template <>
+struct futex_spin_phase<phase_lines::split_lines> {
+  static constexpr std::string_view kAlternativeName = "futex_spin_split";
+  alignas(platform::kPrefetchPair) std::atomic<std::uint32_t> remaining{0};
+  alignas(platform::kPrefetchPair) std::atomic<std::uint32_t> sense{0};
+  std::atomic<std::uint32_t> sleepers{0};
+};
+static_assert(offsetof(futex_spin_phase<phase_lines::split_lines>, sense) -
+                      offsetof(futex_spin_phase<phase_lines::split_lines>, remaining) >=
+                  platform::kPrefetchPair,
+              "split_lines: the counter and the sense word are a prefetch pair apart (not even adjacent lines)");
+static_assert(offsetof(futex_spin_phase<phase_lines::split_lines>, sleepers) / platform::kCacheLine ==
+                  offsetof(futex_spin_phase<phase_lines::split_lines>, sense) / platform::kCacheLine,
+              "split_lines: the sleepers count shares the sense word's line");
+}  // namespace detail
+
+template <phase_lines Lines>
+class basic_futex_spin {
+  using phase_word = detail::futex_spin_phase<Lines>;
+
  public:
-  static constexpr std::string_view kName = "futex_spin";
+  static constexpr std::string_view kName = Lines == kDefaultPhaseLines ? "futex_spin" : phase_word::kAlternativeName;
   static constexpr std::string_view kDescription =
-      "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
-      "spin budget adapts to oversubscription";
+      Lines == phase_lines::one_line
+          ? "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
+            "spin budget adapts to oversubscription; counter and sense on one line"
+          : "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
+            "spin budget adapts to oversubscription; counter and sense on separate lines";
+  static constexpr phase_lines kPhaseLines = Lines;
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
@@ -87,13 +155,13 @@ class futex_spin {
   // 64 of them bound the wait at about the cost of two futex round trips.
   static constexpr std::uint32_t kOversubscribedYields = 64;
 
-  explicit futex_spin(unsigned participants)
+  explicit basic_futex_spin(unsigned participants)
       : participants_(participants), slots_(std::make_unique<slot[]>(participants)) {
     assert(participants >= 1);
     phase_.remaining.store(participants, std::memory_order_relaxed);  // published by the thread start
   }
-  futex_spin(const futex_spin&) = delete;  // participants hold its address
-  futex_spin& operator=(const futex_spin&) = delete;
+  basic_futex_spin(const basic_futex_spin&) = delete;  // participants hold its address
+  basic_futex_spin& operator=(const basic_futex_spin&) = delete;
 
   unsigned participants() const noexcept { return participants_; }
 
@@ -165,19 +233,6 @@ class futex_spin {
   }
 
  private:
-  // One line for the whole phase, as in ck's centralized barrier: the arrival
-  // counter, the sense word every spinner reads, and the sleepers count. A
-  // first version gave the counter a line of its own, so that arrivals would
-  // not disturb the spinners; with the few participants this suite runs, that
-  // costs one more line transfer per phase than it saves (bare episode at 2
-  // threads pinned: 285 ns against ck_centralized's 107 ns, c2c one-way 118
-  // ns). The releaser reads sleepers right after writing the sense: a hit on
-  // the line it already owns.
-  struct alignas(platform::kCacheLine) phase_word {
-    std::atomic<std::uint32_t> remaining{0};  // arrivals still missing in this phase
-    std::atomic<std::uint32_t> sense{0};      // the futex word: 0/1, flips every phase
-    std::atomic<std::uint32_t> sleepers{0};
-  };
   // Per participant, touched only by its own thread.
   struct alignas(platform::kCacheLine) slot {
     std::uint32_t sense = 0;
@@ -185,7 +240,7 @@ class futex_spin {
     std::uint32_t yields = 0;
     std::uint64_t arrivals = 0;
   };
-  static_assert(sizeof(phase_word) == platform::kCacheLine, "the phase word must have a line of its own");
+  static_assert(alignof(phase_word) >= platform::kCacheLine, "the phase words must not share a line with anything else");
   static_assert(sizeof(slot) % platform::kCacheLine == 0, "participant slots must not share a line");
 
   const unsigned participants_;
@@ -194,6 +249,11 @@ class futex_spin {
   cpu_union cpus_;
 };
 
+// The registry's two entries: the default layout, and the other one.
+using futex_spin = basic_futex_spin<kDefaultPhaseLines>;
+using futex_spin_alternative = basic_futex_spin<kDefaultPhaseLines == phase_lines::one_line ? phase_lines::split_lines
+                                                                                            : phase_lines::one_line>;
 static_assert(phase_barrier<futex_spin>);
+static_assert(phase_barrier<futex_spin_alternative>);
 
 }  // namespace lockstep::sync

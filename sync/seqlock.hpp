@@ -43,9 +43,10 @@
 // the contract, and detected (a message on stderr, then abort) for those who
 // do not: never silent.
 // Progress: blocking by waiting: a consumer waits for its producer's stage, a
-// producer (rarely) for its slowest consumer; both spin briefly then yield
-// (spin_wait.hpp), so oversubscription does not stall them.
-// Counters: spins_exhausted and yields (spin_wait.hpp), for both waits.
+// producer (rarely) for its slowest consumer; both wait by the regime policy
+// of wait_policy.hpp (dedicated: spin about a futex round trip, then yield;
+// oversubscribed: yield at once), so oversubscription does not stall them.
+// Counters: spins_exhausted and yields (wait_policy.hpp), for both waits.
 // futex_waits stays 0 and that 0 is exact (kCountsFutexWaits): it never sleeps.
 // Memory ordering: receive() of (p, s) happens-after p's publish(s) ((W4) -> (R1)),
 // so what p wrote before publishing is visible after receiving. Consumer
@@ -66,8 +67,9 @@
 #include <vector>
 
 #include "platform/cache_line.hpp"
+#include "sync/channel_rows.hpp"
 #include "sync/concepts.hpp"
-#include "sync/spin_wait.hpp"
+#include "sync/wait_policy.hpp"
 
 namespace lockstep::sync {
 
@@ -167,46 +169,6 @@ class seqlock_slot {
   std::unique_ptr<extra_line[]> extra_;
 };
 
-namespace detail {
-// What a channel does when a caller broke its contract so that a stage was
-// overwritten before it was received: say so and stop (never a silent wrong
-// value).
-[[noreturn]] inline void channel_overrun(std::string_view channel, unsigned producer, std::uint64_t stage,
-                                         std::uint64_t found) noexcept {
-  std::fprintf(stderr,
-               "lockstep::sync::%.*s: overrun: stage %llu of producer %u was overwritten (slot holds stage %llu) "
-               "before this consumer received it; receive only from producers in the dependency graph\n",
-               static_cast<int>(channel.size()), channel.data(), static_cast<unsigned long long>(stage), producer,
-               static_cast<unsigned long long>(found));
-  std::abort();
-}
-
-// acknowledged(consumer, producer): how many of `producer`'s stages
-// `consumer` has received. Each consumer's row sits on its own lines (only
-// that consumer writes it); producers read it when a ring is about to wrap.
-class acknowledgements {
- public:
-  explicit acknowledgements(unsigned participants)
-      : participants_(participants),
-        lines_per_row_((participants + kPerLine - 1) / kPerLine),
-        lines_(std::make_unique<row_line[]>(static_cast<std::size_t>(participants) * lines_per_row_)) {}
-
-  std::atomic<std::uint64_t>& at(unsigned consumer, unsigned producer) const noexcept {
-    return lines_[static_cast<std::size_t>(consumer) * lines_per_row_ + producer / kPerLine].received[producer % kPerLine];
-  }
-  unsigned participants() const noexcept { return participants_; }
-
- private:
-  static constexpr unsigned kPerLine = platform::kCacheLine / sizeof(std::uint64_t);
-  struct alignas(platform::kCacheLine) row_line {
-    std::atomic<std::uint64_t> received[kPerLine]{};
-  };
-  static_assert(sizeof(row_line) == platform::kCacheLine, "one consumer's row never shares a line with another's");
-  unsigned participants_;
-  unsigned lines_per_row_;
-  std::unique_ptr<row_line[]> lines_;
-};
-}  // namespace detail
 
 template <std::size_t Depth = 4>
 class basic_seqlock {
@@ -219,13 +181,16 @@ class basic_seqlock {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // spin briefly, then yield (spin_wait.hpp)
+  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then yield (wait_policy.hpp)
   static constexpr bool kVisibleToTsan = true;  // C++ atomics (payload orders strengthened under TSan)
   static constexpr std::size_t kDepth = Depth;
   static_assert(Depth >= 2, "back-pressure needs at least two slots per producer");
 
   basic_seqlock(const dependency_graph& graph, std::size_t width)
-      : width_(width), participants_(graph.participants()), acknowledged_(graph.participants()) {
+      : width_(width),
+        participants_(graph.participants()),
+        acknowledged_(graph.participants()),
+        census_(graph.participants()) {
     graph.validate();
     consumers_of_.resize(participants_);
     for (unsigned consumer = 0; consumer < participants_; ++consumer)
@@ -248,9 +213,12 @@ class basic_seqlock {
       // received it (acknowledged > stage - Depth) before we overwrite it.
       const std::uint64_t needed = stage - Depth + 1;
       if (mine.all_received < needed) {
-        spin_then_yield([&] { return (mine.all_received = slowest_consumer(self.id)) >= needed; }, self.counters);
+        auto all_received = [&] { return (mine.all_received = slowest_consumer(self.id)) >= needed; };
+        wait_until(all_received, census_.budget(mine.regime), self.counters,
+                   [&] { yield_until(all_received, self.counters); });
       }
     }
+    census_.enrol(mine.regime);
     slot(self.id, stage).write(stage + 1, values);
     mine.next_stage = stage + 1;
   }
@@ -259,7 +227,12 @@ class basic_seqlock {
     seqlock_slot& source = slot(producer, stage);
     const std::uint64_t wanted = stage + 1;  // the version stage s is written as
     for (;;) {
-      spin_then_yield([&] { return source.version() >= wanted; }, self.counters);
+      auto published = [&] { return source.version() >= wanted; };
+      if (!published()) {
+        producer_state& mine = producers_[self.id];
+        wait_until(published, census_.budget(mine.regime), self.counters,
+                   [&] { yield_until(published, self.counters); });
+      }
       const std::uint64_t version = source.try_read(out);
       if (version == wanted) break;
       if (version > wanted) detail::channel_overrun(kName, producer, stage, version - 1);
@@ -277,6 +250,7 @@ class basic_seqlock {
   struct alignas(platform::kCacheLine) producer_state {
     std::uint64_t next_stage = 0;    // debug check of the in-order contract
     std::uint64_t all_received = 0;  // cached minimum of the consumers' acknowledgements
+    regime_view regime;              // this participant's wait regime (wait_policy.hpp)
   };
 
   std::uint64_t slowest_consumer(unsigned producer) const noexcept {
@@ -296,7 +270,8 @@ class basic_seqlock {
   std::vector<std::vector<unsigned>> consumers_of_;
   std::unique_ptr<producer_state[]> producers_;
   std::vector<std::unique_ptr<seqlock_slot>> slots_;
-  detail::acknowledgements acknowledged_;
+  detail::received_table acknowledged_;
+  regime_census census_;
 };
 
 using seqlock = basic_seqlock<>;

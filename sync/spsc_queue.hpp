@@ -20,15 +20,18 @@
 // waiting; a full queue makes it wait (back-pressure), so no stage is ever
 // overwritten or dropped: an overrun is impossible.
 // Progress: Boost's push and pop are wait-free; waiting for room (producer) or
-// for a stage (consumer) spins briefly then yields (spin_wait.hpp).
+// for a stage (consumer) follows the regime policy of wait_policy.hpp
+// (dedicated: spin about a futex round trip, then yield; oversubscribed:
+// yield at once).
 // Memory ordering: Boost.Lockfree's spsc_queue publishes each element with a
 // release store of the write index that the consumer's pop reads with
 // acquire: what the producer wrote before publish() is visible after the
 // matching receive() returns.
-// Counters: spins_exhausted and yields (spin_wait.hpp). futex_waits stays 0
+// Counters: spins_exhausted and yields (wait_policy.hpp). futex_waits stays 0
 // and that 0 is exact (kCountsFutexWaits): it never sleeps.
 #include <boost/lockfree/spsc_queue.hpp>
 
+#include <atomic>
 #include <cassert>
 #include <cstddef>
 #include <cstdint>
@@ -40,8 +43,9 @@
 #include <vector>
 
 #include "platform/cache_line.hpp"
+#include "sync/channel_rows.hpp"
 #include "sync/concepts.hpp"
-#include "sync/spin_wait.hpp"
+#include "sync/wait_policy.hpp"
 
 namespace lockstep::sync {
 
@@ -55,12 +59,15 @@ class basic_spsc_queue {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // spin briefly, then yield (spin_wait.hpp)
+  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then yield (wait_policy.hpp)
   static constexpr bool kVisibleToTsan = true;  // Boost.Lockfree: C++ atomics
   static constexpr std::size_t kDepth = Depth;
 
   basic_spsc_queue(const dependency_graph& graph, std::size_t width)
-      : width_(width), participants_(graph.participants()) {
+      : width_(width),
+        participants_(graph.participants()),
+        received_(graph.participants()),
+        census_(graph.participants()) {
     graph.validate();
     queues_.resize(static_cast<std::size_t>(participants_) * participants_);
     consumers_of_.resize(participants_);
@@ -69,9 +76,7 @@ class basic_spsc_queue {
         edge(producer, consumer) = std::make_unique<queue_type>(Depth * width_);
         consumers_of_[producer].push_back(consumer);
       }
-    expected_ = std::make_unique<expected_row[]>(participants_);
-    for (unsigned consumer = 0; consumer < participants_; ++consumer)
-      expected_[consumer].next.assign(participants_, 0);
+    states_ = std::make_unique<participant_state[]>(participants_);
   }
   basic_spsc_queue(const basic_spsc_queue&) = delete;  // participants hold its address
   basic_spsc_queue& operator=(const basic_spsc_queue&) = delete;
@@ -80,40 +85,46 @@ class basic_spsc_queue {
 
   void publish(participant& self, std::uint64_t /*stage*/, std::span<const double> values) noexcept {
     assert(values.size() == width_);
+    regime_view& regime = states_[self.id].regime;
+    census_.enrol(regime);
     for (unsigned consumer : consumers_of_[self.id]) {
       queue_type& queue = *edge(self.id, consumer);
       std::size_t pushed = queue.push(values.data(), values.size());
-      if (pushed != values.size())
-        spin_then_yield(
-            [&] {
-              pushed += queue.push(values.data() + pushed, values.size() - pushed);
-              return pushed == values.size();
-            },
-            self.counters);
+      if (pushed != values.size()) {
+        auto all_pushed = [&] {
+          pushed += queue.push(values.data() + pushed, values.size() - pushed);
+          return pushed == values.size();
+        };
+        wait_until(all_pushed, census_.budget(regime), self.counters,
+                   [&] { yield_until(all_pushed, self.counters); });
+      }
     }
   }
 
   void receive(participant& self, unsigned producer, std::uint64_t stage, std::span<double> out) noexcept {
     assert(out.size() == width_);
-    std::uint64_t& next = expected_[self.id].next[producer];
+    // relaxed: only this consumer reads and writes its row.
+    std::atomic<std::uint64_t>& received = received_.at(self.id, producer);
+    const std::uint64_t next = received.load(std::memory_order_relaxed);
     queue_type* queue = edge(producer, self.id).get();
     if (queue == nullptr || stage != next) misuse(self.id, producer, stage, next, queue == nullptr);
     std::size_t popped = queue->pop(out.data(), out.size());
-    if (popped != out.size())
-      spin_then_yield(
-          [&] {
-            popped += queue->pop(out.data() + popped, out.size() - popped);
-            return popped == out.size();
-          },
-          self.counters);
-    ++next;
+    if (popped != out.size()) {
+      auto all_popped = [&] {
+        popped += queue->pop(out.data() + popped, out.size() - popped);
+        return popped == out.size();
+      };
+      wait_until(all_popped, census_.budget(states_[self.id].regime), self.counters,
+                 [&] { yield_until(all_popped, self.counters); });
+    }
+    received.store(next + 1, std::memory_order_relaxed);
   }
 
  private:
   using queue_type = boost::lockfree::spsc_queue<double>;
-  // Touched only by its consumer.
-  struct alignas(platform::kCacheLine) expected_row {
-    std::vector<std::uint64_t> next;  // per producer: the stage receive() must be asked for next
+  // Touched only by its participant's thread.
+  struct alignas(platform::kCacheLine) participant_state {
+    regime_view regime;  // this participant's wait regime (wait_policy.hpp)
   };
 
   std::unique_ptr<queue_type>& edge(unsigned producer, unsigned consumer) noexcept {
@@ -136,7 +147,11 @@ class basic_spsc_queue {
   unsigned participants_;
   std::vector<std::unique_ptr<queue_type>> queues_;  // [producer * participants + consumer]
   std::vector<std::vector<unsigned>> consumers_of_;
-  std::unique_ptr<expected_row[]> expected_;
+  std::unique_ptr<participant_state[]> states_;
+  // received_.at(c, p): the stages of p that consumer c has received (the one
+  // it must be asked for next); rows on lines of their own.
+  detail::received_table received_;
+  regime_census census_;
 };
 
 using spsc_queue = basic_spsc_queue<>;

@@ -1,16 +1,22 @@
-/* mailbox's waiter bit (sync/mailbox.hpp, issue 11), as specified.
+/* mailbox's waiter bit (sync/mailbox.hpp, issue 11), as the header states it.
  *
- * Each producer owns a ring of RING slots; slot k holds a word, epoch << 1 |
- * waiter bit, and a payload. Stage e lives in slot e % RING, so the ring is
- * reused every RING stages. Every participant produces one value per stage
- * and consumes the values of the producers it depends on:
+ * Each producer owns a ring of RING slots (the header's kDepth: 4); slot k
+ * holds a word, epoch << 1 | waiter bit, and a payload. Stage e lives in slot
+ * e % RING, so the ring is reused every RING stages; a slot starts holding
+ * epoch 0 (the header: the word of stage slot - kDepth, its predecessor).
+ * Every participant produces one value per stage and consumes the values of
+ * the producers it depends on:
  *   publish(e): store the payload, exchange the word to epoch e (waiter bit
- *               clear), FUTEX_WAKE every waiter when the old word had the bit;
- *   consume(p, e): read producer p's word (the poll: one read at a moment the
- *               scheduler picks stands for the bounded spin); if its epoch is
- *               not e yet, set the waiter bit by compare-exchange from the
- *               value read (on failure read again: maybe published) and
- *               FUTEX_WAIT on the value with the bit.
+ *               clear), FUTEX_WAKE every waiter when the old word had the bit
+ *               (the header's (P1), (P2), (P3));
+ *   consume(p, e): read producer p's word (the poll (C1)/(C3): one read at a
+ *               moment the scheduler picks stands for the spin and the
+ *               yields); anything but epoch e or its predecessor in the slot,
+ *               e - RING, is an overrun (the header reports it: here an
+ *               assertion). If the word holds the predecessor without the
+ *               bit, set the bit by compare-exchange from exactly that word
+ *               (C4; on failure read again: maybe published); then
+ *               FUTEX_WAIT on the predecessor with the bit (C5).
  * A participant publishes stage e, waits for stage e of each dependency, then
  * reads their payloads (the compute of stage e + 1), then publishes e + 1.
  * The payload is a ghost: the epoch itself, so a stale or overwritten payload
@@ -38,7 +44,7 @@
 #define PARTICIPANTS 4
 #endif
 #ifndef RING
-#define RING 2
+#define RING 4
 #endif
 #ifndef STAGES
 #define STAGES (RING + 1)
@@ -77,6 +83,8 @@
 
 #define WAITER 1
 #define EPOCH(word) ((word) >> 1)
+/* The stage a slot held before epoch e: e - RING, or the initial epoch 0. */
+#define PREVIOUS(e) ((e) > RING -> (e) - RING : 0)
 #define SLOT(producer, epoch) ((producer) * RING + (epoch) % RING)
 
 /* Producer p's slot k is word[p * RING + k], payload[p * RING + k]. */
@@ -142,8 +150,10 @@ inline consume(producer) {
       seen = word[SLOT(producer, epoch)];                  /* acquire poll */
       printf("participant %d: producer %d's slot %d holds epoch %d (waiter bit %d), wants %d\n",
              _pid, producer, SLOT(producer, epoch), EPOCH(seen), seen & WAITER, epoch);
-      /* A producer a whole ring ahead would have overwritten the stage. */
-      assert(EPOCH(seen) <= epoch);
+      /* The header's overrun check: the slot holds the stage wanted or the
+       * one before it in the slot, nothing else (a producer a whole ring
+       * ahead would have overwritten the stage). */
+      assert(EPOCH(seen) == epoch || EPOCH(seen) == PREVIOUS(epoch));
       if
       :: EPOCH(seen) == epoch -> seen = 0; break
       :: else -> skip
@@ -154,13 +164,13 @@ inline consume(producer) {
     if
     :: atomic { seen & WAITER -> futex_wait(SLOT(producer, epoch), seen) }
     :: atomic {
-        !(seen & WAITER) && word[SLOT(producer, epoch)] == seen ->
-        word[SLOT(producer, epoch)] = seen | WAITER; seen = seen | WAITER;
+        !(seen & WAITER) && word[SLOT(producer, epoch)] == PREVIOUS(epoch) << 1 ->
+        word[SLOT(producer, epoch)] = PREVIOUS(epoch) << 1 | WAITER; seen = PREVIOUS(epoch) << 1 | WAITER;
         printf("participant %d: compare-exchange sets the waiter bit\n", _pid)
       };
       atomic { futex_wait(SLOT(producer, epoch), seen) }
     :: atomic {
-        !(seen & WAITER) && word[SLOT(producer, epoch)] != seen ->
+        !(seen & WAITER) && word[SLOT(producer, epoch)] != PREVIOUS(epoch) << 1 ->
         printf("participant %d: compare-exchange fails: the word changed\n", _pid)
       }
     fi

@@ -1,7 +1,8 @@
 // The dataflow primitives: the seqlock's torn-read detector with a
-// self-verifying payload, and both channels (seqlock, spsc_queue) under a
-// producer that runs far ahead (back-pressure) and under the RK4 dependency
-// graph (a producer up to ~3 stages ahead of a consumer it does not depend on).
+// self-verifying payload, and every channel (seqlock, spsc_queue, mailbox)
+// under a producer that runs far ahead (back-pressure) and under the RK4
+// dependency graph (a producer up to ~3 stages ahead of a consumer it does not
+// depend on). mailbox_test.cpp has the mailbox's own tests.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -14,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include "platform/cpu_relax.hpp"
+#include "sync/mailbox.hpp"
 #include "sync/seqlock.hpp"
 #include "sync/spsc_queue.hpp"
 #include "sync/team.hpp"
@@ -95,7 +97,7 @@ TEST(SeqlockSlot, NoReaderEverAcceptsATornSnapshot) {
 
 template <class Channel>
 class Channel_ : public ::testing::Test {};
-using channels = ::testing::Types<seqlock, spsc_queue>;
+using channels = ::testing::Types<seqlock, spsc_queue, mailbox>;
 struct channel_name {
   template <class Channel>
   static std::string GetName(int) {
