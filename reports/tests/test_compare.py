@@ -435,7 +435,7 @@ class NoiseThreshold(unittest.TestCase):
         warning = next(line for line in out.splitlines() if "back to back (context lockstep_order)" in line)
         self.assertIn("a.json measured", warning)
         self.assertNotIn("b.json", warning)
-        self.assertIn("--interleave", warning)
+        self.assertIn("--no-interleave", warning)
         self.assertIn("lockstep_order*", out)
         _, out, _ = run_tool("compare", b, b)
         self.assertNotIn("back to back (context lockstep_order)", out)
