@@ -18,7 +18,8 @@
 //
 // Who reads it: every repetition of an entry carries the readings taken just
 // before and just after it (its pace, and its mode when both agree); every
-// paired comparison (paired.hpp) takes one reading per pair of blocks. The
+// pair of blocks of a paired comparison (paired_blocks.hpp) the readings just
+// before and after it. The
 // summary says what the modes were and how often the machine changed between
 // them; compare and the report read the same trace from the JSON.
 #include <cstddef>

@@ -8,6 +8,8 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <numeric>
+#include <random>
 #include <tuple>
 
 #include "bench/harness/pace.hpp"
@@ -17,6 +19,11 @@
 namespace lockstep::bench {
 
 namespace {
+
+// A reading taken at the end of the pair just before is this pair's reading
+// before: no time passes between them.
+constexpr std::int64_t kFreshReadingNs = 1'000'000;
+constexpr std::uint64_t kRoundOrderSeed = 0x9a17'04de;
 
 
 // From the layout registry: a shared layout whose writers share lines (the
@@ -106,53 +113,76 @@ std::uint64_t block_units(const harness_state& harness, const std::string& name,
   return static_cast<std::uint64_t>(std::clamp(scaled, 1.0, static_cast<double>(kMaxUnitsPerBatch)));
 }
 
-paired_result measure_one(harness_state& harness, const comparison& what, const pairing_settings& settings) {
+// One comparison while its pairs are being taken: both sides built once, and
+// what the pairs so far gave.
+struct comparison_in_progress {
   paired_result result;
-  result.what = what;
+  std::unique_ptr<block_runner> side_a;
+  std::unique_ptr<block_runner> side_b;
+  std::uint64_t units_a = 1;
+  std::uint64_t units_b = 1;
+  std::vector<double> block_ms;
+  std::int64_t spent_ns = 0;  // time in this comparison's pairs so far
+  bool finished = false;
+};
+
+comparison_in_progress start_comparison(harness_state& harness, const comparison& what,
+                                        const pairing_settings& settings) {
+  comparison_in_progress progress;
+  progress.result.what = what;
   const auto factory_a = harness.block_runners.find(what.a);
   const auto factory_b = harness.block_runners.find(what.b);
   if (factory_a == harness.block_runners.end() || factory_b == harness.block_runners.end()) {
-    result.failure = "not measured as a pair: no block runner for a side";
-    return result;
+    progress.result.failure = "not measured as a pair: no block runner for a side";
+    progress.finished = true;
+    return progress;
   }
-  const std::unique_ptr<block_runner> side_a = factory_a->second();
-  const std::unique_ptr<block_runner> side_b = factory_b->second();
-  const std::uint64_t units_a = block_units(harness, what.a, settings.block_ns);
-  const std::uint64_t units_b = block_units(harness, what.b, settings.block_ns);
-  std::vector<double> block_ms;
-  const auto reading = [&] {
-    if (harness.pace != nullptr) result.readings.push_back(harness.pace->take());
-  };
-  reading();
+  progress.side_a = factory_a->second();
+  progress.side_b = factory_b->second();
+  progress.units_a = block_units(harness, what.a, settings.block_ns);
+  progress.units_b = block_units(harness, what.b, settings.block_ns);
+  return progress;
+}
+
+// Pair number `pair` of one comparison: a pace reading before (shared with
+// the pair just before it, whichever comparison that was) and after, block A
+// and block B, in the order A B on even pairs and B A on odd ones.
+void take_pair(harness_state& harness, comparison_in_progress& progress, unsigned pair) {
+  paired_result& result = progress.result;
+  const auto& what = result.what;
+  if (harness.pace != nullptr) result.readings.push_back(harness.pace->latest_or_take(kFreshReadingNs));
   const std::int64_t start_ns = platform::now_ns();
-  for (unsigned pair = 0; pair < settings.pairs; ++pair) {
-    if (pair >= kMinPairs && platform::now_ns() - start_ns > settings.budget_ns) {
-      result.budget_cut = true;
-      break;
-    }
-    std::optional<double> a;
-    std::optional<double> b;
-    if (pair % 2 == 0) {
-      a = side_a->run_block(units_a);
-      b = side_b->run_block(units_b);
-    } else {
-      b = side_b->run_block(units_b);
-      a = side_a->run_block(units_a);
-    }
-    if (!a || !b || !(*a > 0.0) || !(*b > 0.0)) {
-      result.failure = fmt::format("not measured as a pair: a block of {} stalled", !a ? what.a : what.b);
-      result.ratios.clear();
-      return result;
-    }
-    result.ratios.push_back(*a / *b);
-    block_ms.push_back(*a * static_cast<double>(units_a) * 1e-6);
-    block_ms.push_back(*b * static_cast<double>(units_b) * 1e-6);
-    reading();
+  std::optional<double> a;
+  std::optional<double> b;
+  if (pair % 2 == 0) {
+    a = progress.side_a->run_block(progress.units_a);
+    b = progress.side_b->run_block(progress.units_b);
+  } else {
+    b = progress.side_b->run_block(progress.units_b);
+    a = progress.side_a->run_block(progress.units_a);
   }
-  std::sort(block_ms.begin(), block_ms.end());
-  if (!block_ms.empty()) result.block_ms = block_ms[block_ms.size() / 2];
-  result.estimate = bootstrap_median(result.ratios);
-  result.verdict = verdict_of(result.estimate, settings.noise);
+  progress.spent_ns += platform::now_ns() - start_ns;
+  if (harness.pace != nullptr) result.readings.push_back(harness.pace->take());
+  if (!a || !b || !(*a > 0.0) || !(*b > 0.0)) {
+    result.failure = fmt::format("not measured as a pair: a block of {} stalled", !a ? what.a : what.b);
+    result.ratios.clear();
+    result.readings.clear();
+    progress.finished = true;
+    return;
+  }
+  result.ratios.push_back(*a / *b);
+  progress.block_ms.push_back(*a * static_cast<double>(progress.units_a) * 1e-6);
+  progress.block_ms.push_back(*b * static_cast<double>(progress.units_b) * 1e-6);
+}
+
+paired_result finish_comparison(comparison_in_progress& progress, const pairing_settings& settings) {
+  paired_result result = std::move(progress.result);
+  std::sort(progress.block_ms.begin(), progress.block_ms.end());
+  if (!progress.block_ms.empty()) result.block_ms = progress.block_ms[progress.block_ms.size() / 2];
+  if (result.failure.empty()) {
+    result.estimate = bootstrap_median(result.ratios);
+    result.verdict = verdict_of(result.estimate, settings.noise);
+  }
   return result;
 }
 
@@ -181,10 +211,40 @@ void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, 
                    const std::function<void(std::size_t, std::size_t)>& progress) {
   harness.book->noise = settings.noise;
   if (settings.pairs == 0) return;
+  std::vector<comparison_in_progress> running;
+  running.reserve(plan.size());
+  for (const comparison& what : plan) running.push_back(start_comparison(harness, what, settings));
   std::size_t done = 0;
-  for (const comparison& what : plan) {
-    harness.book->pairs.push_back(measure_one(harness, what, settings));
+  const auto finished = [&] {
     if (progress) progress(++done, plan.size());
+  };
+  for (const auto& item : running)
+    if (item.finished) finished();
+  // Rounds: each round takes one pair of every comparison still running, in
+  // an order shuffled per round (seeded: a run can be repeated), so that a
+  // comparison's pairs lie spread over the whole pairing phase, not within
+  // the tenth of a second its pairs would take back to back.
+  std::vector<std::size_t> order(running.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 shuffle(kRoundOrderSeed);
+  for (unsigned pair = 0; pair < settings.pairs; ++pair) {
+    std::shuffle(order.begin(), order.end(), shuffle);
+    for (const std::size_t index : order) {
+      comparison_in_progress& item = running[index];
+      if (item.finished) continue;
+      if (pair >= kMinPairs && item.spent_ns > settings.budget_ns) {
+        item.result.budget_cut = true;
+        item.finished = true;
+        finished();
+        continue;
+      }
+      take_pair(harness, item, pair);
+      if (item.finished) finished();
+    }
+  }
+  for (auto& item : running) {
+    if (!item.finished) finished();
+    harness.book->pairs.push_back(finish_comparison(item, settings));
   }
 }
 
@@ -201,8 +261,8 @@ void assign_pace_modes(run_book& book, const pace_modes& modes) {
   });
   for (paired_result& pair : book.pairs) {
     pair.modes.clear();
-    for (std::size_t index = 0; index + 1 < pair.readings.size() && index < pair.ratios.size(); ++index)
-      pair.modes.push_back(agreed_mode(modes, pair.readings[index], pair.readings[index + 1]));
+    for (std::size_t index = 0; 2 * index + 1 < pair.readings.size() && index < pair.ratios.size(); ++index)
+      pair.modes.push_back(agreed_mode(modes, pair.readings[2 * index], pair.readings[2 * index + 1]));
   }
 }
 

@@ -13,11 +13,20 @@
 //   against_best_other  per placement and thread count, each primitive on its
 //                       best layout against the best other primitive on its
 //                       best layout; RK4 steps and bare episodes alike
-// How (measure_pairs): both sides are built once (block_runner), then
-// `pairs` times: a pace reading, block A and block B (the order alternates,
-// A B then B A, so that a drift within a pair cancels over pairs), ratio
-// A / B. A block is a warm-up batch and a timed batch of about `block_ns`
-// (from the entry's own batch size). A last reading closes the trace.
+// How (measure_pairs): both sides of every comparison are built once
+// (block_runner); then, in `pairs` rounds, each round takes one pair of every
+// comparison in a shuffled order: a pace reading, block A and block B (the
+// order alternates, A B then B A, so that a drift within a pair cancels over
+// pairs), ratio A / B, a reading. A block is a warm-up batch and a timed
+// batch of about `block_ns` (from the entry's own batch size).
+// Why rounds: the two blocks of a pair lie a few milliseconds apart, so they
+// share the machine's pace; but a comparison's pairs taken back to back lie
+// within a tenth of a second, and this VM keeps states that are not in the
+// c2c reading (futex_spin's 2-thread step runs 10-25 % faster or slower for
+// seconds at a time) for longer than that. Ten pairs from one such moment
+// gave intervals of +-3 % around 1.09 in one run and 0.89 in the next. Spread
+// over the pairing phase, the pairs sample those states, and the interval
+// says how far the ratio moves with them.
 #include <cstdint>
 #include <functional>
 #include <string>

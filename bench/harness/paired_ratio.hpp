@@ -61,7 +61,7 @@ struct comparison {
 };
 
 // One comparison as measured: the per-pair ratios a/b and the pace readings
-// around them (readings[i] before pair i, readings[i + 1] after it).
+// around them (readings[2 i] before pair i, readings[2 i + 1] after it).
 struct paired_result {
   comparison what;
   std::vector<double> ratios;
