@@ -2,10 +2,21 @@
 // A zero-initialised array of doubles that starts on a chosen boundary and
 // owns whole blocks of that size: the storage under every layout. Allocated
 // once, before any participant runs; never resized.
+//
+// Whatever boundary is asked for, the allocation itself starts and ends on a
+// prefetch pair (platform::kPrefetchPair), so no other allocation shares a
+// pair of lines with it: the adjacent-line prefetcher pulls both lines of a
+// pair, and a buffer whose first or last line shared a pair with whatever the
+// heap put beside it was slower or not by where the heap happened to put it,
+// which differed from process to process (a layout's own lines still share
+// pairs exactly as the layout places them: only its neighbours are kept off).
+#include <algorithm>
 #include <cstddef>
 #include <cstring>
 #include <new>
 #include <utility>
+
+#include "platform/cache_line.hpp"
 
 namespace lockstep::layouts {
 
@@ -23,7 +34,7 @@ class aligned_buffer {
   aligned_buffer(std::size_t count, std::size_t alignment)
       : count_(count),
         alignment_(alignment),
-        data_(static_cast<double*>(::operator new(bytes(), std::align_val_t{alignment}))) {
+        data_(static_cast<double*>(::operator new(bytes(), std::align_val_t{allocation_alignment()}))) {
     std::memset(data_, 0, bytes());
   }
   aligned_buffer(const aligned_buffer&) = delete;  // participants hold pointers into it
@@ -39,7 +50,7 @@ class aligned_buffer {
     return *this;
   }
   ~aligned_buffer() {
-    if (data_ != nullptr) ::operator delete(data_, std::align_val_t{alignment_});
+    if (data_ != nullptr) ::operator delete(data_, std::align_val_t{allocation_alignment()});
   }
 
   [[nodiscard]] double* data() noexcept { return data_; }
@@ -49,8 +60,11 @@ class aligned_buffer {
   [[nodiscard]] const double& operator[](std::size_t index) const noexcept { return data_[index]; }
 
  private:
+  [[nodiscard]] std::size_t allocation_alignment() const noexcept {
+    return std::max(alignment_, platform::kPrefetchPair);
+  }
   [[nodiscard]] std::size_t bytes() const noexcept {
-    return round_up(count_ == 0 ? 1 : count_ * sizeof(double), alignment_);
+    return round_up(count_ == 0 ? 1 : count_ * sizeof(double), allocation_alignment());
   }
 
   std::size_t count_ = 0;

@@ -209,8 +209,8 @@ void set_pace_counters(benchmark::State& state, const harness_state& harness, lo
 std::string stall_reason(const call_result& result, const char* unit, bool pure_spin, bool may_lose_wakeups,
                          const platform::placement_plan& plan, const run_settings& settings);
 
-// The time per unit of the median batch (probe calls).
-double median_unit_ns(const batch_record& record);
+// The time per unit of the fastest batch (probe calls).
+double fastest_unit_ns(const batch_record& record);
 
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
@@ -298,29 +298,34 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
 
   auto batch_size = harness.units_per_batch.find(name);
   if (batch_size == harness.units_per_batch.end()) {
-    // The first probe (8 batches of one unit) can land on a slow moment, or
+    // The first probe (batches of one unit) can land on a slow moment, or
     // weigh the harness barrier's own cost (a sleeping team's wake-up) in
     // its unit, and settle on batches far shorter than the target: the
-    // entry's figure is then mostly the harness's. So the size is checked
-    // by batches of the size it chose, and grown by what they fell short,
-    // up to kRegrowths times; batches still under a quarter of the target
-    // are flagged (harness.short_batches), not hidden.
-    constexpr unsigned kProbeBatches = 8;
-    constexpr unsigned kCheckBatches = 3;
+    // entry's figure is then mostly the harness's. So the size comes from
+    // the *fastest* batch of the probe, never the median: a slow moment can
+    // then only make a batch longer than the target, not shorter (an
+    // unpinned team's first batches, while the scheduler still places its
+    // new threads, took 10-100x a step, and a median of them settled on one
+    // step per batch: 750 ns per step against 210 ns in the same mode). The
+    // size is checked by batches of the size it chose, and grown by what the
+    // fastest of them fell short, up to kRegrowths times; batches still under
+    // a quarter of the target are flagged (harness.short_batches), not hidden.
+    constexpr unsigned kProbeBatches = 16;
+    constexpr unsigned kCheckBatches = 5;
     constexpr int kRegrowths = 3;
     call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
     if (!probe.failure.empty()) return record_placement_failure(probe);
     if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
-    std::uint64_t units = units_for_batch(median_unit_ns(probe.batches), settings);
+    std::uint64_t units = units_for_batch(fastest_unit_ns(probe.batches), settings);
     bool short_batch = false;
     for (int regrowth = 0; regrowth <= kRegrowths; ++regrowth) {
       call_result check = run_call(team, slots, plan, kCheckBatches, units, settings, false, work);
       if (!check.failure.empty()) return record_placement_failure(check);
       if (check.batches.stalled || check.batches.over_budget) return record_stop(check);
-      const double batch_ns = median_unit_ns(check.batches) * static_cast<double>(units);
+      const double batch_ns = fastest_unit_ns(check.batches) * static_cast<double>(units);
       short_batch = batch_ns < static_cast<double>(settings.target_batch_ns) / 4.0;
       if (batch_ns >= static_cast<double>(settings.target_batch_ns) / 2.0 || units >= kMaxUnitsPerBatch) break;
-      units = units_for_batch(median_unit_ns(check.batches), settings);
+      units = units_for_batch(fastest_unit_ns(check.batches), settings);
     }
     if (short_batch) harness.short_batches.insert(name);
     batch_size = harness.units_per_batch.emplace(name, units).first;
