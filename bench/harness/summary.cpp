@@ -254,7 +254,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
   // Every ratio the summary prints, paired (paired_blocks.hpp).
   const std::vector<comparison> plan = plan_comparisons(book);
   out += fmt::format(
-      "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), the median ratio "
+      "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), one pair per round "
+      "of all comparisons (so its pairs spread over the pairing phase), the median ratio "
       "over pairs with its {:.0f} % bootstrap interval; \"penalty\" / \"gain\" only when the whole interval lies "
       "beyond the noise band of {:.0f} %, else \"within noise\".\n",
       100.0 * kConfidence, 100.0 * book.noise);
