@@ -63,10 +63,11 @@ void set_pace_counters(benchmark::State& state, const harness_state& harness, lo
   state.counters[std::string(kPaceAfterCounter)] = static_cast<double>(after);
 }
 
-double fastest_unit_ns(const batch_record& record) {
+double median_unit_ns(const batch_record& record) {
   if (record.batch_ns.empty() || record.units_per_batch == 0) return 0.0;
-  const std::int64_t fastest = *std::min_element(record.batch_ns.begin(), record.batch_ns.end());
-  return static_cast<double>(fastest) / static_cast<double>(record.units_per_batch);
+  std::vector<std::int64_t> sorted = record.batch_ns;
+  std::sort(sorted.begin(), sorted.end());
+  return static_cast<double>(sorted[sorted.size() / 2]) / static_cast<double>(record.units_per_batch);
 }
 
 double ns_per_unit(const call_result& result) {
