@@ -168,4 +168,13 @@ CLI::Option* add_out_option(CLI::App& command, std::string& path, const std::str
       ->option_text("FILE");
 }
 
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses) {
+  return command
+      .add_option("--masses", masses,
+                  "Integrate an S-mass chain (eq. (1), 2S equations) whatever the threads (default: the paper's "
+                  "two masses up to 4 threads, else a chain of one equation per thread)")
+      ->check(CLI::Range(std::size_t{1}, kMassesMax))
+      ->option_text("S");
+}
+
 }  // namespace lockstep::cli

@@ -10,6 +10,7 @@
 // Every parse failure throws usage_error with one line naming the option.
 #include <CLI/CLI.hpp>
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -55,6 +56,12 @@ std::vector<int> usable_cpus(const platform::topology& machine, bool include_smt
 // `requested`, each of which must be in `usable`.
 std::vector<int> restrict_to(const std::vector<int>& usable, const std::vector<int>& requested,
                              const std::string& option);
+
+// --masses S, the same words and range in every command that integrates the
+// model (kernels/model_choice.hpp: which oscillator T threads integrate).
+// `masses` stays empty when not given.
+inline constexpr std::size_t kMassesMax = 4096;
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses);
 
 // The --out option, the same words in every command that writes a result.
 CLI::Option* add_out_option(CLI::App& command, std::string& path, const std::string& what = "the result as JSON");
