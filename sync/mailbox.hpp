@@ -302,11 +302,16 @@ class basic_mailbox {
     const std::uint32_t wanted = word_of(stage);
     const std::uint32_t previous = word_of(stage - Depth);
     // (C3) acquire: pairs with (P2). Anything but the stage or its
-    // predecessor in the slot is an overrun (see the header).
+    // predecessor in the slot is an overrun (see the header). The waiter bit
+    // is ignored: it may sit on our stage's word too, set by another consumer
+    // of this producer that is a lap ahead of us (it received this stage and
+    // now waits for stage + kDepth in the same slot; the ring's guarantee
+    // allows the skew). Read with the bit, such a word once looked like an
+    // overrun to the slower consumer (8 participants on an s-mass chain, 2 CPUs).
     auto published = [&] {
-      const std::uint32_t word = line.epoch.load(std::memory_order_acquire);
+      const std::uint32_t word = line.epoch.load(std::memory_order_acquire) & ~kWaiterBit;
       if (word == wanted) return true;
-      if ((word & ~kWaiterBit) != previous) [[unlikely]]
+      if (word != previous) [[unlikely]]
         detail::channel_overrun(kName, producer, stage, version_of(word) - 1);
       return false;
     };

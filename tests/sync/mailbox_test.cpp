@@ -149,6 +149,51 @@ TEST(MailboxPayload, AcknowledgedEdgesHoldTheProducerBack) {
   EXPECT_EQ(run_self_checking_graph(cycle_graph(6), 3), 0u);
 }
 
+// Two consumers of one producer a lap apart: the fast one received stages
+// 0..3 and sleeps for stage 4, so slot 0's word holds stage 0 with the waiter
+// bit; the slow one then receives stage 0 from that word. The bit belongs to
+// the fast consumer's wait, not to an overrun (seen once as a false overrun
+// abort: 8 participants on an s-mass chain, 2 CPUs).
+TEST(MailboxRing, AWaiterBitSetALapAheadIsNoOverrun) {
+  watchdog guard(30s * kSlowdown, "mailbox lap-ahead waiter stuck");
+  dependency_graph graph;
+  graph.producers_of = {{}, {0}, {0}};  // 0 -> 1, 0 -> 2 (acknowledged: no path back)
+  mailbox channel(graph, 1);
+  participant producer{0, {}};
+  participant fast{1, {}};
+  participant slow{2, {}};
+  std::atomic<bool> fast_received_first_lap{false};
+  double fast_last = 0.0;
+  std::thread fast_consumer([&] {
+    double value = 0.0;
+    for (std::uint64_t stage = 0; stage < mailbox::kDepth; ++stage)
+      channel.receive(fast, 0, stage, std::span<double>(&value, 1));
+    fast_received_first_lap.store(true);
+    channel.receive(fast, 0, mailbox::kDepth, std::span<double>(&value, 1));  // sleeps on slot 0
+    fast_last = value;
+  });
+  for (std::uint64_t stage = 0; stage < mailbox::kDepth; ++stage) {
+    const double value = stage_word(0, stage, 0);
+    channel.publish(producer, stage, std::span<const double>(&value, 1));
+  }
+  while (!fast_received_first_lap.load()) std::this_thread::yield();
+  // Room for the fast consumer to spin out its budget and set the bit; the
+  // test asserts what is received, never how long anything took.
+  std::this_thread::sleep_for(100ms);
+  double slow_first = -1.0;
+  channel.receive(slow, 0, 0, std::span<double>(&slow_first, 1));
+  EXPECT_EQ(slow_first, stage_word(0, 0, 0));
+  for (std::uint64_t stage = 1; stage < mailbox::kDepth; ++stage) {
+    double value = -1.0;
+    channel.receive(slow, 0, stage, std::span<double>(&value, 1));
+    EXPECT_EQ(value, stage_word(0, stage, 0));
+  }
+  const double fifth = stage_word(0, mailbox::kDepth, 0);
+  channel.publish(producer, mailbox::kDepth, std::span<const double>(&fifth, 1));
+  fast_consumer.join();
+  EXPECT_EQ(fast_last, fifth);
+}
+
 // ---- contract violations: detected before any slot is overwritten ---------
 
 // Each breaks the contract once, single-threaded; the death tests expect the
