@@ -34,9 +34,9 @@ struct model_choice {
   [[nodiscard]] std::string name() const { return is_chain() ? "chain" + std::to_string(masses) : std::string{}; }
   // "/model:chain16", or "" for the paper's system: what a name inserts.
   [[nodiscard]] std::string name_segment() const { return is_chain() ? "/model:" + name() : std::string{}; }
-  // "the paper's two-mass system" or "a 16-mass chain (32 equations)".
+  // "the paper's two-mass system" or "a chain of 16 masses (32 equations)".
   [[nodiscard]] std::string description() const {
-    return is_chain() ? "a " + std::to_string(masses) + "-mass chain (" + std::to_string(equations()) + " equations)"
+    return is_chain() ? "a chain of " + std::to_string(masses) + " masses (" + std::to_string(equations()) + " equations)"
                       : std::string("the paper's two-mass system");
   }
   // The chain's parameters (uniform: the paper's masses and springs,

@@ -9,6 +9,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdlib>
+#include <map>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -31,6 +33,9 @@
 #include "bench/harness/summary.hpp"
 #include "bench/harness/team_driver.hpp"
 #include "bench/harness/rk4_entries.hpp"
+#include "bench/harness/run_plan.hpp"
+#include "bench/harness/scaling.hpp"
+#include "kernels/model_choice.hpp"
 #include "kernels/oscillator.hpp"
 #include "layouts/registry.hpp"
 #include "platform/clock.hpp"
@@ -47,6 +52,9 @@ struct run_options {
   std::optional<std::string> layouts;
   std::optional<std::string> pins;
   std::optional<std::string> threads;
+  std::optional<std::size_t> masses;  // --masses: not given, each thread count's own model
+  bool plan = false;                  // --plan: print what would run, measure nothing
+  bool scaling = false;               // --scaling: the thread sweep, one placement
   int repetitions = 0;   // 0: the mode's default
   std::string min_time;  // empty: the mode's default
   std::string out;
@@ -78,27 +86,98 @@ constexpr std::int64_t kQuickBlockNs = 500'000;
 constexpr std::int64_t kDefaultPairBudgetNs = 150'000'000;
 constexpr std::int64_t kQuickPairBudgetNs = 50'000'000;
 
-// The thread counts: the paper's four and this machine's core count by
-// default, each a count the model can split (the 2-mass model has four
-// equations: one per thread at most).
-std::vector<unsigned> select_threads(const std::optional<std::string>& wanted, const platform::topology& machine) {
-  constexpr unsigned kEquations = kernels::two_mass_model::kEquations;
+// The thread counts (run_plan.hpp says which by default and for --scaling),
+// each a count its model can split (kernels/model_choice.hpp: only a chain
+// chosen with --masses can have fewer equations than threads).
+std::vector<unsigned> select_threads(const run_options& options, const platform::topology& machine) {
   std::vector<unsigned> threads;
-  if (!wanted) {
-    threads.push_back(kEquations);
-    const unsigned cores = std::max(1u, machine.core_count());
-    if (cores < kEquations) threads.push_back(cores);
-  } else {
-    for (long long count : parse_number_list(*wanted, "--threads", 1, 1024)) {
-      if (count > kEquations)
-        throw usage_error(fmt::format("--threads: the model cannot split over {} threads (the paper's 2-mass model "
-                                      "has {} equations, one per thread at most)",
-                                      count, kEquations));
+  if (options.threads) {
+    for (long long count : parse_number_list(*options.threads, "--threads", 1, 1024))
       threads.push_back(static_cast<unsigned>(count));
-    }
+  } else if (options.scaling) {
+    threads = bench::scaling_thread_counts(static_cast<unsigned>(machine.affinity().size()));
+  } else {
+    threads = bench::default_thread_counts(machine.core_count());
+  }
+  for (const unsigned count : threads) {
+    const kernels::model_choice model = kernels::model_for(count, options.masses);
+    if (count > model.equations())
+      throw usage_error(fmt::format("--threads: {} threads cannot split {}: at most {} threads, one equation each",
+                                    count, model.description(), model.equations()));
   }
   std::sort(threads.begin(), threads.end());
+  threads.erase(std::unique(threads.begin(), threads.end()), threads.end());
   return threads;
+}
+
+// The machine a run measures, or, for --plan, the one it plans for: hwloc's
+// HWLOC_SYNTHETIC or HWLOC_XMLFILE describe another machine, whose every PU
+// counts as the affinity set (this process's own set belongs to this machine).
+platform::topology machine_for(bool plan) {
+  if (plan) {
+    if (const char* synthetic = std::getenv("HWLOC_SYNTHETIC"); synthetic != nullptr && *synthetic != '\0')
+      return platform::topology::from_synthetic(synthetic);
+    if (const char* xml = std::getenv("HWLOC_XMLFILE"); xml != nullptr && *xml != '\0')
+      return platform::topology::from_xml_file(xml);
+  }
+  platform::topology machine = platform::topology::this_machine();
+  if (!plan && !machine.is_this_system())
+    throw usage_error("HWLOC_SYNTHETIC or HWLOC_XMLFILE is set, so hwloc describes another machine: only --plan "
+                      "can use it (unset it to measure this one)");
+  return machine;
+}
+
+// --plan: what the run would measure and how long it would take, from the
+// entries registered exactly as a run registers them; nothing is measured or
+// written.
+int print_plan(const platform::topology& machine, const bench::run_selection& selection,
+               const std::vector<std::string>& names, const bench::run_book& book, const bench::run_cost& cost) {
+  std::map<std::string, std::size_t> by_kind;
+  bench::run_book planned;
+  for (const auto& name : names) {
+    bench::captured_entry entry;
+    entry.name = name;
+    entry.fields = bench::parse_entry_name(name);
+    ++by_kind[entry.fields["kind"]];
+    // Any figure will do: the plan of comparisons reads which entries exist.
+    entry.repetitions.push_back({{"ns_per_step", 1.0}, {"ns_per_episode", 1.0}});
+    planned.record(std::move(entry));
+  }
+  const std::size_t comparisons = bench::plan_comparisons(planned).size();
+  const bench::run_estimate estimate = bench::estimate_run(names.size(), comparisons, cost);
+  std::string models;
+  std::vector<std::size_t> seen;
+  for (const unsigned threads : selection.threads) {
+    const kernels::model_choice model = kernels::model_for(threads, selection.masses);
+    if (std::find(seen.begin(), seen.end(), model.masses) != seen.end()) continue;
+    seen.push_back(model.masses);
+    std::string at;
+    for (const unsigned other : selection.threads)
+      if (kernels::model_for(other, selection.masses) == model) at += (at.empty() ? "" : ",") + std::to_string(other);
+    models += fmt::format("{}{} at threads {}", models.empty() ? "" : "; ", model.description(), at);
+  }
+  std::string kinds;
+  for (const auto& [kind, count] : by_kind) kinds += fmt::format("{}{} {}", kinds.empty() ? "" : ", ", count, kind);
+  std::string thread_list;
+  for (const unsigned threads : selection.threads)
+    thread_list += (thread_list.empty() ? "" : ", ") + std::to_string(threads);
+  std::string entries;
+  for (const auto& name : names) entries += "  " + name + "\n";
+  if (!book.not_applicable.empty()) entries += "not applicable:\n";
+  for (const auto& skipped : book.not_applicable) entries += "  " + skipped.name + ": " + skipped.reason + "\n";
+  fmt::print("lockstep run --plan (nothing measured)\n"
+             "machine: {} ({}, {} CPUs in the affinity set)\n"
+             "threads: {}\n"
+             "models: {}\n"
+             "entries: {} ({}), {} repetitions each; not applicable: {}\n"
+             "paired comparisons: {}, {} pairs each\n"
+             "estimated time: {} (matrix {}, pairs {}; calibrated on a 2-vCPU VM, an estimate)\n"
+             "entries to measure:\n{}",
+             machine.source(), machine.summary(), machine.affinity().size(), thread_list, models, names.size(), kinds,
+             cost.repetitions, book.not_applicable.size(), comparisons, cost.pairs,
+             bench::format_seconds(estimate.total_s()), bench::format_seconds(estimate.matrix_s),
+             bench::format_seconds(estimate.pairs_s), entries);
+  return kExitOk;
 }
 
 std::vector<std::string> sync_names() {
@@ -141,24 +220,35 @@ std::size_t count_selected(const std::vector<std::string>& names) {
 
 int execute(const run_options& options) {
   // The topology first: it reads the affinity set before anything pins.
-  const platform::topology machine = platform::topology::this_machine();
+  platform::topology machine = [&] {
+    try {
+      return machine_for(options.plan);
+    } catch (const platform::topology_error& error) {
+      throw usage_error(std::string("--plan: ") + error.what());
+    }
+  }();
 
   // The result file first: a destination that cannot be written fails here,
-  // in a millisecond, before anything is measured.
+  // in a millisecond, before anything is measured. A plan writes nothing.
   std::optional<bench::atomic_result_file> result_file;
-  try {
-    result_file.emplace(options.out.empty() ? bench::default_result_path() : options.out);
-  } catch (const bench::result_path_error& error) {
-    throw usage_error(std::string("--out: ") + error.what());
+  if (!options.plan) {
+    try {
+      result_file.emplace(options.out.empty() ? bench::default_result_path() : options.out);
+    } catch (const bench::result_path_error& error) {
+      throw usage_error(std::string("--out: ") + error.what());
+    }
   }
 
   bench::run_selection selection;
   selection.syncs = select_names(options.syncs, sync_names(), "--sync");
-  std::vector<std::string> default_pins{"none", "compact"};
+  // The scaling sweep holds the placement still (compact unless --pin says).
+  std::vector<std::string> default_pins =
+      options.scaling ? std::vector<std::string>{"compact"} : std::vector<std::string>{"none", "compact"};
   const std::vector<std::string> pins =
       options.pins ? select_names(options.pins, placement_names(), "--pin") : default_pins;
   for (const auto& pin : pins) selection.pins.push_back(platform::parse_placement(pin));
-  selection.threads = select_threads(options.threads, machine);
+  selection.masses = options.masses;
+  selection.threads = select_threads(options, machine);
   selection.layouts = select_names(options.layouts, layout_names(), "--layout");
   const std::int64_t min_time_ns = parse_duration_ns(
       options.min_time.empty() ? (options.quick ? kQuickMinTime : kDefaultMinTime) : options.min_time, "--min-time",
@@ -177,6 +267,7 @@ int execute(const run_options& options) {
   harness.machine = &machine;
   harness.book = &book;
   harness.settings.accounting = !options.no_accounting;
+  book.scaling = options.scaling;
   // The stall bound per step (or episode) sits far above a preemption on a
   // busy machine (tens of ms) and far below the paper's 1000 ms timeout, so a
   // lost wake-up is caught at its first occurrence.
@@ -204,7 +295,7 @@ int execute(const run_options& options) {
 
   // Google Benchmark's flags: ours first, the user's after (the last wins).
   std::vector<std::string> arguments{"lockstep run",
-                                     "--benchmark_out=" + result_file->temporary_path(),
+                                     "--benchmark_out=" + (result_file ? result_file->temporary_path() : "/dev/null"),
                                      "--benchmark_out_format=json",
                                      fmt::format("--benchmark_repetitions={}", repetitions),
                                      fmt::format("--benchmark_min_time={}", static_cast<double>(min_time_ns) / 1e9)};
@@ -220,6 +311,7 @@ int execute(const run_options& options) {
 
   benchmark::AddCustomContext("lockstep_mode", options.quick ? "quick" : "default");
   benchmark::AddCustomContext("lockstep_accounting", harness.settings.accounting ? "on" : "off");
+  benchmark::AddCustomContext("lockstep_scaling", options.scaling ? "on" : "off");
   {
     // The primitives whose entries omit futex_waits_per_step: their futex calls
     // happen inside a library, out of sight (sync/registry.hpp: counts_futex_waits).
@@ -240,10 +332,21 @@ int execute(const run_options& options) {
       "manual time per batch of steps (episodes) on a persistent pinned team; team start-up outside the timed "
       "region; medians over repetitions");
 
-  std::vector<std::string> names = bench::register_calibration_benchmarks(harness);
+  std::vector<std::string> names = bench::register_calibration_benchmarks(selection, harness);
   for (auto& name : bench::register_overhead_pair(selection, harness)) names.push_back(std::move(name));
   for (auto& name : bench::register_barrier_benchmarks(selection, harness)) names.push_back(std::move(name));
   for (auto& name : bench::register_rk4_benchmarks(selection, harness)) names.push_back(std::move(name));
+
+  // The paired comparisons' settings (measured after the matrix).
+  bench::pairing_settings pairing;
+  pairing.pairs = static_cast<unsigned>(options.pairs >= 0 ? options.pairs : options.quick ? kQuickPairs : kDefaultPairs);
+  pairing.block_ns = options.quick ? kQuickBlockNs : kDefaultBlockNs;
+  pairing.noise = options.noise_pct / 100.0;
+  pairing.budget_ns = options.quick ? kQuickPairBudgetNs : kDefaultPairBudgetNs;
+  if (options.plan) {
+    const bench::run_cost cost{repetitions, min_time_ns, pairing.pairs, pairing.block_ns, pairing.budget_ns};
+    return print_plan(machine, selection, names, book, cost);
+  }
 
   bench::progress_reporter progress(book, count_selected(names));
   bench::result_json_reporter json;
@@ -255,11 +358,6 @@ int execute(const run_options& options) {
   book.derive_ratios();
 
   // The paired comparisons, after the matrix: the plan needs its medians.
-  bench::pairing_settings pairing;
-  pairing.pairs = static_cast<unsigned>(options.pairs >= 0 ? options.pairs : options.quick ? kQuickPairs : kDefaultPairs);
-  pairing.block_ns = options.quick ? kQuickBlockNs : kDefaultBlockNs;
-  pairing.noise = options.noise_pct / 100.0;
-  pairing.budget_ns = options.quick ? kQuickPairBudgetNs : kDefaultPairBudgetNs;
   const std::vector<bench::comparison> plan = bench::plan_comparisons(book);
   if (pairing.pairs > 0 && !plan.empty()) {
     fmt::print(stderr, "lockstep run: {} paired comparisons, {} pairs of blocks of about {} each\n", plan.size(),
@@ -288,8 +386,9 @@ int execute(const run_options& options) {
   }
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
-  bench::derive_ratios(document, {book.c2c_one_way_ns(), book.serial_step_ns()});
+  bench::derive_ratios(document, book);
   bench::write_pace_and_pairs(document, book, &pace, modes);
+  if (options.scaling) document["lockstep_scaling"] = bench::scaling_json(bench::scaling_of(book), book.c2c_one_way_ns());
   // The machine's fingerprint from the one producer (replacing Google
   // Benchmark's host_name and num_cpus with the same figures), then the
   // in-run keys.
@@ -330,14 +429,22 @@ void add_run(CLI::App& app, int& result) {
   run->add_option("--layout", options->layouts, "Layouts, a comma list (default: all)");
   run->add_option("--pin", options->pins, "Placements, a comma list (default: none,compact)");
   run->add_option("--threads", options->threads,
-                  "Thread counts, a comma list, each at most the model's 4 equations (default: 4, and this machine's core count when fewer)");
+                  "Thread counts, a comma list (default: the paper's 4, this machine's core count, and up to three "
+                  "counts between; beyond 4 threads the model is a chain of one equation per thread)");
+  add_masses_option(*run, options->masses);
+  auto* plan = run->add_flag("--plan", options->plan,
+                             "Print the entries the run would measure and its estimated time, measure nothing; "
+                             "HWLOC_SYNTHETIC or HWLOC_XMLFILE plan for another machine");
+  run->add_flag("--scaling", options->scaling,
+                "The scaling sweep: threads 2, 4, 8, ... up to the CPUs (at least 8), pin:compact unless --pin, "
+                "every layout; the summary draws sync time per stage against threads, per primitive on its best layout");
   run->add_option("--repetitions", options->repetitions,
                   fmt::format("Repetitions per entry (default {}; --quick {})", kDefaultRepetitions, kQuickRepetitions))
       ->check(CLI::Range(1, 1000));
   run->add_option("--min-time", options->min_time,
                   fmt::format("Minimum measured time per repetition, with a unit (default {}; --quick {})",
                               kDefaultMinTime, kQuickMinTime));
-  add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)");
+  add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)")->excludes(plan);
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
   run->add_flag("--no-interleave", options->no_interleave,
                 "Run every entry's repetitions back to back. The default shuffles the repetitions of all entries "

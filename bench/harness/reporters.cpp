@@ -90,11 +90,14 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
 progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries)
     : book_(book), expected_(expected_entries), start_(std::chrono::steady_clock::now()) {}
 
-void derive_ratios(nlohmann::json& result, const calibrations& run) {
+void derive_ratios(nlohmann::json& result, const run_book& book) {
   if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
   for (nlohmann::json& row : result["benchmarks"]) {
     if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
-    if (!has_derived_ratios(parse_entry_name(row["run_name"].get<std::string>()))) continue;
+    const auto fields = parse_entry_name(row["run_name"].get<std::string>());
+    if (!has_derived_ratios(fields)) continue;
+    const auto model = fields.find("model");
+    const calibrations run = book.calibrations_for(model == fields.end() ? std::string{} : model->second);
     std::map<std::string, double> counters;
     for (const auto& [key, value] : row.items())
       if (value.is_number()) counters[key] = value.get<double>();

@@ -60,6 +60,6 @@ std::map<std::string, std::string> parse_entry_name(const std::string& name);
 // absent, and so then is its ratio). Dividing by a constant scales a mean, a
 // median and a standard deviation alike; a coefficient of variation does not
 // change, so a cv row's ratio is its counter's cv.
-void derive_ratios(nlohmann::json& result, const calibrations& run);
+void derive_ratios(nlohmann::json& result, const run_book& book);
 
 }  // namespace lockstep::bench

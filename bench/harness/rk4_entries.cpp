@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <string_view>
 #include <tuple>
+#include <type_traits>
 #include <exception>
 #include <vector>
 
 #include "bench/probes/core_to_core.hpp"
+#include "kernels/model_choice.hpp"
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
 #include "kernels/rk4.hpp"
@@ -57,12 +59,31 @@ void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, 
   state.counters["one_way_p99_ns"] = one_way.p99;
 }
 
-// rk4/serial: batches of steps on the benchmark thread, timed by hand so that
-// the batch loop matches the parallel entries'.
-void serial_entry(benchmark::State& state, harness_state& harness) {
-  const kernels::two_mass_model model;
-  kernels::staged_rk4<kernels::two_mass_model> rk4(model, kBenchmarkStepSeconds);
-  const std::string name = "rk4/serial";
+// The model an entry integrates (kernels/model_choice.hpp): the paper's two
+// masses, or the chain its spec names.
+template <class Model>
+Model model_of(const entry_spec& spec) {
+  if constexpr (std::is_same_v<Model, kernels::chain_model>)
+    return kernels::chain_model(kernels::model_choice{spec.masses}.chain());
+  else
+    return Model{};
+}
+
+// Calls register_entry.template operator()<Model>() with the model type of
+// `choice`: the one place the harness turns a model choice into a type.
+template <class Register>
+decltype(auto) with_model(const kernels::model_choice& choice, Register&& register_entry) {
+  if (choice.is_chain()) return register_entry.template operator()<kernels::chain_model>();
+  return register_entry.template operator()<kernels::two_mass_model>();
+}
+
+// rk4/serial (rk4/model:chainS/serial): batches of steps on the benchmark
+// thread, timed by hand so that the batch loop matches the parallel entries'.
+template <class Model>
+void serial_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
+  const Model model = model_of<Model>(spec);
+  kernels::staged_rk4<Model> rk4(model, kBenchmarkStepSeconds);
+  const std::string name = spec.name();
   auto batch_size = harness.units_per_batch.find(name);
   if (batch_size == harness.units_per_batch.end()) {
     constexpr std::uint64_t kProbeSteps = 1000;
@@ -122,15 +143,14 @@ void add_paired_c2c(benchmark::State& state, const platform::placement_plan& pla
 }
 
 // One call of an RK4 entry: the composed step on a pinned team.
-template <class Sync, class Layout, kernels::sync_timing Timing>
+template <class Sync, class Layout, class Model, kernels::sync_timing Timing>
 void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
   constexpr bool kInstrumented = Timing != kernels::sync_timing::off;
   constexpr sync::primitive_info info = sync::info_of<Sync>();
   affinity_guard restore_caller;  // omp_team runs participant 0 on the benchmark thread
   const platform::placement_plan plan = platform::plan_placement(*harness.machine, spec.pin, spec.threads);
-  const kernels::two_mass_model model;
-  kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, Timing> step(model, kBenchmarkStepSeconds,
-                                                                            spec.threads);
+  const Model model = model_of<Model>(spec);
+  kernels::parallel_rk4<Sync, Layout, Model, Timing> step(model, kBenchmarkStepSeconds, spec.threads);
   sync::team_of_t<Sync> team(spec.threads);
   std::vector<participant_slot> slots(spec.threads);
   auto steps = [&step](sync::participant& self, std::uint64_t count) { step.run(self, count); };
@@ -189,7 +209,7 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // VM's 2-thread steps moved between about 280 ns and 1.1 us for seconds).
   if constexpr (kInstrumented) {
     if (spec.kind == entry_kind::overhead) {
-      kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, kernels::sync_timing::off> bare(
+      kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off> bare(
           model, kBenchmarkStepSeconds, spec.threads);
       sync::team_of_t<Sync> bare_team(spec.threads);
       std::vector<participant_slot> bare_slots(spec.threads);
@@ -211,7 +231,7 @@ bool selected(const std::vector<std::string>& names, std::string_view name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-template <class Sync, class Layout>
+template <class Sync, class Layout, class Model>
 benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harness_state& harness,
                                                    bool instrumented) {
   auto* entry =
@@ -221,11 +241,11 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
                                            // sampled: one step per sampling period
                                            // (rk4_entry sets it) reads the clock around
                                            // its syncs; the other steps read none.
-                                           rk4_entry<Sync, Layout, kernels::sync_timing::sampled>(state, harness,
-                                                                                                  spec);
+                                           rk4_entry<Sync, Layout, Model, kernels::sync_timing::sampled>(
+                                               state, harness, spec);
                                          })
           : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
-              rk4_entry<Sync, Layout, kernels::sync_timing::off>(state, harness, spec);
+              rk4_entry<Sync, Layout, Model, kernels::sync_timing::off>(state, harness, spec);
             });
   return entry->UseManualTime()->Unit(benchmark::kNanosecond);
 }
@@ -234,30 +254,33 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
 
 std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
   std::vector<std::string> registered;
-  const std::size_t equations = kernels::two_mass_model::kEquations;
   sync::for_each_primitive([&]<class Sync>() {
     if (!selected(selection.syncs, Sync::kName)) return;
     layouts::for_each_layout([&]<class Layout>() {
       if (!selected(selection.layouts, Layout::kName)) return;
       for (unsigned threads : selection.threads) {
+        const kernels::model_choice model = kernels::model_for(threads, selection.masses);
         for (platform::placement pin : selection.pins) {
-          const entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
-          const std::string reason = kernels::not_applicable_reason<Sync, Layout>(equations, threads);
+          entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
+          spec.masses = model.masses;
+          const std::string reason = kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads);
           if (!reason.empty()) {
             harness.book->not_applicable.push_back({spec.name(), reason});
             continue;
           }
           if constexpr (kernels::applicable<Sync, Layout>().applicable) {
-            register_rk4_entry<Sync, Layout>(spec, harness, harness.settings.accounting);
+            with_model(model, [&]<class Model>() {
+              register_rk4_entry<Sync, Layout, Model>(spec, harness, harness.settings.accounting);
+              // The entry's side of a paired comparison: the bare step, as the
+              // matrix builds it (paired_blocks.hpp).
+              harness.block_runners[spec.name()] =
+                  block_runner_of<sync::team_of_t<Sync>,
+                                  kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off>>(
+                      harness, pin, threads,
+                      [](auto& step, sync::participant& self, std::uint64_t count) { step.run(self, count); },
+                      model_of<Model>(spec), kBenchmarkStepSeconds, threads);
+            });
             registered.push_back(spec.name());
-            // The entry's side of a paired comparison: the bare step, as the
-            // matrix builds it (paired_blocks.hpp).
-            harness.block_runners[spec.name()] =
-                block_runner_of<sync::team_of_t<Sync>,
-                                kernels::parallel_rk4<Sync, Layout, kernels::two_mass_model, kernels::sync_timing::off>>(
-                    harness, pin, threads,
-                    [](auto& step, sync::participant& self, std::uint64_t count) { step.run(self, count); },
-                    kernels::two_mass_model{}, kBenchmarkStepSeconds, threads);
           }
         }
       }
@@ -268,7 +291,6 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
 
 std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness) {
   std::vector<std::string> registered;
-  const std::size_t equations = kernels::two_mass_model::kEquations;
   // The preferred combination first: the fastest and steadiest step of the
   // matrix (seqlock on private copies, pinned, two threads: one per core
   // here), where a fixed cost of the harness weighs most. futex_spin's 2-thread
@@ -284,15 +306,18 @@ std::vector<std::string> register_overhead_pair(const run_selection& selection, 
       std::find(selection.pins.begin(), selection.pins.end(), platform::placement::compact) != selection.pins.end()
           ? platform::placement::compact
           : selection.pins.front();
+  const kernels::model_choice model = kernels::model_for(threads, selection.masses);
   bool done = false;
   const auto try_pair = [&]<class Sync, class Layout>() {
     if (done || !selected(selection.syncs, Sync::kName) || !selected(selection.layouts, Layout::kName)) return;
     if constexpr (kernels::applicable<Sync, Layout>().applicable) {
-      if (!kernels::not_applicable_reason<Sync, Layout>(equations, threads).empty()) return;
+      if (!kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads).empty()) return;
       for (bool accounting : {false, true}) {
-        const entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
-                              pin,                  threads,                 accounting};
-        auto* entry = register_rk4_entry<Sync, Layout>(spec, harness, accounting);
+        entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
+                        pin,                  threads,                 accounting};
+        spec.masses = model.masses;
+        auto* entry = with_model(
+            model, [&]<class Model>() { return register_rk4_entry<Sync, Layout, Model>(spec, harness, accounting); });
         if (harness.settings.overhead_repetitions > 0) entry->Repetitions(harness.settings.overhead_repetitions);
         registered.push_back(spec.name());
       }
@@ -306,7 +331,7 @@ std::vector<std::string> register_overhead_pair(const run_selection& selection, 
   return registered;
 }
 
-std::vector<std::string> register_calibration_benchmarks(harness_state& harness) {
+std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness) {
   std::vector<std::string> registered;
   const entry_spec c2c_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2};
   const platform::placement_plan plan = platform::plan_placement(*harness.machine, platform::placement::compact, 2);
@@ -326,10 +351,26 @@ std::vector<std::string> register_calibration_benchmarks(harness_state& harness)
     harness.book->not_applicable.push_back(
         {c2c_spec.name(), "needs two CPUs in the affinity set; vs_c2c is omitted in this run"});
   }
-  benchmark::RegisterBenchmark("rk4/serial", [&harness](benchmark::State& state) { serial_entry(state, harness); })
-      ->UseManualTime()
-      ->Unit(benchmark::kNanosecond);
-  registered.push_back("rk4/serial");
+  // The serial step of every model the run integrates (vs_serial divides an
+  // entry's step by its own model's), the paper's system always.
+  std::vector<std::size_t> masses{0};
+  for (const unsigned threads : selection.threads) {
+    const kernels::model_choice model = kernels::model_for(threads, selection.masses);
+    if (std::find(masses.begin(), masses.end(), model.masses) == masses.end()) masses.push_back(model.masses);
+  }
+  for (const std::size_t model_masses : masses) {
+    entry_spec spec{entry_kind::serial, {}, {}, platform::placement::none, 1};
+    spec.masses = model_masses;
+    with_model(kernels::model_choice{model_masses}, [&]<class Model>() {
+      benchmark::RegisterBenchmark(spec.name().c_str(),
+                                   [&harness, spec](benchmark::State& state) {
+                                     serial_entry<Model>(state, harness, spec);
+                                   })
+          ->UseManualTime()
+          ->Unit(benchmark::kNanosecond);
+    });
+    registered.push_back(spec.name());
+  }
   return registered;
 }
 

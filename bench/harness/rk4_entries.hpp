@@ -14,6 +14,10 @@
 //                               the composed step (kernels/parallel_step.hpp)
 //                               on a pinned team, batches of steps; counters
 //                               in DESIGN.md (see register_rk4_benchmarks).
+//   rk4/model:chainS/...        the same on an s-mass chain, the model of
+//                               more than 4 threads or of --masses
+//                               (kernels/model_choice.hpp); its vs_serial
+//                               divides by rk4/model:chainS/serial.
 // Both calibrations are registered first (Google Benchmark runs entries in
 // registration order unless told to interleave), but no entry reads them while
 // it runs: vs_serial and vs_c2c are derived after the run from the whole run's
@@ -32,9 +36,10 @@ namespace lockstep::bench {
 // so millions of steps stay bounded and never reach denormals or infinities.
 inline constexpr double kBenchmarkStepSeconds = 1e-4;
 
-// c2c and rk4/serial. c2c needs two CPUs in the affinity set; without them it
+// c2c and rk4/serial, and rk4/model:chainS/serial for every chain the
+// selection's thread counts integrate. c2c needs two CPUs in the affinity set; without them it
 // is recorded as not applicable in the run book. Returns the names registered.
-std::vector<std::string> register_calibration_benchmarks(harness_state& harness);
+std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness);
 
 // rk4/sync:S/layout:L/pin:P/threads:T for every selected combination that
 // applies; the others go into the run book's not_applicable list with the

@@ -2,6 +2,7 @@
 #include "bench/harness/run_book.hpp"
 
 #include "bench/harness/derived_figures.hpp"
+#include "kernels/model_choice.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -11,17 +12,18 @@ namespace lockstep::bench {
 std::string entry_spec::name() const {
   const std::string pin_name{platform::to_string(pin)};
   const std::string tail = "/pin:" + pin_name + "/threads:" + std::to_string(threads);
+  const std::string model = kernels::model_choice{masses}.name_segment();
   switch (kind) {
     case entry_kind::c2c:
       return "c2c" + tail;
     case entry_kind::serial:
-      return "rk4/serial";
+      return "rk4" + model + "/serial";
     case entry_kind::barrier:
       return "barrier/sync:" + sync + tail;
     case entry_kind::rk4:
-      return "rk4/sync:" + sync + "/layout:" + layout + tail;
+      return "rk4" + model + "/sync:" + sync + "/layout:" + layout + tail;
     case entry_kind::overhead:
-      return std::string("overhead/accounting:") + (accounting ? "on" : "off") + "/sync:" + sync +
+      return std::string("overhead") + model + "/accounting:" + (accounting ? "on" : "off") + "/sync:" + sync +
              "/layout:" + layout + tail;
   }
   return {};
@@ -82,19 +84,23 @@ std::optional<double> run_book::c2c_one_way_ns() const {
   return entry->median("one_way_ns");
 }
 
-std::optional<double> run_book::serial_step_ns() const {
-  const captured_entry* entry = find("rk4/serial");
+std::optional<double> run_book::serial_step_ns(const std::string& model) const {
+  const captured_entry* entry = find("rk4" + (model.empty() ? std::string{} : "/model:" + model) + "/serial");
   if (entry == nullptr || !entry->error.empty()) return std::nullopt;
   return entry->median("ns_per_step");
 }
 
 void run_book::derive_ratios() {
-  const calibrations run{c2c_one_way_ns(), serial_step_ns()};
   for (captured_entry& entry : entries_) {
     if (!has_derived_ratios(entry.fields)) continue;
+    const calibrations run = calibrations_for(entry.field("model"));
     for (auto& repetition : entry.repetitions)
       for (const derived_ratio& ratio : derived_ratios(repetition, run)) repetition[ratio.name] = ratio.value;
   }
+}
+
+calibrations run_book::calibrations_for(const std::string& model) const {
+  return {c2c_one_way_ns(), serial_step_ns(model)};
 }
 
 std::uint64_t units_for_batch(double unit_ns, const run_settings& settings) {

@@ -33,6 +33,7 @@
 //     (pure spinners through preemption, the paper's ThreadWaiter through its
 //     timeout), slowly, and the bound catches the slowness.
 #include <barrier>
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -40,6 +41,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/harness/derived_figures.hpp"
 #include "bench/harness/pace.hpp"
 #include "bench/harness/paired_ratio.hpp"
 #include "platform/clock.hpp"
@@ -53,6 +55,8 @@ struct run_selection {
   std::vector<std::string> layouts;
   std::vector<platform::placement> pins;
   std::vector<unsigned> threads;
+  // --masses (kernels/model_choice.hpp): empty, each thread count's own model.
+  std::optional<std::size_t> masses;
 };
 
 // How hard the harness works per entry.
@@ -88,9 +92,11 @@ struct entry_spec {
   platform::placement pin = platform::placement::compact;
   unsigned threads = 1;
   bool accounting = true;  // overhead: which side of the pair
+  std::size_t masses = 0;  // rk4, serial, overhead: the model (kernels::model_choice; 0 the paper's)
 
   // rk4/sync:S/layout:L/pin:P/threads:T, rk4/serial, barrier/sync:S/pin:P/threads:T,
-  // c2c/pin:compact/threads:2, overhead/accounting:on|off/sync:S/layout:L/pin:P/threads:T
+  // c2c/pin:compact/threads:2, overhead/accounting:on|off/sync:S/layout:L/pin:P/threads:T;
+  // a chain's entries carry its model after the kind: rk4/model:chain8/sync:..., rk4/model:chain8/serial
   std::string name() const;
 };
 
@@ -133,7 +139,11 @@ class run_book {
   // In-run calibrations: medians of c2c/pin:compact/threads:2 (one_way_ns)
   // and rk4/serial (ns_per_step), once they ran.
   std::optional<double> c2c_one_way_ns() const;
-  std::optional<double> serial_step_ns() const;
+  // `model`: the model field of an entry's name ("chain8"; "" the paper's
+  // system): each model's step has its own serial calibration.
+  std::optional<double> serial_step_ns(const std::string& model = {}) const;
+  // Both, for an entry of this model.
+  calibrations calibrations_for(const std::string& model) const;
 
   // Adds the derived ratios (derived_figures.hpp: vs_serial, vs_c2c)
   // (sync_ns_per_stage / c2c_one_way_ns) to every repetition of the rk4 and
@@ -148,6 +158,7 @@ class run_book {
   double clock_read_ns = 0.0;
   std::vector<skipped_combination> not_applicable;
   std::vector<std::string> notes;  // one line each, for the summary and the context
+  bool scaling = false;            // --scaling: the summary shows the curve (scaling.hpp)
   // The paired comparisons measured after the matrix (paired_blocks.hpp), in plan order.
   std::vector<paired_result> pairs;
   double noise = kDefaultNoise;    // the band their verdicts use

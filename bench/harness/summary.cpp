@@ -1,4 +1,5 @@
 // The end-of-run summary (harness_summary.hpp).
+#include "bench/harness/scaling.hpp"
 #include "bench/harness/summary.hpp"
 
 #include "bench/harness/derived_figures.hpp"
@@ -148,7 +149,7 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
         if (what.group != last_group) out += "  " + what.group + "\n";
         last_group = what.group;
         out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {}\n", a->field("sync"), median_of(book, what.a),
-                           a->field("layout").empty() ? "" : "(" + a->field("layout") + ")", b->field("sync"),
+                           a->field("layout").empty() ? std::string() : fmt::format("({})", a->field("layout")), b->field("sync"),
                            comparison_figure(book, what));
         break;
     }
@@ -296,6 +297,8 @@ std::string render_summary(const run_book& book, const std::string& result_path)
                        paired_shown ? "  " : "\nHarness overhead (" + overhead_name + "), ",
                        format_ns(*with_accounting), format_ns(*without_accounting),
                        *with_accounting / *without_accounting);
+
+  if (book.scaling) out += render_scaling(scaling_of(book));
 
   per_mode_medians(out, book);
 

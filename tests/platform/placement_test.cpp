@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -84,6 +85,66 @@ TEST(Placement, FourThreadsOnThisVmShapeWrapAndOversubscribe) {
   const placement_plan two = plan_placement(machine, placement::compact, 2);
   EXPECT_FALSE(two.wrapped);
   EXPECT_FALSE(two.oversubscribed);
+}
+
+// Placement at scale: the shapes of the servers lockstep's users characterise.
+constexpr const char* kTwoSockets64Pus = "package:2 l3:2 core:8 pu:2";    // 32 cores, 64 PUs
+constexpr const char* kTwoSockets192Pus = "package:2 l3:4 core:12 pu:2";  // 96 cores, 192 PUs
+
+// Every thread on a PU of its own, and which of them share a core.
+void expect_distinct_pus(const placement_plan& plan) {
+  const std::vector<unsigned> pus = pus_of(plan);
+  EXPECT_EQ(std::set<unsigned>(pus.begin(), pus.end()).size(), pus.size()) << plan.note;
+}
+
+std::size_t distinct_cores(const placement_plan& plan) {
+  std::set<unsigned> cores;
+  for (const auto& entry : plan.entries) cores.insert(entry.core.value());
+  return cores.size();
+}
+
+TEST(PlacementAtScale, CompactUsesEveryCoreBeforeAnySmtSibling) {
+  for (const char* shape : {kTwoSockets64Pus, kTwoSockets192Pus}) {
+    const topology machine = topology::from_synthetic(shape);
+    const unsigned cores = machine.core_count();
+    for (placement kind : {placement::compact, placement::scatter}) {
+      const placement_plan full = plan_placement(machine, kind, cores);
+      EXPECT_EQ(distinct_cores(full), cores) << shape << " " << to_string(kind);
+      EXPECT_FALSE(full.wrapped) << "no SMT sibling while a core is free";
+      expect_distinct_pus(full);
+      const placement_plan past = plan_placement(machine, kind, cores + 1);
+      EXPECT_TRUE(past.wrapped) << shape << " " << to_string(kind);
+      EXPECT_FALSE(past.oversubscribed);
+      EXPECT_NE(past.note.find("wrapped"), std::string::npos) << "the plan says it used SMT siblings";
+      EXPECT_EQ(machine.relation(past.entries[0].pu.value(), past.entries[cores].pu.value()),
+                pu_relation::smt_siblings);
+      expect_distinct_pus(plan_placement(machine, kind, machine.pu_count()));
+      EXPECT_TRUE(plan_placement(machine, kind, machine.pu_count() + 1).oversubscribed);
+    }
+  }
+}
+
+TEST(PlacementAtScale, CompactFillsAnL3ThenAPackage) {
+  const topology machine = topology::from_synthetic(kTwoSockets192Pus);  // 12 cores per L3, 48 per package
+  const placement_plan plan = plan_placement(machine, placement::compact, 64);
+  for (unsigned thread = 0; thread < 64; ++thread) {
+    const auto& pu = machine.pu(plan.entries[thread].pu.value());
+    EXPECT_EQ(pu.l3, static_cast<int>(thread / 12)) << "thread " << thread;
+    EXPECT_EQ(pu.package, thread / 48) << "thread " << thread;
+  }
+}
+
+TEST(PlacementAtScale, ScatterVisitsEveryL3BeforeRepeatingOne) {
+  const topology machine = topology::from_synthetic(kTwoSockets192Pus);  // 8 L3 domains
+  const placement_plan plan = plan_placement(machine, placement::scatter, 16);
+  std::vector<int> first_round;
+  std::vector<int> second_round;
+  for (unsigned thread = 0; thread < 16; ++thread)
+    (thread < 8 ? first_round : second_round).push_back(machine.pu(plan.entries[thread].pu.value()).l3);
+  EXPECT_EQ(std::set<int>(first_round.begin(), first_round.end()).size(), 8U);
+  EXPECT_EQ(std::set<int>(second_round.begin(), second_round.end()).size(), 8U);
+  EXPECT_EQ(machine.relation(plan.entries[0].pu.value(), plan.entries[1].pu.value()), pu_relation::different_package);
+  EXPECT_EQ(distinct_cores(plan), 16U);
 }
 
 TEST(Placement, NoneHasNoPinsButStillDetectsOversubscription) {
