@@ -75,6 +75,8 @@ READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
 # All of it is an addition: a file without these keys was written before it and reads as before.
 PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
 PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
+SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, threads, points, best, c2c_one_way_ns}
+SCALING_COUNTERS = ("sync_ns_per_stage", "ns_per_step")
 # Per-repetition counters (iteration rows only; an aggregate's median or mean of a mode index means nothing).
 PACE_C2C_COUNTER = "pace_c2c_ns"  # ns; NaN on a machine of one CPU (no pair to measure)
 PACE_SERIAL_COUNTER = "pace_serial_ns"  # ns

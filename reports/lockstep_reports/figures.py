@@ -81,9 +81,21 @@ def rk4_groups(run_file) -> list[tuple[str, int]]:
     return sorted(groups, key=lambda group: (pins.index(group[0]), group[1] or 0))
 
 
-def _rk4_key(sync, layout, pin, threads) -> BenchmarkKey:
-    return BenchmarkKey("rk4", tuple(sorted((("sync", sync), ("layout", layout), ("pin", pin),
-                                             ("threads", str(threads))))))
+def _model_at(run_file, threads) -> str | None:
+    """The model segment of the run's rk4 entries at this thread count (a chain's "chain8"), or None: the
+    paper's two-mass system, whose names carry no model."""
+    for key in run_file.runs:
+        if key.family == "rk4" and key.threads == threads and key.get("sync"):
+            return key.get("model")
+    return None
+
+
+def _rk4_key(run_file, sync, layout, pin, threads) -> BenchmarkKey:
+    segments = [("sync", sync), ("layout", layout), ("pin", pin), ("threads", str(threads))]
+    model = _model_at(run_file, threads)
+    if model:
+        segments.append(("model", model))
+    return BenchmarkKey("rk4", tuple(sorted(segments)))
 
 
 def _syncs_layouts(run_file):
@@ -101,7 +113,7 @@ def heatmap(run_file, pin: str, threads: int, within_noise=frozenset()) -> str:
     grid = np.full((len(syncs), len(layouts)), np.nan)
     for row, sync in enumerate(syncs):
         for column, layout in enumerate(layouts):
-            value = run_median(run_file, _rk4_key(sync, layout, pin, threads))
+            value = run_median(run_file, _rk4_key(run_file, sync, layout, pin, threads))
             if value is not None:
                 grid[row, column] = value
     figure, axes = plt.subplots(figsize=(1.3 * len(layouts) + 2.2, 0.42 * len(syncs) + 1.4))
@@ -162,7 +174,7 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
     drawn = []
     for column, layout in enumerate(layouts):
         for row, sync in enumerate(syncs):
-            run = run_file.runs.get(_rk4_key(sync, layout, pin, threads))
+            run = run_file.runs.get(_rk4_key(run_file, sync, layout, pin, threads))
             if run is None or run.errored:
                 continue
             times, _ = sample(run)
@@ -218,15 +230,15 @@ def penalty_rows(run_file) -> list[PenaltyRow]:
     for sync in syncs:
         for threads in threads_list:
             if padded and "packed" in layouts:
-                packed_time = run_median(run_file, _rk4_key(sync, "packed", "compact", threads))
-                padded_time = run_median(run_file, _rk4_key(sync, padded, "compact", threads))
+                packed_time = run_median(run_file, _rk4_key(run_file, sync, "packed", "compact", threads))
+                padded_time = run_median(run_file, _rk4_key(run_file, sync, padded, "compact", threads))
                 if packed_time and padded_time:
                     rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads,
                                            packed_time / padded_time))
             base_layout = padded or (layouts[0] if layouts else None)
             for moved in ("migrate", "none"):
-                compact = run_median(run_file, _rk4_key(sync, base_layout, "compact", threads))
-                other = run_median(run_file, _rk4_key(sync, base_layout, moved, threads))
+                compact = run_median(run_file, _rk4_key(run_file, sync, base_layout, "compact", threads))
+                other = run_median(run_file, _rk4_key(run_file, sync, base_layout, moved, threads))
                 if compact and other:
                     rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
                                            other / compact))
@@ -578,4 +590,45 @@ def paired_ratios(pairs, title: str) -> str:
         handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
     axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     axes.set_title(title, fontsize=9)
+    return to_svg(figure)
+
+
+def scaling_curve(curve) -> str:
+    """`lockstep run --scaling`: the curve's counter against threads on log-log axes, one line per primitive on
+    its best layout at each count, hollow markers where the threads outnumbered the CPUs, and the run's
+    core-to-core one-way latency as a reference line. curve: inputs.ScalingCurve."""
+    figure, axes = plt.subplots(figsize=(7.2, 4.2))
+    lines = {}
+    for point in curve.points:
+        if point.value_ns > 0:
+            lines.setdefault(point.sync, []).append(point)
+    palette = plt.get_cmap("tab20")
+    values = []
+    for index, (sync, points) in enumerate(sorted(lines.items())):
+        points.sort(key=lambda point: point.threads)
+        color = palette(index % 20)
+        width = 2.2 if sync == curve.best else 1.0
+        axes.plot([p.threads for p in points], [p.value_ns for p in points], color=color, lw=width,
+                  label=sync + (" (scales best)" if sync == curve.best else ""), zorder=3)
+        for point in points:
+            axes.scatter([point.threads], [point.value_ns], s=18, zorder=4, color=color if not point.oversubscribed
+                         else "white", edgecolors=color, linewidths=1.0)
+        values += [p.value_ns for p in points]
+    if curve.c2c_one_way_ns:
+        axes.axhline(curve.c2c_one_way_ns, color="#555555", lw=0.8, ls="--",
+                     label=f"c2c one-way {format_ns(curve.c2c_one_way_ns)}")
+        values.append(curve.c2c_one_way_ns)
+    axes.set_xscale("log", base=2)
+    axes.set_xticks(list(curve.threads))
+    axes.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    if values:
+        axes.set_yscale("log")
+        axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
+        duration_axis(axes.yaxis)
+    axes.set_xlabel("threads (hollow: more threads than CPUs)")
+    axes.set_ylabel("sync time per stage" if curve.counter == "sync_ns_per_stage" else "step time")
+    axes.grid(color="#eeeeee", lw=0.6)
+    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    axes.set_title(f"Scaling at pin:{curve.pin}, each primitive on its best layout", fontsize=9)
     return to_svg(figure)

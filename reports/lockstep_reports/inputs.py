@@ -335,6 +335,27 @@ class PacePair:
     block_ms: float
 
 
+@dataclass(frozen=True)
+class ScalingPoint:
+    sync: str
+    threads: int
+    layout: str  # the best layout at this count
+    model: str
+    value_ns: float  # the curve's counter
+    oversubscribed: bool
+
+
+@dataclass(frozen=True)
+class ScalingCurve:
+    """The file's "lockstep_scaling" (`lockstep run --scaling`), as the run computed it (bench/harness/scaling.hpp)."""
+    pin: str
+    counter: str
+    threads: tuple[int, ...]
+    points: tuple[ScalingPoint, ...]
+    best: str | None
+    c2c_one_way_ns: float | None
+
+
 @dataclass
 class RunFile:
     path: str
@@ -344,6 +365,7 @@ class RunFile:
     warnings: list[str] = field(default_factory=list)
     pace: PaceTrace | None = None  # None: written before the pace trace
     pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
+    scaling: ScalingCurve | None = None  # None: not a --scaling run
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""
@@ -555,6 +577,27 @@ def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[Pace
     return pairs
 
 
+def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
+    """The top-level "lockstep_scaling", checked field by field; None when the file has none."""
+    if fields.SCALING_KEY not in document:
+        return None
+    curve = _Object(path, document[fields.SCALING_KEY], fields.SCALING_KEY)
+    counter = curve.choice("counter", fields.SCALING_COUNTERS)
+    threads = tuple(_checked_number(curve, f"threads[{at}]", value, 1, fields.LARGEST_AMOUNT)
+                    for at, value in enumerate(curve.array("threads", nonempty=False)))
+    points = []
+    for index, raw in enumerate(curve.array("points", nonempty=False)):
+        point = _Object(path, raw, f"{fields.SCALING_KEY} point {index}")
+        points.append(ScalingPoint(point.text("sync", empty=False), point.integer("threads", low=1),
+                                   point.text("layout", empty=False), point.text("model", empty=False),
+                                   point.number(counter, -fields.LONGEST_NS, fields.LONGEST_NS, unit=" ns"),
+                                   point.flag("oversubscribed")))
+    best = curve.text("best", required=False, empty=False) if curve.value.get("best") is not None else None
+    return ScalingCurve(curve.text("pin", empty=False), counter, tuple(int(t) for t in threads), tuple(points), best,
+                        curve.number("c2c_one_way_ns", fields.SHORTEST_NS, fields.LONGEST_NS, required=False,
+                                     nullable=True, unit=" ns"))
+
+
 def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not isinstance(document, dict):
         raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
@@ -645,7 +688,7 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs)
+                   pairs=pairs, scaling=_read_scaling(path, document))
 
 
 def _same_counters(entry: _Object, counters: frozenset, first: tuple[int, frozenset]) -> None:

@@ -1,6 +1,8 @@
 """Benchmark names as lockstep writes them: `key:value` segments after a family.
 
     rk4/sync:futex_spin/layout:padded128/pin:compact/threads:4
+    rk4/model:chain8/sync:mailbox/layout:padded64/pin:compact/threads:16   (an s-mass chain; no model: the
+                                                                            paper's two masses)
     barrier/sync:ck_centralized/pin:compact/threads:2
     rk4/serial
     c2c/pin:compact/threads:2
@@ -20,7 +22,7 @@ from dataclasses import dataclass
 RUN_CONFIGURATION_KEYS = {"min_time", "min_warmup_time", "repeats", "iterations"}
 RUN_CONFIGURATION_WORDS = {"real_time", "process_time", "manual_time"}
 # The order in which lockstep's own segments are shown.
-SEGMENT_ORDER = ("sync", "layout", "pin", "threads")
+SEGMENT_ORDER = ("model", "sync", "layout", "pin", "threads")
 
 
 @dataclass(frozen=True, order=True)

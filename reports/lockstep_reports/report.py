@@ -105,6 +105,8 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
                                    figures.bars_with_spread(run_file, pin, threads)))
     sections += [heat, bars]
+    if run_file.scaling is not None and len(run_file.scaling.threads) >= 2:
+        sections.append(scaling_section(run_file, counter))
     if run_file.pace is not None:
         sections.append(pace_section(run_file, counter))
     penalty = penalty_section(run_file, counter)
@@ -123,6 +125,29 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                             tables=[Table(["group", "rank", "sync/layout", "step (median)", "x serial"], rank_rows)]))
     counter[0] += 1
     return sections
+
+
+def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
+    curve = run_file.scaling
+    what = "sync time per stage" if curve.counter == "sync_ns_per_stage" else "step time"
+    paragraphs = [f"`lockstep run --scaling`: the {what} of each primitive against the thread count, at "
+                  f"pin:{curve.pin}, each on the layout that was fastest at that count. Beyond four threads the "
+                  "model is an s-mass chain with one equation per thread, whose consumers wait for their two "
+                  "neighbours while a barrier waits for every thread. Hollow markers: more threads than CPUs."]
+    if curve.best:
+        paragraphs.append(f"Scales best: {curve.best} (the lowest {what} at {curve.threads[-1]} threads among the "
+                          "primitives measured at every count).")
+    rows = []
+    by_sync = {}
+    for point in curve.points:
+        by_sync.setdefault(point.sync, {})[point.threads] = point
+    for sync in sorted(by_sync):
+        rows.append([sync] + [format_ns(by_sync[sync][t].value_ns) + ("*" if by_sync[sync][t].oversubscribed else "")
+                              if t in by_sync[sync] else "n/a" for t in curve.threads])
+    return Section(f"Scaling: {run_file.label}", paragraphs=paragraphs,
+                   figures=[Figure(f"scaling-{counter[0]}", f"{what} against threads",
+                                   figures.scaling_curve(curve))],
+                   tables=[Table(["primitive"] + [f"{t} threads" for t in curve.threads], rows)])
 
 
 def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
