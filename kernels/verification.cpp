@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
+#include <span>
 #include <stdexcept>
 
 #include "kernels/dopri5_reference.hpp"
@@ -38,17 +40,23 @@ verify_check make_check(std::string name, double value, double lower, double upp
 }  // namespace
 
 std::string verify_settings::invalid_reason() const {
-  // The parameters' names are the command's flags (--m1, --m2, --c1, --c2).
-  if (auto reason = params.invalid_reason(); !reason.empty()) return "--" + reason;
+  if (model.is_chain() && model.masses > kMaxVerifyMasses)
+    return fmt::format("--masses: verify checks chains of at most {} masses, got {}", kMaxVerifyMasses, model.masses);
+  // The parameters' names are the command's flags (--m1, --m2, --c1, --c2);
+  // a chain does not use them.
+  if (!model.is_chain()) {
+    if (auto reason = params.invalid_reason(); !reason.empty()) return "--" + reason;
+  }
   if (!std::isfinite(step) || !(step > 0.0)) return fmt::format("--dt must be a positive finite number of seconds, got {}", step);
   if (!std::isfinite(end_time) || !(end_time > 0.0)) {
     return fmt::format("--t-end must be a positive finite number of seconds, got {}", end_time);
   }
   if (step > end_time) return fmt::format("--dt ({}) must not exceed --t-end ({})", step, end_time);
   const double ratio = end_time / step;
-  if (ratio > static_cast<double>(kMaxVerifySteps)) {
-    return fmt::format("--t-end / --dt is {:.0f} steps; verify runs at most {} (raise --dt or lower --t-end)", ratio,
-                       kMaxVerifySteps);
+  const std::uint64_t most_steps = kMaxVerifyMassSteps / masses();
+  if (ratio > static_cast<double>(most_steps)) {
+    return fmt::format("--t-end / --dt is {:.0f} steps; verify runs at most {}{} (raise --dt or lower --t-end)", ratio,
+                       most_steps, model.is_chain() ? " for " + model.description() : std::string());
   }
   const double whole = std::round(ratio);
   if (std::abs(whole * step - end_time) > 1e-9 * end_time) {
@@ -114,25 +122,41 @@ double rk4_energy_drift_bound(const normal_mode_solution& solution, double step,
   return bound + kRoundingFactor * n * kEpsilon;
 }
 
-verify_report run_verification(const verify_settings& settings, const verify_progress& progress) {
-  if (auto reason = settings.invalid_reason(); !reason.empty()) throw std::invalid_argument(reason);
-  verify_report report;
-  report.settings = settings;
-  const two_mass_params& params = settings.params;
-  const two_mass_model model(params);
-  const normal_mode_solution analytic = normal_mode_solution::two_mass(params);
-  const std::uint64_t steps = settings.steps();
+std::vector<double> uniform_chain_angular_frequencies(std::size_t masses, double spring_over_mass) {
+  std::vector<double> frequencies(masses);
+  const double scale = 2.0 * std::sqrt(spring_over_mass);
+  const double denominator = 2.0 * (2.0 * static_cast<double>(masses) + 1.0);
+  for (std::size_t mode = 0; mode < masses; ++mode)
+    frequencies[mode] = scale * std::sin((2.0 * static_cast<double>(mode) + 1.0) * std::numbers::pi / denominator);
+  return frequencies;
+}
 
-  // --- Roots: closed form, Eigen, the paper.
+namespace {
+
+double max_relative_difference(const std::vector<double>& values, const std::vector<double>& references) {
+  double largest = 0.0;
+  for (std::size_t index = 0; index < values.size(); ++index)
+    largest = std::max(largest, std::abs(relative_difference(values[index], references[index])));
+  return largest;
+}
+
+std::vector<double> angular_frequencies(const normal_mode_solution& solution) {
+  std::vector<double> frequencies;
+  for (const normal_mode& mode : solution.modes()) frequencies.push_back(mode.angular_frequency);
+  return frequencies;
+}
+
+// The paper's two masses: the quadratic's roots beside Eigen's, and in the
+// paper's case beside the printed ones.
+void check_two_mass_roots(const two_mass_params& params, verify_report& report) {
   root_report& roots = report.roots;
-  roots.computed = two_mass_angular_frequencies(params);
-  const normal_mode_solution eigen = normal_mode_solution::chain(chain_params::from_two_mass(params));
-  roots.eigen = {eigen.modes()[0].angular_frequency, eigen.modes()[1].angular_frequency};
-  roots.closed_form_vs_eigen = std::max(std::abs(relative_difference(roots.computed.slow, roots.eigen.slow)),
-                                        std::abs(relative_difference(roots.computed.fast, roots.eigen.fast)));
+  const two_mass_frequencies computed = two_mass_angular_frequencies(params);
+  roots.closed_form = {computed.slow, computed.fast};
+  roots.eigen = angular_frequencies(normal_mode_solution::chain(chain_params::from_two_mass(params)));
+  roots.closed_form_vs_eigen = max_relative_difference(roots.closed_form, roots.eigen);
   roots.papers_case = params.is_papers_case();
-  roots.fast_vs_paper = relative_difference(roots.computed.fast, kPaperFastRoot);
-  roots.slow_vs_paper = relative_difference(roots.computed.slow, kPaperSlowRoot);
+  roots.fast_vs_paper = relative_difference(computed.fast, kPaperFastRoot);
+  roots.slow_vs_paper = relative_difference(computed.slow, kPaperSlowRoot);
   // Equal masses and springs: w_fast^2 w_slow^2 = (C/m)^2 (product of the roots of m^2 w^4 - 3 m C w^2 + C^2).
   roots.paper_implied_spring_over_mass = kPaperFastRoot * kPaperSlowRoot;
   roots.spring_over_mass = params.c1 / params.m1;
@@ -146,6 +170,40 @@ verify_report run_verification(const verify_settings& settings, const verify_pro
         fmt::format("the paper prints four significant digits; its roots fit C/m = {:.1f}, not {}",
                     roots.paper_implied_spring_over_mass, two_mass_params::kPaperSpringOverMass)));
   }
+}
+
+// A uniform chain: the sine formula's roots beside Eigen's (the analytic
+// solution's own modes). No printed roots to compare with.
+void check_uniform_chain_roots(const chain_params& params, const normal_mode_solution& analytic, verify_report& report) {
+  root_report& roots = report.roots;
+  roots.spring_over_mass = params.springs.front() / params.masses.front();
+  roots.closed_form = uniform_chain_angular_frequencies(params.masses_count(), roots.spring_over_mass);
+  roots.eigen = angular_frequencies(analytic);
+  roots.closed_form_vs_eigen = max_relative_difference(roots.closed_form, roots.eigen);
+  report.checks.push_back(make_check(
+      "roots: uniform chain's closed form vs Eigen's generalized eigensolver (relative)", roots.closed_form_vs_eigen,
+      0.0, kRootAgreementBound,
+      "w_k = 2 sqrt(C/m) sin((2k - 1) pi / (2 (2s + 1))) against Eigen's eigenvalues of the same K, M"));
+}
+
+// RK4 against the analytic solution over the ladder, the observed order, the
+// energy drift, and dopri5 (on `chain`, the same system as a chain) against
+// both: every check after the roots, for either model.
+template <oscillator_model Model>
+void check_integration(const Model& model, const chain_model& chain, const normal_mode_solution& analytic,
+                       const verify_settings& settings, const verify_progress& progress, verify_report& report) {
+  const std::uint64_t steps = settings.steps();
+  const std::size_t positions = analytic.masses_count();
+  // The largest |x_i - y_i| over the positions (the first `positions` of each state).
+  const auto position_error = [positions](std::span<const double> x, std::span<const double> y) {
+    double largest = 0.0;
+    for (std::size_t position = 0; position < positions; ++position)
+      largest = std::max(largest, std::abs(x[position] - y[position]));
+    return largest;
+  };
+  const auto positions_of = [positions](std::span<const double> state) {
+    return std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(positions));
+  };
 
   // --- The ladder: RK4 against the analytic solution at h, h/2, h/4, h/8.
   const double scale = amplitude_scale(analytic);
@@ -164,16 +222,16 @@ verify_report run_verification(const verify_settings& settings, const verify_pro
     if (given_step) {
       report.energy.initial = model.energy(integrator.state());
       report.trajectory.reserve(steps + 1);
-      report.trajectory.push_back({0.0, integrator.state()[0], integrator.state()[1]});
+      report.trajectory.push_back({0.0, positions_of(integrator.state())});
     }
     for (std::uint64_t step = 1; step <= rung.steps; ++step) {
       integrator.step();
       const double time = integrator.time();
       const auto state = integrator.state();
       analytic.state_at(time, exact);
-      rung.max_error = std::max({rung.max_error, std::abs(state[0] - exact[0]), std::abs(state[1] - exact[1])});
+      rung.max_error = std::max(rung.max_error, position_error(state, exact));
       if (given_step) {
-        report.trajectory.push_back({time, state[0], state[1]});
+        report.trajectory.push_back({time, positions_of(state)});
         const double energy = model.energy(state);
         const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
                                                          : energy;
@@ -227,7 +285,6 @@ verify_report run_verification(const verify_settings& settings, const verify_pro
   // --- dopri5 against the analytic solution and against RK4 at the given step.
   std::vector<double> times(steps + 1);
   for (std::uint64_t index = 0; index <= steps; ++index) times[index] = report.trajectory[index].time;
-  const chain_model chain(chain_params::from_two_mass(params));
   dopri5_report& dopri5 = report.dopri5;
   if (progress) progress(fmt::format("dopri5 over {} output times", times.size()));
   std::vector<double> exact_at(model.equations());
@@ -235,11 +292,9 @@ verify_report run_verification(const verify_settings& settings, const verify_pro
       chain, times,
       [&](std::size_t index, std::span<const double> state) {
         analytic.state_at(times[index], exact_at);
-        const trajectory_point& rk4 = report.trajectory[index];
-        dopri5.max_error_vs_analytic =
-            std::max({dopri5.max_error_vs_analytic, std::abs(state[0] - exact_at[0]), std::abs(state[1] - exact_at[1])});
+        dopri5.max_error_vs_analytic = std::max(dopri5.max_error_vs_analytic, position_error(state, exact_at));
         dopri5.max_difference_vs_rk4 =
-            std::max({dopri5.max_difference_vs_rk4, std::abs(state[0] - rk4.x1), std::abs(state[1] - rk4.x2)});
+            std::max(dopri5.max_difference_vs_rk4, position_error(state, report.trajectory[index].positions));
       },
       settings.dopri5_tolerance);
   dopri5.steps = run.steps;
@@ -252,7 +307,27 @@ verify_report run_verification(const verify_settings& settings, const verify_pro
   report.checks.push_back(make_check(fmt::format("RK4 (h = {:.6g} s) max |difference| vs dopri5", settings.step),
                                      dopri5.max_difference_vs_rk4, 0.0, dopri5.difference_bound,
                                      "the RK4 bound plus the dopri5 bound"));
+}
 
+}  // namespace
+
+verify_report run_verification(const verify_settings& settings, const verify_progress& progress) {
+  if (auto reason = settings.invalid_reason(); !reason.empty()) throw std::invalid_argument(reason);
+  verify_report report;
+  report.settings = settings;
+  if (settings.model.is_chain()) {
+    const chain_params params = settings.model.chain();
+    const chain_model chain(params);
+    if (progress) progress(fmt::format("Eigen's normal modes of {}", settings.model.description()));
+    const normal_mode_solution analytic = normal_mode_solution::chain(params);
+    check_uniform_chain_roots(params, analytic, report);
+    check_integration(chain, chain, analytic, settings, progress, report);
+  } else {
+    const two_mass_params& params = settings.params;
+    check_two_mass_roots(params, report);
+    check_integration(two_mass_model(params), chain_model(chain_params::from_two_mass(params)),
+                      normal_mode_solution::two_mass(params), settings, progress, report);
+  }
   report.passed = std::all_of(report.checks.begin(), report.checks.end(),
                               [](const verify_check& check) { return check.passed || !check.checked; });
   return report;

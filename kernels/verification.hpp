@@ -1,18 +1,28 @@
 #pragma once
 // What `lockstep verify` computes, and what the kernel tests check: the staged
-// RK4 of the two-mass model against the analytic normal-mode solution and
-// against Boost.Odeint's dopri5, with every bound stated and derived.
+// RK4 of the model against the analytic normal-mode solution and against
+// Boost.Odeint's dopri5, with every bound stated and derived. The model is the
+// paper's two-mass system (any masses and springs), or with `--masses S` the
+// uniform S-mass chain of eq. (1) (kernels::chain_params::uniform: the
+// paper's masses and springs, displaced 2, -3, 2, ... m), the model that
+// threads beyond four integrate (kernels/model_choice.hpp).
 //
-// The bounds (all on positions x1, x2, in metres, maximum over every step of
-// the run; n = steps, h = step, theta_k = w_k h, A_ik = amplitude of mode k
-// in position i, eps = 2^-52):
+// The bounds (all on the positions x1..xs, in metres, maximum over every step
+// of the run and every mass; n = steps, h = step, theta_k = w_k h, A_ik =
+// amplitude of mode k in position i, eps = 2^-52):
 //
-//  * Roots. The closed form against Eigen's generalized eigensolver (two
+//  * Roots. A closed form against Eigen's generalized eigensolver (two
 //    independent computations of the same eigenvalues): relative difference
-//    <= 1e-9. In the paper's case, the computed roots against the paper's
-//    printed ±51.47j, ±19.66j: relative difference <= 0.1% (the paper prints
-//    four significant digits; the two differ by about 0.04% because the
+//    <= 1e-9. Two masses: the quadratic (kernels/normal_modes.hpp). The
+//    uniform chain fixed at one end: K / C is tridiagonal (2, ..., 2, 1 on
+//    the diagonal, -1 beside it), whose eigenvalues are
+//    4 sin^2((2k - 1) pi / (2 (2s + 1))), so w_k = 2 sqrt(C/m) sin((2k - 1) pi
+//    / (2 (2s + 1))), k = 1..s (s = 2: the paper's w^2 = (C/m)(3 ± sqrt 5)/2).
+//    Only in the paper's two-mass case, the computed roots against the
+//    paper's printed ±51.47j, ±19.66j: relative difference <= 0.1% (the paper
+//    prints four significant digits; the two differ by about 0.04% because the
 //    printed roots fit C/m = w_fast * w_slow of about 1011.9 s^-2, not 1012.5).
+//    A chain has no printed roots to compare with.
 //
 //  * RK4 error, proved from h. RK4 applied to x' = J x multiplies each mode's
 //    complex amplitude per step by R(i theta) = 1 + z + z^2/2 + z^3/6 + z^4/24
@@ -51,6 +61,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/model_choice.hpp"
 #include "kernels/normal_modes.hpp"
 #include "kernels/oscillator.hpp"
 
@@ -65,9 +76,19 @@ inline constexpr double kPaperRootBound = 1e-3;       // computed vs the paper's
 inline constexpr double kOrderLow = 3.9;
 inline constexpr double kOrderHigh = 4.1;
 inline constexpr unsigned kLadderRungs = 4;           // step, step/2, step/4, step/8
-inline constexpr std::uint64_t kMaxVerifySteps = 1'000'000;  // end time / step, the coarsest rung
+// The coarsest rung's steps (end time / step) times the masses: verify keeps
+// that trajectory (every position at every step) and evaluates the analytic
+// solution, s modes for each of s positions, at every step of every rung.
+// 1,000,000 steps of the two masses; a chain of s masses s / 2 times fewer.
+inline constexpr std::uint64_t kMaxVerifyMassSteps = 2'000'000;
+// The longest chain verify checks: Eigen's dense eigensolver costs s^3, and
+// every evaluation of the analytic solution s^2.
+inline constexpr std::size_t kMaxVerifyMasses = 512;
 
 struct verify_settings {
+  // The paper's two-mass system with `params` (the default), or a uniform
+  // chain of model.masses (model.chain(); `params` is then not used).
+  model_choice model{};
   two_mass_params params{};  // the paper's case by default
   double step = 1e-3;        // s: w_fast h = 0.05 in the paper's case, well inside RK4's asymptotic range
   double end_time = 1.0;     // s: about 8 periods of the fast mode, 3 of the slow one
@@ -77,7 +98,13 @@ struct verify_settings {
   [[nodiscard]] std::string invalid_reason() const;
   // end_time / step, rounded (the settings require it to be a whole number).
   [[nodiscard]] std::uint64_t steps() const;
+  // The masses whose positions are checked: 2, or the chain's.
+  [[nodiscard]] std::size_t masses() const noexcept { return model.equations() / 2; }
 };
+
+// The uniform chain's angular frequencies, ascending, rad/s (the closed form
+// above; `masses` equal masses m and springs C, spring_over_mass = C / m).
+[[nodiscard]] std::vector<double> uniform_chain_angular_frequencies(std::size_t masses, double spring_over_mass);
 
 // RK4's per-step amplification of a mode of angular frequency w at step h,
 // theta = w h: |R(i theta)| and the bound on |R(i theta) - e^{i theta}|.
@@ -99,9 +126,12 @@ struct verify_check {
 };
 
 struct root_report {
-  two_mass_frequencies computed;  // closed form from the parameters
-  two_mass_frequencies eigen;     // Eigen's generalized eigensolver on the same K, M
+  // Angular frequencies, ascending, rad/s (the roots are ±j w): for two
+  // masses {slow (in phase), fast (out of phase)}.
+  std::vector<double> closed_form;  // from the parameters (above)
+  std::vector<double> eigen;        // Eigen's generalized eigensolver on the same K, M
   double closed_form_vs_eigen = 0.0;  // max relative difference
+  // The paper's printed roots: for the two-mass system only.
   bool papers_case = false;           // only then are the paper's roots the ones to compare with
   double fast_vs_paper = 0.0;         // (computed - paper) / paper
   double slow_vs_paper = 0.0;
@@ -137,8 +167,7 @@ struct dopri5_report {
 
 struct trajectory_point {
   double time = 0.0;
-  double x1 = 0.0;
-  double x2 = 0.0;
+  std::vector<double> positions;  // x1..xs, m
 };
 
 struct verify_report {

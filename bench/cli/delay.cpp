@@ -42,6 +42,7 @@
 #include "bench/probes/latency_histogram.hpp"
 #include "bench/probes/paced.hpp"
 #include "bench/probes/period_search.hpp"
+#include "kernels/model_choice.hpp"
 #include "platform/clock.hpp"
 #include "platform/idle_states.hpp"
 #include "platform/placement.hpp"
@@ -73,6 +74,7 @@ struct delay_options {
   std::string layout = "padded64";
   std::string pin = "compact";
   unsigned threads = 4;
+  std::optional<std::size_t> masses;  // --masses S: an S-mass chain whatever --threads
   std::string period = "1ms";
   std::string duration = "10s";
   std::optional<int> fifo;
@@ -148,6 +150,9 @@ struct delay_plan {
   std::optional<std::int64_t> stop_above_ns;
   probes::period_search_settings search;
   std::vector<unsigned> cpus;  // --per-cpu
+  // What the team integrates (kernels::model_for); --per-cpu: the paper's
+  // two masses, one step per CPU (bench/probes/paced.hpp).
+  kernels::model_choice model;
 };
 
 std::int64_t whole_microseconds(const std::string& text, const std::string& option, std::int64_t min_us,
@@ -335,9 +340,12 @@ delay_plan check_input(const delay_options& options) {
     if (options.trial_periods && *options.trial_periods > 100'000'000)
       throw usage_error("--trial-periods: at most 100000000 periods");
   }
-  // Names and applicability before permissions: the first error is the input's.
-  const std::string problem = options.per_cpu ? probes::paced_per_cpu_problem(options.sync, options.layout)
-                                              : probes::paced_step_problem(options.sync, options.layout, options.threads);
+  if (!options.per_cpu) plan.model = kernels::model_for(options.threads, options.masses);
+  // Names and applicability before permissions: the first error is the input's
+  // (more threads than the model's equations among them, possible with --masses).
+  const std::string problem =
+      options.per_cpu ? probes::paced_per_cpu_problem(options.sync, options.layout)
+                      : probes::paced_step_problem(options.sync, options.layout, options.threads, plan.model);
   if (!problem.empty()) throw usage_error(problem);
   check_out(options.out);
   if (!options.histogram_file.empty()) {
@@ -524,22 +532,26 @@ void run_delay(const delay_options& options, int& result) {
   settings.sync = options.sync;
   settings.layout = options.layout;
   settings.threads = threads;
+  settings.model = plan.model;
   settings.pacing.period_ns = plan.period_ns;
   settings.pacing.periods = plan.periods;
   settings.pacing.fifo_priority = options.fifo;
   settings.pacing.stop_above_ns = plan.stop_above_ns;
 
   const std::string pin_name = options.per_cpu ? "per_cpu" : options.pin;
-  const std::string name =
-      fmt::format("rk4/sync:{}/layout:{}/pin:{}/threads:{}", options.sync, options.layout, pin_name, threads);
+  const std::string name = fmt::format("rk4{}/sync:{}/layout:{}/pin:{}/threads:{}", plan.model.name_segment(),
+                                       options.sync, options.layout, pin_name, threads);
   const std::string policy = fmt::format("{}{}", options.fifo ? fmt::format(", SCHED_FIFO {}", *options.fifo) : ", SCHED_OTHER",
                                          options.mlock ? ", memory locked" : "");
   const std::string view =
       options.per_cpu ? "per CPU: one paced thread per CPU, each computing the step alone (like for like with "
                         "cyclictest -S)"
-      : threads == 1  ? "one participant computes the step alone (like for like with cyclictest -t1)"
-                      : fmt::format("the paper's model: {} participants share one step, {} between the stages",
-                                    threads, options.sync);
+      : threads == 1 ? "one participant computes the step alone (like for like with cyclictest -t1)"
+      : plan.model.is_chain()
+          ? fmt::format("{}: {} participants share one step, {} between the stages", plan.model.description(),
+                        threads, options.sync)
+          : fmt::format("the paper's model: {} participants share one step, {} between the stages", threads,
+                        options.sync);
   if (!pinned_plan.note.empty()) fmt::print(stderr, "delay: {}\n", pinned_plan.note);
 
   std::optional<search_outcome> searched;
@@ -632,6 +644,8 @@ void run_delay(const delay_options& options, int& result) {
           {"layout", options.layout},
           {"pin", pin_name},
           {"threads", threads},
+          {"model", plan.model.is_chain() ? plan.model.name() : std::string("two_mass")},
+          {"equations", plan.model.equations()},
           {"per_cpu", options.per_cpu},
           {"view", view},
           {"fifo_priority", options.fifo ? nlohmann::json(*options.fifo) : nullptr},
@@ -678,7 +692,10 @@ void add_delay(CLI::App& app, int& result) {
       "  --threads 1        like for like with cyclictest -t1: one paced thread (add --pin compact under\n"
       "                     taskset -c CPU for cyclictest -a CPU)\n"
       "  --per-cpu          like for like with cyclictest -S: one paced thread per CPU of the affinity set,\n"
-      "                     each computing the step alone; names the noisiest CPU\n"
+      "                     each computing the step alone; names the noisiest CPU\n" +
+      fmt::format("  --threads T > {}    an s-mass chain (eq. (1)) of one equation per thread, named model:chainS;\n"
+                  "                     --masses S chooses the chain (blocks of equations per thread)\n",
+                  kernels::kPaperThreadsMax) +
       "Idle states: /dev/cpu_dma_latency is held at 0 us for the run, as cyclictest does, unless\n"
       "--dma-latency or --no-dma-latency says otherwise; the output says which setting was in force.\n"
       "--find-period --miss-rate R: the shortest period whose deadline misses stay at most at rate R,\n"
@@ -689,7 +706,9 @@ void add_delay(CLI::App& app, int& result) {
   auto* pin = command->add_option("--pin", options->pin, "Placement: none, compact, scatter, migrate")
                   ->capture_default_str();
   auto* threads = command->add_option("--threads", options->threads,
-                                      "Participants (at most the model's 4 equations; 1: like cyclictest -t1)")
+                                      fmt::format("Participants sharing the step (1: like cyclictest -t1); up to {} "
+                                                  "integrate the paper's two masses, more an s-mass chain",
+                                                  kernels::kPaperThreadsMax))
                       ->check(CLI::Range(1, 1024))
                       ->capture_default_str();
   command->add_option("--period", options->period,
@@ -716,7 +735,8 @@ void add_delay(CLI::App& app, int& result) {
       ->option_text("FILE");
   auto* per_cpu = command->add_flag("--per-cpu", options->per_cpu,
                                     "One paced thread per CPU of the affinity set (cyclictest -S), side by side");
-  per_cpu->excludes(threads)->excludes(pin)->excludes(compare);
+  auto* masses = add_masses_option(*command, options->masses);
+  per_cpu->excludes(threads)->excludes(pin)->excludes(compare)->excludes(masses);
   auto* stop_above = command->add_option("--stop-above", options->stop_above,
                                          "End the run at the first wake-up later than this (cyclictest -b)")
                          ->option_text("TIME");

@@ -9,6 +9,7 @@
 #include <type_traits>
 #include <vector>
 
+#include "kernels/model_choice.hpp"
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
 #include "layouts/registry.hpp"
@@ -56,10 +57,10 @@ std::int64_t stop_margin_periods(const Step& step) {
   return std::max<std::int64_t>(1, static_cast<std::int64_t>((longest + kernels::kRk4Stages - 1) / kernels::kRk4Stages));
 }
 
-template <class Sync, class Layout>
-paced_result run_combination(unsigned threads, const platform::placement_plan& plan, paced_settings settings) {
-  const kernels::two_mass_model model;
-  kernels::parallel_rk4<Sync, Layout> step(model, kStepSeconds, threads);
+template <class Sync, class Layout, kernels::oscillator_model Model>
+paced_result run_combination(const Model& model, unsigned threads, const platform::placement_plan& plan,
+                             paced_settings settings) {
+  kernels::parallel_rk4<Sync, Layout, Model> step(model, kStepSeconds, threads);
   std::vector<sync::participant> participants(threads);
   for (unsigned id = 0; id < threads; ++id) participants[id].id = id;
   sync::team_of_t<Sync> team(threads);
@@ -83,7 +84,11 @@ paced_result run_combination(unsigned threads, const platform::placement_plan& p
 }
 
 // Per CPU: participant i alone on cpus[i], with a step of its own, built on
-// its own thread after the pin (its memory is first touched there).
+// its own thread after the pin (its memory is first touched there). Always
+// the paper's two masses: one participant owns every equation, so a bigger
+// model would only lengthen the step, not add a sync to wait in.
+constexpr kernels::model_choice kPerCpuModel{};
+
 template <class Sync, class Layout>
 paced_result run_per_cpu(std::span<const unsigned> cpus, paced_settings settings) {
   using step_type = kernels::parallel_rk4<Sync, Layout>;
@@ -110,10 +115,11 @@ paced_result run_per_cpu(std::span<const unsigned> cpus, paced_settings settings
 }
 
 // Calls visit.template operator()<Sync, Layout>() for the named pair when it
-// applies; returns why not otherwise (empty: visited).
+// applies to `threads` participants over `model`; returns why not otherwise
+// (empty: visited).
 template <class Visitor>
 std::string with_combination(const std::string& sync_name, const std::string& layout_name, unsigned threads,
-                             Visitor&& visit) {
+                             const kernels::model_choice& model, Visitor&& visit) {
   if (sync::find_primitive(sync_name) == nullptr) {
     std::string names;
     for (const auto& info : sync::all_primitive_info) names += (names.empty() ? "" : ", ") + std::string(info.name);
@@ -129,11 +135,10 @@ std::string with_combination(const std::string& sync_name, const std::string& la
     if (Sync::kName != sync_name) return;
     layouts::for_each_layout([&]<class Layout>() {
       if (Layout::kName != layout_name) return;
-      const kernels::two_mass_model model;
       const std::string reason = kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads);
       if (!reason.empty()) {
-        problem = sync_name + " on " + layout_name + " with " + std::to_string(threads) +
-                  " threads does not run: " + reason;
+        problem = sync_name + " on " + layout_name + " with " + std::to_string(threads) + " threads on " +
+                  model.description() + " does not run: " + reason;
         return;
       }
       if constexpr (kernels::applicable<Sync, Layout>().applicable) visit.template operator()<Sync, Layout>();
@@ -144,15 +149,23 @@ std::string with_combination(const std::string& sync_name, const std::string& la
 
 }  // namespace
 
-std::string paced_step_problem(const std::string& sync, const std::string& layout, unsigned threads) {
-  return with_combination(sync, layout, threads, []<class, class>() {});
+std::string paced_step_problem(const std::string& sync, const std::string& layout, unsigned threads,
+                               const kernels::model_choice& model) {
+  return with_combination(sync, layout, threads, model, []<class, class>() {});
 }
 
 paced_result run_paced_step(const paced_step_settings& settings, const platform::placement_plan& plan) {
   paced_result result;
-  const std::string problem =
-      with_combination(settings.sync, settings.layout, settings.threads, [&]<class Sync, class Layout>() {
-        result = run_combination<Sync, Layout>(settings.threads, plan, settings.pacing);
+  // Both models for every pair: the chain's step is the same template over
+  // another model type, so this file instantiates each pair twice (and only
+  // this file: the per-CPU run stays on the two-mass step).
+  const std::string problem = with_combination(
+      settings.sync, settings.layout, settings.threads, settings.model, [&]<class Sync, class Layout>() {
+        if (settings.model.is_chain())
+          result = run_combination<Sync, Layout>(kernels::chain_model(settings.model.chain()), settings.threads, plan,
+                                                 settings.pacing);
+        else
+          result = run_combination<Sync, Layout>(kernels::two_mass_model{}, settings.threads, plan, settings.pacing);
       });
   if (!problem.empty()) throw std::invalid_argument(problem);
   return result;
@@ -164,7 +177,7 @@ namespace lockstep::bench::probes {
 
 std::string paced_per_cpu_problem(const std::string& sync_name, const std::string& layout_name) {
   std::string problem;
-  const std::string basic = with_combination(sync_name, layout_name, 1, [&]<class Sync, class Layout>() {
+  const std::string basic = with_combination(sync_name, layout_name, 1, kPerCpuModel, [&]<class Sync, class Layout>() {
     if constexpr (!std::is_same_v<sync::team_of_t<Sync>, sync::std_thread_team>)
       problem = "--per-cpu runs each CPU's step on a thread of its own; " + sync_name + " needs a team of its own (" +
                 std::string(sync::team_of_t<Sync>::kName) + "): choose another --sync";
@@ -177,7 +190,7 @@ paced_result run_paced_per_cpu(const paced_step_settings& settings, std::span<co
     throw std::invalid_argument(problem);
   if (cpus.empty()) throw std::invalid_argument("a per-CPU run needs at least one CPU");
   paced_result result;
-  (void)with_combination(settings.sync, settings.layout, 1, [&]<class Sync, class Layout>() {
+  (void)with_combination(settings.sync, settings.layout, 1, kPerCpuModel, [&]<class Sync, class Layout>() {
     if constexpr (std::is_same_v<sync::team_of_t<Sync>, sync::std_thread_team>)
       result = run_per_cpu<Sync, Layout>(cpus, settings.pacing);
   });

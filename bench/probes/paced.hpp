@@ -22,9 +22,10 @@
 //
 // Two shapes of run:
 //  * a team (run_paced_step): the participants share one step and sync
-//    inside it, the paper's model (4 participants by default);
+//    inside it, the paper's model (4 participants by default); beyond four
+//    participants the step is an s-mass chain's (kernels/model_choice.hpp);
 //  * per CPU (run_paced_per_cpu): one participant pinned to each CPU, each
-//    computing a step of its own (one participant, no one to wait for), as
+//    computing a two-mass step of its own (no one to wait for), as
 //    `cyclictest -S` runs one thread per CPU. Its completion time and
 //    deadline are then per participant.
 //
@@ -74,6 +75,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/model_choice.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"
 #include "platform/scheduling.hpp"
@@ -287,18 +289,23 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
 }
 
 // The paced RK4 step of `lockstep delay`: one sync x layout, `threads`
-// participants placed by `plan`, paced by `settings`.
+// participants placed by `plan` integrating `model`, paced by `settings`.
 struct paced_step_settings {
   std::string sync;    // a name from sync/registry.hpp
   std::string layout;  // a name from layouts/registry.hpp
   unsigned threads = 4;
+  // Which oscillator the team integrates: kernels::model_for(threads,
+  // --masses) decides; the default is the paper's two-mass system.
+  kernels::model_choice model;
   paced_settings pacing;  // stop_margin_periods and independent are set by the runs below
 };
 
 // Why these settings cannot run, in one line ("unknown primitive 'x' (valid:
-// ...)", "... does not run: <reason>"), or empty when they can. Checked by
-// run_paced_step too; call it first to reject bad input before measuring.
-std::string paced_step_problem(const std::string& sync, const std::string& layout, unsigned threads);
+// ...)", "... does not run: <reason>", e.g. more threads than the model has
+// equations), or empty when they can. Checked by run_paced_step too; call it
+// first to reject bad input before measuring.
+std::string paced_step_problem(const std::string& sync, const std::string& layout, unsigned threads,
+                               const kernels::model_choice& model);
 
 // Runs the paced step; throws std::invalid_argument with
 // paced_step_problem's line when the settings cannot run. Moves a migrate
@@ -312,8 +319,9 @@ paced_result run_paced_step(const paced_step_settings& settings, const platform:
 std::string paced_per_cpu_problem(const std::string& sync, const std::string& layout);
 
 // One participant pinned to each of `cpus` (OS indices), each computing its
-// own one-participant step of settings.sync x settings.layout
-// (settings.threads is ignored). Participant i runs on cpus[i]. Throws
+// own one-participant step of settings.sync x settings.layout on the paper's
+// two-mass system, like cyclictest's one thread per CPU (settings.threads and
+// settings.model are ignored). Participant i runs on cpus[i]. Throws
 // std::invalid_argument with paced_per_cpu_problem's line.
 paced_result run_paced_per_cpu(const paced_step_settings& settings, std::span<const unsigned> cpus);
 

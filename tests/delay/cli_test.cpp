@@ -165,7 +165,10 @@ TEST(DelayCommand, BadInputExitsTwoWithOneLine) {
   expect_usage_error({"delay", "--layout", "nope"});
   expect_usage_error({"delay", "--pin", "nope"});
   expect_usage_error({"delay", "--threads", "0"});
-  expect_usage_error({"delay", "--threads", "5"});  // the model has 4 equations
+  expect_usage_error({"delay", "--threads", "2000"});
+  expect_usage_error({"delay", "--masses", "2", "--threads", "8"});  // 8 threads, 4 equations
+  expect_usage_error({"delay", "--masses", "0"});
+  expect_usage_error({"delay", "--masses", "4", "--per-cpu"});  // per CPU: the two-mass step
   expect_usage_error({"delay", "--sync", "seqlock", "--layout", "packed"});  // not applicable
   expect_usage_error({"delay", "--fifo", "0"});
   expect_usage_error({"delay", "--fifo", "100"});
@@ -271,6 +274,10 @@ TEST(DelayCommand, PacedRunWritesTheAgreedJson) {
   EXPECT_NE(result.out.find("Figure 5"), std::string::npos);
   const auto document = read_json(path);
   expect_delay_json(document, 20, 2);
+  // The paper's two masses: no model segment in the name, as before chains.
+  EXPECT_EQ(document["name"], "rk4/sync:futex_spin/layout:padded64/pin:compact/threads:2");
+  EXPECT_EQ(document["settings"]["model"], "two_mass");
+  EXPECT_EQ(document["settings"]["equations"], 4);
   EXPECT_TRUE(document["settings"]["fifo_priority"].is_null());
   EXPECT_EQ(document["settings"]["mlock"], false);
   EXPECT_FALSE(document.contains("figure5_unpinned"));
@@ -287,6 +294,52 @@ TEST(DelayCommand, ComparePinningAddsTheUnpinnedTable) {
   expect_delay_json(document, 10, 2);
   ASSERT_EQ(document["figure5_unpinned"].size(), 3u);
   EXPECT_EQ(document["unpinned"]["completion_ns"]["count"], 10);
+}
+
+// Beyond four threads the team paces a chain of one equation per thread
+// (oversubscribed on two CPUs: the run must still complete and say so).
+TEST(DelayCommand, EightThreadsPaceAFourMassChain) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --threads 8");
+  const auto path = temp_json("delay-chain");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "8", "--period", "1ms", "--duration",
+                                   "300ms", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("rk4/model:chain4/sync:std_barrier/layout:padded64/pin:compact/threads:8"),
+            std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("4-mass chain (8 equations)"), std::string::npos) << result.out;
+  const auto document = read_json(path);
+  expect_delay_json(document, 300, 8);
+  EXPECT_EQ(document["name"], "rk4/model:chain4/sync:std_barrier/layout:padded64/pin:compact/threads:8");
+  EXPECT_EQ(document["settings"]["model"], "chain4");
+  EXPECT_EQ(document["settings"]["equations"], 8);
+}
+
+// --masses chooses the chain whatever the threads: blocks of equations.
+TEST(DelayCommand, MassesChoosesTheChain) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --masses");
+  const auto path = temp_json("delay-masses");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--masses", "8", "--threads", "2", "--period", "1ms",
+                                   "--duration", "20ms", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const auto document = read_json(path);
+  expect_delay_json(document, 20, 2);
+  EXPECT_EQ(document["name"], "rk4/model:chain8/sync:std_barrier/layout:padded64/pin:compact/threads:2");
+  EXPECT_EQ(document["settings"]["model"], "chain8");
+  EXPECT_EQ(document["settings"]["equations"], 16);
+}
+
+// A chain too small for the threads is refused before anything runs, in one
+// line that gives the counts.
+TEST(DelayCommand, MoreThreadsThanTheChainsEquationsExitsTwoBeforeMeasuring) {
+  const auto path = temp_json("delay-too-few-equations");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--masses", "2", "--threads", "8", "--out", path});
+  EXPECT_EQ(result.exit_status, 2) << result.err;
+  EXPECT_EQ(count_lines(result.err), 1) << result.err;
+  EXPECT_NE(result.err.find("8 threads but 4 equations"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("2-mass chain"), std::string::npos) << result.err;
+  EXPECT_EQ(result.out, "");
+  EXPECT_FALSE(std::ifstream(path).good()) << "nothing measured, nothing written";
 }
 
 // Runs lockstep in a child that has really lost a permission: the capability
@@ -587,6 +640,10 @@ TEST(DelayCommand, HelpSaysWhichViewIsLikeForLike) {
   EXPECT_NE(result.out.find("the paper's model: 4 participants"), std::string::npos) << result.out;
   EXPECT_NE(result.out.find("like for like with cyclictest -t1"), std::string::npos);
   EXPECT_NE(result.out.find("like for like with cyclictest -S"), std::string::npos);
+  // Threads beyond the paper's four equations integrate a chain.
+  EXPECT_EQ(result.out.find("at most the model's 4 equations"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("--masses"), std::string::npos);
+  EXPECT_NE(result.out.find("model:chainS"), std::string::npos);
 }
 
 const std::string kScript = std::string(LOCKSTEP_SOURCE_DIR) + "/bench/vs_cyclictest.sh";

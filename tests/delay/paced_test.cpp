@@ -9,10 +9,12 @@
 #include <barrier>
 #include <chrono>
 #include <cstdint>
+#include <string>
 #include <thread>
 #include <vector>
 
 #include "bench/probes/paced.hpp"
+#include "kernels/model_choice.hpp"
 #include "sync/team.hpp"
 #include "tests/support/watchdog.hpp"
 
@@ -266,6 +268,45 @@ TEST(PacedStep, StopAboveEndsTheComposedStep) {
     ASSERT_TRUE(run.stop.has_value()) << sync;
     EXPECT_EQ(run.periods, 1) << sync;
     EXPECT_EQ(run.wakeup_ns.size(), 4u) << sync;
+  }
+}
+
+// Beyond four participants the team paces a chain (kernels::model_for); a
+// chain too small for the team is refused with the counts.
+TEST(PacedStep, ProblemAsksTheModelForItsEquations) {
+  EXPECT_EQ(probes::paced_step_problem("std_barrier", "padded64", 8, lockstep::kernels::model_for(8)), "");
+  EXPECT_NE(probes::paced_step_problem("std_barrier", "padded64", 8, {}).find("8 threads but 4 equations"),
+            std::string::npos);
+  const std::string too_small =
+      probes::paced_step_problem("std_barrier", "padded64", 8, lockstep::kernels::model_for(8, 3));
+  EXPECT_NE(too_small.find("8 threads but 6 equations"), std::string::npos) << too_small;
+  EXPECT_NE(too_small.find("3-mass chain"), std::string::npos) << too_small;
+}
+
+// A chain's step, barrier and dataflow, stops together at the first late
+// wake-up as the two-mass step does (the dataflow graph of a chain is longer
+// than the two-mass one: the margin comes from it).
+TEST(PacedStep, ChainStepOfSixParticipantsStopsTogether) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "paced chain stop");
+  constexpr unsigned kThreads = 6;
+  for (const char* sync : {"std_barrier", "seqlock"}) {
+    probes::paced_step_settings settings;
+    settings.sync = sync;
+    settings.layout = "per_thread";
+    settings.threads = kThreads;
+    settings.model = lockstep::kernels::model_for(kThreads);
+    ASSERT_TRUE(settings.model.is_chain());
+    settings.pacing.period_ns = 1'000'000;
+    settings.pacing.periods = 30;
+    settings.pacing.lead_ns = 1'000'000;
+    settings.pacing.stop_above_ns = 0;  // the first wake-up is late
+    const lockstep::platform::topology machine = lockstep::platform::topology::this_machine();
+    const auto plan = lockstep::platform::plan_placement(machine, lockstep::platform::placement::none, kThreads);
+    const auto run = probes::run_paced_step(settings, plan);
+    EXPECT_EQ(run.participants, kThreads) << sync;
+    ASSERT_TRUE(run.stop.has_value()) << sync;
+    EXPECT_EQ(run.periods, 1) << sync;
+    EXPECT_EQ(run.wakeup_ns.size(), kThreads) << sync;
   }
 }
 

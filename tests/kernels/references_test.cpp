@@ -8,9 +8,11 @@
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include "kernels/dopri5_reference.hpp"
+#include "kernels/model_choice.hpp"
 #include "kernels/normal_modes.hpp"
 #include "kernels/oscillator.hpp"
 #include "kernels/rk4.hpp"
@@ -237,6 +239,59 @@ TEST(References, Dopri5MatchesEigensModesOnAChain) {
   EXPECT_GT(run.steps, 0U);
   EXPECT_LE(error, static_cast<double>(run.steps) * run.tolerance * (1.0 + 2.0 * run.max_abs_state));
   EXPECT_LE(error, 1e-8);
+}
+
+// The uniform chain's closed form: for two masses it is the paper's
+// w^2 = (C/m)(3 -+ sqrt 5)/2, and for any s it is what Eigen finds.
+TEST(References, UniformChainClosedFormMatchesThePapersFormulaAndEigen) {
+  const double spring_over_mass = two_mass_params::kPaperSpringOverMass;
+  const std::vector<double> two = uniform_chain_angular_frequencies(2, spring_over_mass);
+  const two_mass_frequencies paper = equal_two_mass_angular_frequencies(spring_over_mass);
+  ASSERT_EQ(two.size(), 2U);
+  EXPECT_NEAR(two[0], paper.slow, 1e-12 * paper.slow);
+  EXPECT_NEAR(two[1], paper.fast, 1e-12 * paper.fast);
+  for (std::size_t masses : {1U, 5U, 17U}) {
+    const normal_mode_solution eigen = normal_mode_solution::chain(chain_params::uniform(masses));
+    const std::vector<double> closed_form = uniform_chain_angular_frequencies(masses, spring_over_mass);
+    ASSERT_EQ(closed_form.size(), masses);
+    for (std::size_t mode = 0; mode < masses; ++mode)
+      EXPECT_NEAR(closed_form[mode], eigen.modes()[mode].angular_frequency, 1e-9 * closed_form[mode])
+          << masses << " masses, mode " << mode;
+  }
+}
+
+TEST(References, UniformChainVerificationPasses) {
+  verify_settings settings;
+  settings.model = model_choice{5};
+  const verify_report report = run_verification(settings);
+  EXPECT_TRUE(report.passed);
+  for (const verify_check& check : report.checks) {
+    EXPECT_TRUE(check.checked) << check.name;
+    EXPECT_TRUE(check.passed) << check.name << ": " << check.value << " not in [" << check.lower << ", " << check.upper << "]";
+    EXPECT_EQ(check.name.find("paper"), std::string::npos) << check.name << ": no printed roots for a chain";
+  }
+  EXPECT_FALSE(report.roots.papers_case);
+  EXPECT_EQ(report.roots.closed_form.size(), 5U);
+  ASSERT_EQ(report.trajectory.size(), 1001U);
+  EXPECT_EQ(report.trajectory.front().positions, (std::vector<double>{2.0, -3.0, 2.0, -3.0, 2.0}));
+  EXPECT_GE(report.observed_order, 3.9);
+  EXPECT_LE(report.observed_order, 4.1);
+}
+
+// A chain's trajectory holds every position: the step budget shrinks with the masses.
+TEST(References, ChainStepBudgetShrinksWithTheMasses) {
+  verify_settings settings;
+  settings.model = model_choice{kMaxVerifyMasses};
+  EXPECT_TRUE(settings.invalid_reason().empty()) << settings.invalid_reason();
+  settings.model = model_choice{kMaxVerifyMasses + 1};
+  EXPECT_NE(settings.invalid_reason().find("--masses"), std::string::npos);
+  settings.model = model_choice{100};
+  settings.step = 1e-5;  // 100,000 steps of 100 masses
+  EXPECT_NE(settings.invalid_reason().find("at most " + std::to_string(kMaxVerifyMassSteps / 100)), std::string::npos)
+      << settings.invalid_reason();
+  settings.params.c2 = -1.0;  // not the chain's: not checked
+  settings.step = 1e-3;
+  EXPECT_TRUE(settings.invalid_reason().empty()) << settings.invalid_reason();
 }
 
 TEST(References, SettingsRejectBadInput) {

@@ -55,7 +55,9 @@ TEST(VerifyCli, BadInputIsExitTwoWithOneLine) {
       {"--dt", "0"},     {"--dt", "-0.001"}, {"--dt", "nan"},   {"--dt", "inf"},     {"--t-end", "nan"},
       {"--t-end", "0"},  {"--m1", "0"},      {"--m2", "-0.02"}, {"--c1", "0"},       {"--c2", "-20"},
       {"--m1", "nan"},   {"--c2", "inf"},    {"--m2", "-inf"},  {"--bogus"},         {"--dt", "abc"},
-      {"--dt", "0.3"},   {"--dt", "2"},      {"--t-end", "1e9"}, {"--csv"},           {"extra"}};
+      {"--dt", "0.3"},   {"--dt", "2"},      {"--t-end", "1e9"}, {"--csv"},           {"extra"},
+      {"--masses", "0"}, {"--masses", "513"}, {"--masses", "x"}, {"--masses", "3", "--m1", "0.05"},
+      {"--masses", "100", "--dt", "10us"}};
   for (const auto& arguments : bad_inputs) {
     const command_result result = verify(arguments);
     std::string shown;
@@ -171,10 +173,50 @@ TEST(VerifyCli, OtherParametersAreUsed) {
   EXPECT_DOUBLE_EQ(json.at("roots").at("computed_rad_s").at("fast").get<double>(), expected.fast);
 }
 
+// --masses S: the uniform chain, checked the same way, without the paper's
+// printed roots (they belong to its two masses).
+TEST(VerifyCli, MassesChecksTheUniformChain) {
+  const lockstep::testing::scratch_directory directory("lockstep-verify");
+  const std::string json_path = directory.file("verify.json");
+  const std::string csv_path = directory.file("trajectory.csv");
+  const command_result result = verify({"--masses", "8", "--out", json_path, "--csv", csv_path});
+  ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
+  EXPECT_EQ(result.err, "");
+  EXPECT_NE(result.out.find("lockstep verify: a 8-mass chain (16 equations)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("verify: a 8-mass chain (16 equations): all"), std::string::npos) << result.out;
+  EXPECT_EQ(result.out.find("±51.47j"), std::string::npos) << "the paper's roots are its two masses'";
+  EXPECT_NE(result.out.find("observed order 4.0"), std::string::npos);
+  EXPECT_EQ(result.out.find("FAIL"), std::string::npos);
+
+  const nlohmann::json json = nlohmann::json::parse(slurp(json_path));
+  EXPECT_EQ(json.at("model").at("name"), "chain8");
+  EXPECT_EQ(json.at("model").at("masses"), 8);
+  EXPECT_EQ(json.at("model").at("equations"), 16);
+  EXPECT_TRUE(json.at("passed").get<bool>());
+  EXPECT_FALSE(json.at("parameters").at("papers_case").get<bool>());
+  const auto& roots = json.at("roots");
+  ASSERT_EQ(roots.at("closed_form_rad_s").size(), 8U);
+  ASSERT_EQ(roots.at("eigen_rad_s").size(), 8U);
+  EXPECT_FALSE(roots.contains("paper_rad_s"));
+  EXPECT_LE(roots.at("closed_form_vs_eigen_relative").get<double>(), 1e-9);
+  for (const auto& check : json.at("checks")) {
+    EXPECT_TRUE(check.at("passed").get<bool>()) << check.dump();
+    EXPECT_EQ(check.at("name").get<std::string>().find("paper"), std::string::npos) << check.dump();
+  }
+
+  // Every mass's position, starting from the uniform chain's 2, -3, 2, ... m.
+  std::istringstream csv(slurp(csv_path));
+  std::string line;
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line, "t,x1,x2,x3,x4,x5,x6,x7,x8");
+  ASSERT_TRUE(std::getline(csv, line));
+  EXPECT_EQ(line, "0,2,-3,2,-3,2,-3,2,-3");
+}
+
 TEST(VerifyCli, HelpNamesTheFlags) {
   const command_result result = run_command({LOCKSTEP_BINARY, "help", "verify"});
   EXPECT_EQ(result.exit_status, 0);
-  for (const char* flag : {"--m1", "--m2", "--c1", "--c2", "--dt", "--t-end", "--csv", "--out"}) {
+  for (const char* flag : {"--m1", "--m2", "--c1", "--c2", "--masses", "--dt", "--t-end", "--csv", "--out"}) {
     EXPECT_NE(result.out.find(flag), std::string::npos) << flag;
   }
 }
