@@ -79,7 +79,9 @@ const bad_input kBadInputs[] = {
     {{"run", "--noise", "150", "--out", "@/r.json"}, "--noise"},
     {{"verify", "--dt", "0.001"}, "--dt"},
     // Thread counts the model cannot split, and empty lists.
-    {{"run", "--threads", "8", "--out", "@/r.json"}, "--threads"},
+    {{"run", "--threads", "8", "--masses", "2", "--out", "@/r.json"}, "--threads"},
+    {{"run", "--masses", "0", "--out", "@/r.json"}, "--masses"},
+    {{"run", "--plan", "--out", "@/r.json"}, "--plan"},
     {{"run", "--threads", "0", "--out", "@/r.json"}, "--threads"},
     {{"run", "--threads", ",", "--out", "@/r.json"}, "--threads"},
     {{"run", "--sync", "", "--out", "@/r.json"}, "--sync"},

@@ -58,7 +58,8 @@ TEST(RunCli, BadInputIsOneLineAndExitTwo) {
       run_args({"--layout", "diagonal"}),
       run_args({"--threads", "0"}),
       run_args({"--threads", "two"}),
-      run_args({"--threads", "2,1000"}),
+      run_args({"--threads", "2,5000"}),
+      run_args({"--threads", "8", "--masses", "3"}),
       run_args({"--repetitions", "-3"}),
       run_args({"--repetitions", "many"}),
       run_args({"--", "--benchmark_out=/tmp/x.json"}),
@@ -73,6 +74,22 @@ TEST(RunCli, BadInputIsOneLineAndExitTwo) {
     EXPECT_EQ(count_lines(result.err), 1) << shown << "\nstderr: " << result.err;
     EXPECT_TRUE(result.out.empty()) << shown << "\nstdout: " << result.out;
   }
+}
+
+// --plan measures nothing and writes nothing: the entries, with chains past
+// four threads, and the estimated time.
+TEST(RunCli, PlanListsTheEntriesAndTheEstimateWithoutMeasuring) {
+  watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
+  const auto result = run_command(run_args({"--plan", "--sync", "mailbox,std_barrier", "--threads", "2,8"}));
+  EXPECT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("estimated time: "), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("rk4/model:chain4/sync:mailbox/layout:per_thread/pin:compact/threads:8"),
+            std::string::npos)
+      << result.out;
+  EXPECT_NE(result.out.find("rk4/model:chain4/serial"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("rk4/sync:std_barrier/layout:packed/pin:none/threads:2"), std::string::npos)
+      << result.out;
+  EXPECT_EQ(result.out.find("lockstep run: results written"), std::string::npos);
 }
 
 TEST(RunCli, UnknownSyncListsTheValidOnes) {
