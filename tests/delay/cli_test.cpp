@@ -307,7 +307,7 @@ TEST(DelayCommand, EightThreadsPaceAFourMassChain) {
   EXPECT_NE(result.out.find("rk4/model:chain4/sync:std_barrier/layout:padded64/pin:compact/threads:8"),
             std::string::npos)
       << result.out;
-  EXPECT_NE(result.out.find("4-mass chain (8 equations)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("a chain of 4 masses (8 equations)"), std::string::npos) << result.out;
   const auto document = read_json(path);
   expect_delay_json(document, 300, 8);
   EXPECT_EQ(document["name"], "rk4/model:chain4/sync:std_barrier/layout:padded64/pin:compact/threads:8");
@@ -337,7 +337,7 @@ TEST(DelayCommand, MoreThreadsThanTheChainsEquationsExitsTwoBeforeMeasuring) {
   EXPECT_EQ(result.exit_status, 2) << result.err;
   EXPECT_EQ(count_lines(result.err), 1) << result.err;
   EXPECT_NE(result.err.find("8 threads but 4 equations"), std::string::npos) << result.err;
-  EXPECT_NE(result.err.find("2-mass chain"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("a chain of 2 masses"), std::string::npos) << result.err;
   EXPECT_EQ(result.out, "");
   EXPECT_FALSE(std::ifstream(path).good()) << "nothing measured, nothing written";
 }

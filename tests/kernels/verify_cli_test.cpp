@@ -182,8 +182,8 @@ TEST(VerifyCli, MassesChecksTheUniformChain) {
   const command_result result = verify({"--masses", "8", "--out", json_path, "--csv", csv_path});
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
   EXPECT_EQ(result.err, "");
-  EXPECT_NE(result.out.find("lockstep verify: a 8-mass chain (16 equations)"), std::string::npos) << result.out;
-  EXPECT_NE(result.out.find("verify: a 8-mass chain (16 equations): all"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("lockstep verify: a chain of 8 masses (16 equations)"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("verify: a chain of 8 masses (16 equations): all"), std::string::npos) << result.out;
   EXPECT_EQ(result.out.find("±51.47j"), std::string::npos) << "the paper's roots are its two masses'";
   EXPECT_NE(result.out.find("observed order 4.0"), std::string::npos);
   EXPECT_EQ(result.out.find("FAIL"), std::string::npos);
