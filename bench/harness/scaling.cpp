@@ -30,9 +30,13 @@ std::string held_pin(const run_book& book) {
 scaling_curve scaling_of(const run_book& book) {
   scaling_curve curve;
   curve.pin = held_pin(book);
-  curve.counter = "sync_ns_per_stage";
+  // The sync time per stage where the run instrumented its steps; the step
+  // time only when no entry has it (--no-accounting). An entry without it in
+  // an instrumented run is left off the curve, not allowed to switch it.
+  curve.counter = "ns_per_step";
   for (const auto& entry : book.entries())
-    if (entry.field("kind") == "rk4" && entry.error.empty() && !entry.median(curve.counter)) curve.counter = "ns_per_step";
+    if (entry.field("kind") == "rk4" && entry.error.empty() && entry.median("sync_ns_per_stage"))
+      curve.counter = "sync_ns_per_stage";
   std::map<std::pair<std::string, unsigned>, scaling_point> best;
   std::set<unsigned> counts;
   for (const auto& entry : book.entries()) {
@@ -47,7 +51,10 @@ scaling_curve scaling_of(const run_book& book) {
     if (!point.layout.empty() && current <= *figure) continue;
     point = {entry.field("sync"), threads, entry.field("layout"), entry.field("model"),
              entry.median("sync_ns_per_stage").value_or(0.0), entry.median("ns_per_step").value_or(0.0),
-             entry.median("oversubscribed").value_or(0.0) > 0.5};
+             0.0, 0.0, entry.median("oversubscribed").value_or(0.0) > 0.5};
+    const auto range = entry.range(curve.counter).value_or(std::pair{*figure, *figure});
+    point.lowest = range.first;
+    point.highest = range.second;
   }
   curve.threads.assign(counts.begin(), counts.end());
   for (auto& [key, point] : best) curve.points.push_back(std::move(point));
@@ -107,9 +114,14 @@ std::string render_scaling(const scaling_curve& curve) {
     out += fmt::format("Scales best: {} ({} at {} threads{}, {:.1f}x its {}-thread figure, on layout {}", *curve.best,
                        format_ns(figure_of(*at_last)), last, at_last->oversubscribed ? ", oversubscribed" : "",
                        figure_of(*at_last) / figure_of(*at_first), first, at_last->layout);
-    if (runner_up != nullptr)
+    if (runner_up != nullptr) {
       out += fmt::format("; next {} at {}, {:.2f}x", runner_up->sync, format_ns(figure_of(*runner_up)),
                          figure_of(*runner_up) / figure_of(*at_last));
+      if (runner_up->lowest <= at_last->highest)
+        out += fmt::format(", within the spread of the repetitions ({}..{} against {}..{}): this run does not separate them",
+                           format_ns(at_last->lowest), format_ns(at_last->highest), format_ns(runner_up->lowest),
+                           format_ns(runner_up->highest));
+    }
     out += ")\n";
   }
   return out;
@@ -124,6 +136,8 @@ nlohmann::json scaling_json(const scaling_curve& curve, std::optional<double> c2
                       {"model", point.model.empty() ? "two_mass" : point.model},
                       {"sync_ns_per_stage", point.sync_ns_per_stage},
                       {"ns_per_step", point.ns_per_step},
+                      {"repetitions_min", point.lowest},  // of the counter
+                      {"repetitions_max", point.highest},
                       {"oversubscribed", point.oversubscribed}});
   nlohmann::json result{{"pin", curve.pin}, {"counter", curve.counter}, {"threads", curve.threads},
                         {"points", points}};

@@ -26,6 +26,10 @@ struct scaling_point {
   std::string model;   // "" the paper's two masses, else "chain8"
   double sync_ns_per_stage = 0.0;
   double ns_per_step = 0.0;
+  // min and max over the repetitions of the curve's counter: two primitives
+  // whose ranges overlap are not separated by the run.
+  double lowest = 0.0;
+  double highest = 0.0;
   bool oversubscribed = false;
 };
 

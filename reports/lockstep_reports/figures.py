@@ -595,7 +595,8 @@ def paired_ratios(pairs, title: str) -> str:
 
 def scaling_curve(curve) -> str:
     """`lockstep run --scaling`: the curve's counter against threads on log-log axes, one line per primitive on
-    its best layout at each count, hollow markers where the threads outnumbered the CPUs, and the run's
+    its best layout at each count (a bar: the min..max over repetitions), hollow markers where the threads
+    outnumbered the CPUs, and the run's
     core-to-core one-way latency as a reference line. curve: inputs.ScalingCurve."""
     figure, axes = plt.subplots(figsize=(7.2, 4.2))
     lines = {}
@@ -613,6 +614,9 @@ def scaling_curve(curve) -> str:
         for point in points:
             axes.scatter([point.threads], [point.value_ns], s=18, zorder=4, color=color if not point.oversubscribed
                          else "white", edgecolors=color, linewidths=1.0)
+            if point.range_ns and point.range_ns[0] > 0:
+                axes.vlines(point.threads, *point.range_ns, color=color, lw=0.7, alpha=0.6, zorder=3)
+                values += list(point.range_ns)
         values += [p.value_ns for p in points]
     if curve.c2c_one_way_ns:
         axes.axhline(curve.c2c_one_way_ns, color="#555555", lw=0.8, ls="--",

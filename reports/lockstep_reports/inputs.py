@@ -343,6 +343,7 @@ class ScalingPoint:
     model: str
     value_ns: float  # the curve's counter
     oversubscribed: bool
+    range_ns: tuple[float, float] | None = None  # its min..max over repetitions (None: an earlier file)
 
 
 @dataclass(frozen=True)
@@ -577,6 +578,13 @@ def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[Pace
     return pairs
 
 
+def _scaling_range(point: "_Object") -> tuple[float, float] | None:
+    """A scaling point's min..max of the counter over repetitions, when the file carries it."""
+    low = point.number("repetitions_min", -fields.LONGEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
+    high = point.number("repetitions_max", -fields.LONGEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
+    return (low, high) if low is not None and high is not None else None
+
+
 def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
     """The top-level "lockstep_scaling", checked field by field; None when the file has none."""
     if fields.SCALING_KEY not in document:
@@ -591,7 +599,7 @@ def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
         points.append(ScalingPoint(point.text("sync", empty=False), point.integer("threads", low=1),
                                    point.text("layout", empty=False), point.text("model", empty=False),
                                    point.number(counter, -fields.LONGEST_NS, fields.LONGEST_NS, unit=" ns"),
-                                   point.flag("oversubscribed")))
+                                   point.flag("oversubscribed"), _scaling_range(point)))
     best = curve.text("best", required=False, empty=False) if curve.value.get("best") is not None else None
     return ScalingCurve(curve.text("pin", empty=False), counter, tuple(int(t) for t in threads), tuple(points), best,
                         curve.number("c2c_one_way_ns", fields.SHORTEST_NS, fields.LONGEST_NS, required=False,

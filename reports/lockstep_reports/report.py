@@ -127,6 +127,21 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     return sections
 
 
+def _separation(curve, by_sync) -> str:
+    """Whether the best at the largest count is apart from the primitives next to it: those whose min..max over
+    repetitions overlaps the best's are named, as the run does not separate them."""
+    last = curve.threads[-1]
+    best = by_sync[curve.best].get(last)
+    if best is None or best.range_ns is None:
+        return ""
+    tied = sorted(sync for sync, points in by_sync.items()
+                  if sync != curve.best and len(points) == len(curve.threads) and last in points
+                  and points[last].range_ns is not None and points[last].range_ns[0] <= best.range_ns[1])
+    if not tied:
+        return "; its repetitions' range is clear of every other primitive's"
+    return f"; not separated from {', '.join(tied)}: their repetitions' ranges overlap its"
+
+
 def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
     curve = run_file.scaling
     what = "sync time per stage" if curve.counter == "sync_ns_per_stage" else "step time"
@@ -134,13 +149,13 @@ def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
                   f"pin:{curve.pin}, each on the layout that was fastest at that count. Beyond four threads the "
                   "model is an s-mass chain with one equation per thread, whose consumers wait for their two "
                   "neighbours while a barrier waits for every thread. Hollow markers: more threads than CPUs."]
-    if curve.best:
-        paragraphs.append(f"Scales best: {curve.best} (the lowest {what} at {curve.threads[-1]} threads among the "
-                          "primitives measured at every count).")
-    rows = []
     by_sync = {}
     for point in curve.points:
         by_sync.setdefault(point.sync, {})[point.threads] = point
+    if curve.best:
+        paragraphs.append(f"Scales best: {curve.best} (the lowest {what} at {curve.threads[-1]} threads among the "
+                          f"primitives measured at every count){_separation(curve, by_sync)}.")
+    rows = []
     for sync in sorted(by_sync):
         rows.append([sync] + [format_ns(by_sync[sync][t].value_ns) + ("*" if by_sync[sync][t].oversubscribed else "")
                               if t in by_sync[sync] else "n/a" for t in curve.threads])

@@ -1,5 +1,6 @@
 """`lockstep report`: the HTML and Markdown it writes, their figures and tables, and their determinism."""
 import hashlib
+import json
 import os
 import re
 import tempfile
@@ -196,6 +197,56 @@ class WithoutPaceKeys(unittest.TestCase):
             self.assertNotIn(added, markdown)
         self.assertIn("| scheduling | SCHED_OTHER", markdown)
         self.assertIn("| memory | not locked (no mlockall) |", markdown)
+
+
+def scaling_point(sync, threads, value, low, high, oversubscribed):
+    return {"sync": sync, "threads": threads, "layout": "per_thread", "model": "two_mass" if threads <= 4 else "chain4",
+            "sync_ns_per_stage": value, "ns_per_step": 10 * value, "repetitions_min": low, "repetitions_max": high,
+            "oversubscribed": oversubscribed}
+
+
+class ScalingReport(unittest.TestCase):
+    """A `run --scaling` file: the section, its figure and whether the best is separated from the next."""
+
+    def report_of(self, points, best):
+        with open(fixture("machine_a.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        document["lockstep_scaling"] = {"pin": "compact", "counter": "sync_ns_per_stage", "threads": [2, 8],
+                                        "points": points, "best": best, "c2c_one_way_ns": 23.0}
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "scaling.json")
+            with open(path, "w", encoding="utf-8") as stream:
+                json.dump(document, stream)
+            out = os.path.join(directory, "report")
+            status, _, err = run_tool("report", path, "--out", out)
+            self.assertEqual(status, 0, err)
+            with open(os.path.join(out, "report.md"), encoding="utf-8") as stream:
+                markdown = stream.read()
+            self.assertTrue(os.path.exists(os.path.join(out, "figures", "scaling-0.svg")))
+        return markdown
+
+    def test_a_clear_lead_is_said_clear(self):
+        markdown = self.report_of([scaling_point("fast", 2, 20, 19, 21, False), scaling_point("fast", 8, 2000, 1900, 2100, True),
+                                   scaling_point("slow", 2, 50, 49, 51, False), scaling_point("slow", 8, 5000, 4900, 5100, True)],
+                                  "fast")
+        self.assertIn("## Scaling: scaling.json", markdown)
+        self.assertIn("Scales best: fast", markdown)
+        self.assertIn("clear of every other primitive's", markdown)
+        self.assertIn("| slow | 50.0 ns | 5.000 us* |", markdown)
+
+    def test_overlapping_ranges_are_said_not_separated(self):
+        markdown = self.report_of([scaling_point("fast", 2, 20, 19, 21, False), scaling_point("fast", 8, 2000, 1900, 2600, True),
+                                   scaling_point("slow", 2, 50, 49, 51, False), scaling_point("slow", 8, 2100, 2050, 2200, True)],
+                                  "fast")
+        self.assertIn("not separated from slow", markdown)
+
+    def test_a_file_without_ranges_reports_the_best_alone(self):
+        points = [scaling_point("fast", 2, 20, 19, 21, False), scaling_point("fast", 8, 2000, 1900, 2100, True)]
+        for point in points:
+            del point["repetitions_min"], point["repetitions_max"]
+        markdown = self.report_of(points, "fast")
+        self.assertIn("Scales best: fast (the lowest sync time per stage at 8 threads among the primitives measured at "
+                      "every count).", markdown)
 
 
 class Pieces(unittest.TestCase):

@@ -92,6 +92,36 @@ TEST(RunCli, PlanListsTheEntriesAndTheEstimateWithoutMeasuring) {
   EXPECT_EQ(result.out.find("lockstep run: results written"), std::string::npos);
 }
 
+// --scaling: 2, 4 and 8 threads at pin:compact, the curve in the summary and
+// in the JSON's lockstep_scaling (its values: tests/cli/scaling_curve_test.cpp).
+TEST(RunCli, ScalingWritesTheCurve) {
+  watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "lockstep run --scaling did not finish");
+  scratch_directory scratch("lockstep-scaling-test");
+  const fs::path out = scratch.path() / "scaling.json";
+  const auto result = run_command(run_args({"--scaling", "--quick", "--sync", "mailbox,futex_spin", "--repetitions",
+                                            "2", "--pairs", "0", "--out", out.string(), "--",
+                                            "--benchmark_min_time=0.001"}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("Scaling (pin:compact;"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("Scales best: "), std::string::npos) << result.out;
+  std::ifstream file(out);
+  const nlohmann::json document = nlohmann::json::parse(file);
+  ASSERT_TRUE(document.contains("lockstep_scaling"));
+  const auto& curve = document["lockstep_scaling"];
+  EXPECT_EQ(curve["pin"], "compact");
+  EXPECT_EQ(curve["threads"], nlohmann::json::array({2, 4, 8}));
+  std::set<std::pair<std::string, unsigned>> points;
+  for (const auto& point : curve["points"]) {
+    points.insert({point["sync"].get<std::string>(), point["threads"].get<unsigned>()});
+    EXPECT_EQ(point["model"], point["threads"].get<unsigned>() > 4 ? "chain4" : "two_mass");
+    EXPECT_LE(point["repetitions_min"].get<double>(), point["repetitions_max"].get<double>());
+  }
+  for (const char* sync : {"mailbox", "futex_spin"})
+    for (const unsigned threads : {2U, 4U, 8U}) EXPECT_EQ(points.count({sync, threads}), 1U) << sync << " " << threads;
+  ASSERT_TRUE(curve["best"].is_string());
+  EXPECT_EQ(document["context"]["lockstep_scaling"], "on") << document["context"].dump();
+}
+
 TEST(RunCli, UnknownSyncListsTheValidOnes) {
   watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
   const auto result = run_command(run_args({"--sync", "nope"}));
