@@ -623,6 +623,16 @@ TEST(DelayCommand, FindPeriodRecordsTheSearch) {
   }
   for (const char* key : {"budget_cut", "stopped_because", "elapsed_s", "rule", "confidence"})
     EXPECT_TRUE(search.contains(key)) << key;
+  // Whether stalls, not the step, set the answer: said in the JSON and, only
+  // then, in one line of the output.
+  ASSERT_TRUE(search["set_by_stalls"].is_boolean());
+  double largest_p99 = 0;
+  for (const auto& trial : search["trials"]) largest_p99 = std::max(largest_p99, trial["completion_p99_ns"].get<double>());
+  EXPECT_DOUBLE_EQ(search["largest_completion_p99_ns"].get<double>(), largest_p99);
+  const bool set_by_stalls = search["found_period_ns"].is_number() && largest_p99 > 0 &&
+                             search["found_period_ns"].get<double>() > 10.0 * largest_p99;
+  EXPECT_EQ(search["set_by_stalls"].get<bool>(), set_by_stalls);
+  EXPECT_EQ(result.out.find("set by stalls: ") != std::string::npos, set_by_stalls) << result.out;
   if (search["found_period_ns"].is_number()) {
     ASSERT_TRUE(search["confirm"].is_object());
     EXPECT_EQ(search["confirm"]["period_ns"], search["found_period_ns"]);
