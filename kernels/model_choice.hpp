@@ -25,6 +25,10 @@ namespace lockstep::kernels {
 // The paper's two masses give four first-order equations.
 inline constexpr unsigned kPaperThreadsMax = 4;
 
+// How JSON names the paper's system where a model is recorded (settings,
+// scaling points); a chain is its name(), "chain16".
+inline constexpr const char* kTwoMassKey = "two_mass";
+
 struct model_choice {
   std::size_t masses = 0;  // 0: the paper's two-mass system; else an s-mass chain
 
@@ -32,6 +36,8 @@ struct model_choice {
   [[nodiscard]] std::size_t equations() const noexcept { return is_chain() ? 2 * masses : two_mass_model::kEquations; }
   // "chain16", or "" for the paper's system.
   [[nodiscard]] std::string name() const { return is_chain() ? "chain" + std::to_string(masses) : std::string{}; }
+  // "chain16", or "two_mass" (kTwoMassKey): what JSON records as the model.
+  [[nodiscard]] std::string key() const { return is_chain() ? name() : std::string(kTwoMassKey); }
   // "/model:chain16", or "" for the paper's system: what a name inserts.
   [[nodiscard]] std::string name_segment() const { return is_chain() ? "/model:" + name() : std::string{}; }
   // "the paper's two-mass system" or "a chain of 16 masses (32 equations)".

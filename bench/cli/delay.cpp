@@ -672,7 +672,7 @@ void run_delay(const delay_options& options, int& result) {
           {"layout", options.layout},
           {"pin", pin_name},
           {"threads", threads},
-          {"model", plan.model.is_chain() ? plan.model.name() : std::string("two_mass")},
+          {"model", plan.model.key()},
           {"equations", plan.model.equations()},
           {"per_cpu", options.per_cpu},
           {"view", view},

@@ -188,7 +188,7 @@ std::string json_text(const verify_report& report) {
   const auto& roots = report.roots;
   const auto& model = settings.model;
   nlohmann::json json = bench::result_document("verify", platform::topology::this_machine());
-  json["model"] = {{"name", model.is_chain() ? model.name() : std::string("two_mass")},
+  json["model"] = {{"name", model.key()},
                    {"description", model.description()},
                    {"masses", settings.masses()},
                    {"equations", model.equations()}};

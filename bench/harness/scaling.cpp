@@ -8,6 +8,7 @@
 #include <set>
 
 #include "bench/harness/derived_figures.hpp"
+#include "kernels/model_choice.hpp"
 
 namespace lockstep::bench {
 
@@ -133,7 +134,7 @@ nlohmann::json scaling_json(const scaling_curve& curve, std::optional<double> c2
     points.push_back({{"sync", point.sync},
                       {"threads", point.threads},
                       {"layout", point.layout},
-                      {"model", point.model.empty() ? "two_mass" : point.model},
+                      {"model", point.model.empty() ? kernels::kTwoMassKey : point.model},
                       {"sync_ns_per_stage", point.sync_ns_per_stage},
                       {"ns_per_step", point.ns_per_step},
                       {"repetitions_min", point.lowest},  // of the counter
