@@ -683,6 +683,33 @@ class Models(unittest.TestCase):
         self.assertIn("only in B (new.json): added: 2", out)
 
 
+    def test_a_chains_serial_step_is_a_calibration(self):
+        # The chain's serial step moves by 40 % and nothing else does: a calibration that moved, compared apart,
+        # never in the geometric mean, the counts or the gate.
+        a = self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0)))
+        b = self.write("b.json", with_chain(run_document("25.0", "20.00", 560.0), serial_ns=45.0 * 1.4))
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertNotIn(CHAIN_SERIAL, displays(row.key for row in comparison.rows))
+        row = next(row for row in comparison.calibrations if row.key.display == CHAIN_SERIAL)
+        self.assertEqual(comparison.verdict(row), "slower")
+        self.assertEqual(displays(row.key for row in comparison.calibrations),
+                         sorted([C2C, "rk4/serial", CHAIN_SERIAL, OVERHEAD.format("off"), OVERHEAD.format("on")]))
+        self.assertEqual(comparison.verdict_counts()["slower"], 0)
+        self.assertEqual(run_tool("compare", a, b, "--fail-above", "0")[0], 0)
+
+    def test_a_chain_is_normalised_by_its_own_serial_step(self):
+        # The context's serial_step_ns (20 ns) is the paper's system's; the chain's step (900 ns) is divided by
+        # the chain's serial step (45 ns), as the harness's own vs_serial is.
+        run_file = load_run_file(self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0))))
+        vs_serial, _ = normalised(run_file, parse_name(CHAIN))
+        self.assertAlmostEqual(vs_serial, 900.0 / 45.0)
+        steady = parse_name(STEADY)
+        vs_serial, _ = normalised(run_file, steady)
+        self.assertAlmostEqual(vs_serial, statistics.median(run_file.runs[steady].times_ns()) / 20.0)
+        (name, step, vs_serial), = rank_tables([run_file])[("compact", 8)][0]
+        self.assertEqual(name, "seqlock/per_thread")
+        self.assertAlmostEqual(vs_serial, 900.0 / 45.0)
+
 
 if __name__ == "__main__":
     unittest.main()
