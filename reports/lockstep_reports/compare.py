@@ -29,9 +29,9 @@ repetition's time divided by the c2c reading taken around it (pace_c2c_ns).
 The headline count of changed entries counts what changed beyond the pace:
 the pace-aware verdict where there is one, else the raw one.
 
-Calibrations: `rk4/serial`, `c2c/...` and the `overhead/...` pair measure the
-machine and the instrumentation, not a combination of primitive, layout and
-placement. They are compared in a block of their own (c2c by its one_way_ns
+Calibrations: `rk4/serial` (and a chain's `rk4/model:chainS/serial`), `c2c/...`
+and the `overhead/...` pair measure the machine and the instrumentation, not a
+combination of primitive, layout and placement. They are compared in a block of their own (c2c by its one_way_ns
 counter: its iteration time is thread start-up plus the measurement), tested
 as a family of their own, and kept out of the geometric mean, the verdict
 counts and --fail-above. The context's in-run calibrations of the two files
@@ -225,7 +225,8 @@ class Comparison:
 
 
 def is_calibration(key: BenchmarkKey) -> bool:
-    return key.family in CALIBRATION_FAMILIES or key.display == SERIAL_ENTRY
+    # The serial step of every model the run integrates: rk4/serial, and rk4/model:chainS/serial for a chain.
+    return key.family in CALIBRATION_FAMILIES or key.without("model").display == SERIAL_ENTRY
 
 
 def sample(run, time_kind: str = "real") -> tuple[list[float], bool]:
@@ -472,16 +473,27 @@ def calibration(run_file: RunFile, context_key: str) -> float | None:
     return run_median(run_file, key)
 
 
-def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") -> tuple[float | None, float | None]:
-    """(step time / serial step time, stage sync time / one-way c2c latency) on that file's own machine.
+def model_serial(run_file: RunFile, key: BenchmarkKey) -> float | None:
+    """The serial step an rk4 entry's step is divided by: its own model's. The paper's system (no model
+    segment): the context's serial_step_ns, else rk4/serial; a chain: its in-run entry rk4/model:<model>/serial
+    (the context holds the paper's system's only)."""
+    model = key.get("model")
+    if not model:
+        return calibration(run_file, SERIAL_CONTEXT)
+    return run_median(run_file, parse_name(f"rk4/model:{model}/serial"))
 
-    Uses the in-run calibrations of the context; falls back to the entry's own
-    vs_serial / vs_c2c counters; None ("unavailable") when neither exists."""
+
+def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") -> tuple[float | None, float | None]:
+    """(step time / serial step time of its model, stage sync time / one-way c2c latency) on that file's own
+    machine.
+
+    Uses the in-run calibrations of the context (a chain's serial step: its rk4/model:<model>/serial entry);
+    falls back to the entry's own vs_serial / vs_c2c counters; None ("unavailable") when neither exists."""
     run = run_file.runs.get(key)
     if run is None or run.errored:
         return None, None
     step = run_median(run_file, key, time_kind)
-    serial = calibration(run_file, SERIAL_CONTEXT)
+    serial = model_serial(run_file, key)
     c2c = calibration(run_file, C2C_CONTEXT)
     vs_serial = step / serial if (step is not None and serial) else None
     if vs_serial is None and run.counter_values(VS_SERIAL_COUNTER):
@@ -534,7 +546,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
                 step = run_median(run_file, key, time_kind)
                 if step is None:
                     continue
-                serial = calibration(run_file, SERIAL_CONTEXT)
+                serial = model_serial(run_file, key)
                 entries.append((f"{key.get('sync')}/{key.get('layout')}", step, step / serial if serial else None))
             entries.sort(key=lambda entry: (entry[1], entry[0]))
             per_file.append(entries[:top])
@@ -732,7 +744,8 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
 def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> list[str]:
     letters = [file_letter(i) for i in range(len(run_files))]
     out = ["== Across machines: each file normalised by its own machine", ""]
-    out.append("x serial: step time / that run's serial RK4 step (context serial_step_ns); "
+    out.append("x serial: step time / that run's serial RK4 step of the entry's model (context serial_step_ns; "
+               "a chain's: its rk4/model:chainS/serial entry); "
                "x c2c: stage sync time / that run's one-way core-to-core latency (context c2c_one_way_ns).")
     rows = []
     for key in rk4_keys(run_files):

@@ -589,5 +589,127 @@ class PowerAndPace(unittest.TestCase):
         self.assertIn("pace: unavailable in machine_a.json (no lockstep_pace", out)
 
 
+# ---------------------------------------------------------------- models (issue 13)
+# Beyond four threads `lockstep run` integrates an s-mass chain and names it by a model segment
+# (kernels/model_choice.hpp): rk4/model:chain4/sync:.../threads:8, with the chain's own serial step
+# rk4/model:chain4/serial. The paper's two masses carry no model segment, so a file written before chains
+# existed names them as a new file does.
+
+CHAIN = "rk4/model:chain4/sync:seqlock/layout:per_thread/pin:compact/threads:8"
+CHAIN_SERIAL = "rk4/model:chain4/serial"
+# `--masses 8` on 8 threads: the same sync, layout, pin and threads as CHAIN, another chain.
+CHAIN_OF_8 = "rk4/model:chain8/sync:seqlock/layout:per_thread/pin:compact/threads:8"
+# `--masses 4` on 2 threads: the same sync, layout, pin and threads as STEADY (the paper's system).
+STEADY_AS_CHAIN = "rk4/model:chain4/sync:seqlock/layout:per_thread/pin:compact/threads:2"
+
+
+def with_chain(document, chain_ns=900.0, names=(CHAIN,), serial_ns=45.0):
+    """document plus chain entries and the chain's serial step, as a run beyond four threads adds them."""
+    extended = json.loads(json.dumps(document))
+    extended["benchmarks"] += entries(CHAIN_SERIAL, serial_ns)
+    for name in names:
+        extended["benchmarks"] += entries(name, chain_ns)
+    return extended
+
+
+def displays(keys):
+    return sorted(key.display for key in keys)
+
+
+class Models(unittest.TestCase):
+    def setUp(self):
+        self.directory = tempfile.TemporaryDirectory()
+        self.addCleanup(self.directory.cleanup)
+
+    def write(self, name, document):
+        path = os.path.join(self.directory.name, name)
+        with open(path, "w", encoding="utf-8") as stream:
+            json.dump(document, stream)
+        return path
+
+    def test_chain_entries_match_by_their_model(self):
+        a = self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0)))
+        b = self.write("b.json", with_chain(run_document("25.0", "20.00", 560.0), chain_ns=900.0 * 1.4))
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        row = next(row for row in comparison.rows if row.key.display == CHAIN)
+        self.assertAlmostEqual(row.ratio, 1.4)
+        self.assertEqual(comparison.verdict(row), "slower")
+        self.assertEqual((comparison.added, comparison.removed), ([], []))
+        status, out, err = run_tool("compare", a, b, "--fail-above", "10")
+        self.assertEqual(status, 1)
+        self.assertIn(CHAIN, err)
+        self.assertIn("only in A (a.json): removed: 0", out)
+        self.assertIn("only in B (b.json): added: 0", out)
+
+    def test_a_chain_entry_never_matches_a_two_mass_entry_nor_another_chain(self):
+        # A: the paper's system on 2 threads (STEADY) and an 8-mass chain on 8 threads; B: `--masses 4`, the
+        # same primitives, layouts, placements and thread counts with another model each. Nothing of them matches.
+        document_a = with_chain(run_document("25.0", "20.00", 560.0), names=(CHAIN_OF_8,))
+        document_b = with_chain(run_document("25.0", "20.00", 560.0), names=(CHAIN, STEADY_AS_CHAIN))
+        document_b["benchmarks"] = [entry for entry in document_b["benchmarks"] if entry["name"] != STEADY]
+        a, b = self.write("a.json", document_a), self.write("b.json", document_b)
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        matched = displays(row.key for row in comparison.rows + comparison.calibrations)
+        for name in (STEADY, STEADY_AS_CHAIN, CHAIN, CHAIN_OF_8):
+            self.assertNotIn(name, matched)
+        self.assertIn(SHIFTED, matched)  # the rest of the two files still matches
+        self.assertEqual(displays(comparison.removed), sorted([STEADY, CHAIN_OF_8]))
+        self.assertEqual(displays(comparison.added), sorted([STEADY_AS_CHAIN, CHAIN]))
+        status, out, err = run_tool("compare", a, b)
+        self.assertEqual(status, 0, err)
+        lines = out.splitlines()
+        removed = lines.index("only in A (a.json): removed: 2")
+        self.assertEqual(sorted(lines[removed + 1:removed + 3]), sorted(f"  {name}" for name in (STEADY, CHAIN_OF_8)))
+        added = lines.index("only in B (b.json): added: 2")
+        self.assertEqual(sorted(lines[added + 1:added + 3]), sorted(f"  {name}" for name in (STEADY_AS_CHAIN, CHAIN)))
+
+    def test_a_file_written_before_models_compares_with_a_new_one(self):
+        # machine_a.json's names carry no model segment (written before chains existed); a new run of the same
+        # entries adds chains beyond four threads. Every old entry matches its new namesake.
+        with open(fixture("machine_a.json"), encoding="utf-8") as stream:
+            old_document = json.load(stream)
+        old = fixture("machine_a.json")
+        new = self.write("new.json", with_chain(old_document))
+        old_keys = set(load("machine_a.json").runs)
+        self.assertFalse(any(key.get("model") for key in old_keys))
+        comparison = compare_pair(load("machine_a.json"), load_run_file(new))
+        self.assertEqual(comparison.removed, [])
+        self.assertEqual(displays(comparison.added), sorted([CHAIN, CHAIN_SERIAL]))
+        self.assertEqual(len(comparison.rows) + len(comparison.calibrations) + len(comparison.errored), len(old_keys))
+        self.assertTrue(all(row.ratio == 1.0 for row in comparison.rows))
+        status, out, err = run_tool("compare", old, new)
+        self.assertEqual(status, 0, err)
+        self.assertIn("only in A (machine_a.json): removed: 0", out)
+        self.assertIn("only in B (new.json): added: 2", out)
+
+
+    def test_a_chains_serial_step_is_a_calibration(self):
+        # The chain's serial step moves by 40 % and nothing else does: a calibration that moved, compared apart,
+        # never in the geometric mean, the counts or the gate.
+        a = self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0)))
+        b = self.write("b.json", with_chain(run_document("25.0", "20.00", 560.0), serial_ns=45.0 * 1.4))
+        comparison = compare_pair(load_run_file(a), load_run_file(b))
+        self.assertNotIn(CHAIN_SERIAL, displays(row.key for row in comparison.rows))
+        row = next(row for row in comparison.calibrations if row.key.display == CHAIN_SERIAL)
+        self.assertEqual(comparison.verdict(row), "slower")
+        self.assertEqual(displays(row.key for row in comparison.calibrations),
+                         sorted([C2C, "rk4/serial", CHAIN_SERIAL, OVERHEAD.format("off"), OVERHEAD.format("on")]))
+        self.assertEqual(comparison.verdict_counts()["slower"], 0)
+        self.assertEqual(run_tool("compare", a, b, "--fail-above", "0")[0], 0)
+
+    def test_a_chain_is_normalised_by_its_own_serial_step(self):
+        # The context's serial_step_ns (20 ns) is the paper's system's; the chain's step (900 ns) is divided by
+        # the chain's serial step (45 ns), as the harness's own vs_serial is.
+        run_file = load_run_file(self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0))))
+        vs_serial, _ = normalised(run_file, parse_name(CHAIN))
+        self.assertAlmostEqual(vs_serial, 900.0 / 45.0)
+        steady = parse_name(STEADY)
+        vs_serial, _ = normalised(run_file, steady)
+        self.assertAlmostEqual(vs_serial, statistics.median(run_file.runs[steady].times_ns()) / 20.0)
+        (name, step, vs_serial), = rank_tables([run_file])[("compact", 8)][0]
+        self.assertEqual(name, "seqlock/per_thread")
+        self.assertAlmostEqual(vs_serial, 900.0 / 45.0)
+
+
 if __name__ == "__main__":
     unittest.main()

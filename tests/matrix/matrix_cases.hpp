@@ -173,6 +173,13 @@ std::string combination_name(unsigned threads, placement pin) {
          "/pin_" + std::string(platform::to_string(pin));
 }
 
+// A chain's test name: <sync>/<layout>/masses<S>/threads<T>.
+template <class Sync, class Layout>
+std::string chain_name(std::size_t masses, unsigned threads) {
+  return std::string(Sync::kName) + "/" + std::string(Layout::kName) + "/masses" + std::to_string(masses) +
+         "/threads" + std::to_string(threads);
+}
+
 // The layouts a primitive runs with in the subsets that cannot afford every
 // sync x layout pair (the sanitize and stress matrices): each primitive takes
 // the applicable layout used least so far (registry order breaks ties), so

@@ -1,10 +1,16 @@
 // The matrix subset that the tsan and asan-ubsan presets run (label
 // `sanitize`): every primitive and every layout at least once, on 2 and 4
-// threads, few steps. Each primitive runs with one layout, the applicable one
+// threads (and a chain on 8), few steps. Each primitive runs with one layout, the applicable one
 // used least so far (layout_rotation, matrix_cases.hpp), so that the layouts
 // rotate through the primitives of this build's subset; a layout that no
 // primitive took then runs with the first primitive it applies to. Each
-// primitive also runs the s-mass chain with its layout.
+// primitive also runs the s-mass chain with its layout: 3 masses on 4 threads
+// (uneven blocks), and the chain the harness integrates on 8 threads
+// (kernels::model_for(8): 4 masses, one equation per thread), oversubscribed
+// on a 2-CPU machine: a barrier's team of eight, and for the dataflow
+// primitives a graph in which each participant waits only for the few whose
+// equations it reads, so that participants far apart in the chain drift
+// stages apart, held only by the channels' back-pressure.
 //
 // Under ThreadSanitizer the subset is the primitives a TSan run can check
 // (sync::checked_by_tsan, from their traits). Left out today:
@@ -19,12 +25,19 @@
 //    the paper's design causes. tests/sync/win_event_test.cpp drives that lost
 //    wake-up deterministically under TSan instead.
 // AddressSanitizer + UBSan run them all. A new primitive joins by its traits.
+#include "kernels/model_choice.hpp"
 #include "tests/matrix/matrix_cases.hpp"
 
 namespace lockstep::testing::matrix {
 namespace {
 
 constexpr std::uint64_t kSanitizeSteps = 120;
+// The 8-thread chain: each of its stage syncs is eight threads' worth of
+// context switches on two CPUs, under a sanitizer's slowdown; a few steps
+// (steps_for takes a third of them in a sanitizer build) suffice for the
+// sanitizers to see every handoff.
+constexpr unsigned kWideChainThreads = 8;
+constexpr std::uint64_t kWideChainSteps = 30;
 
 template <class Sync>
 constexpr bool in_this_build() {
@@ -46,15 +59,19 @@ void register_one(unsigned threads) {
 }
 
 template <class Sync, class Layout>
-void register_with_chain() {
+void register_chain(std::size_t masses, unsigned threads, std::uint64_t steps) {
   if constexpr (kernels::applicable<Sync, Layout>().applicable && in_this_build<Sync>()) {
-    register_scenario("ChainSanitize", std::string(Sync::kName) + "/" + std::string(Layout::kName) + "/masses3/threads4",
-                      [] {
-                        const kernels::chain_model chain(kernels::chain_params::uniform(3));
-                        expect_bitwise_serial<Sync, Layout>(chain, 4, placement::none,
-                                                            steps_for<Sync>(4, kSanitizeSteps));
-                      });
+    register_scenario("ChainSanitize", chain_name<Sync, Layout>(masses, threads), [masses, threads, steps] {
+      const kernels::chain_model chain(kernels::chain_params::uniform(masses));
+      expect_bitwise_serial<Sync, Layout>(chain, threads, placement::none, steps_for<Sync>(threads, steps));
+    });
   }
+}
+
+template <class Sync, class Layout>
+void register_with_chains() {
+  register_chain<Sync, Layout>(3, 4, kSanitizeSteps);
+  register_chain<Sync, Layout>(kernels::model_for(kWideChainThreads).masses, kWideChainThreads, kWideChainSteps);
 }
 
 const bool registered = [] {
@@ -64,7 +81,7 @@ const bool registered = [] {
       with_layout<Sync>(rotation.next<Sync>(), []<class Layout>() {
         register_one<Sync, Layout>(4);
         register_one<Sync, Layout>(2);
-        register_with_chain<Sync, Layout>();
+        register_with_chains<Sync, Layout>();
       });
     }
   });
