@@ -727,8 +727,10 @@ void add_delay(CLI::App& app, int& result) {
       "Idle states: /dev/cpu_dma_latency is held at 0 us for the run, as cyclictest does, unless\n"
       "--dma-latency or --no-dma-latency says otherwise; the output says which setting was in force.\n"
       "--find-period --miss-rate R: the shortest period whose deadline misses stay at most at rate R,\n"
-      "with 95 % confidence (a one-sided Clopper-Pearson bound), found by bisection; --period is where\n"
-      "the search starts.");
+      "with 95 % confidence (a one-sided Clopper-Pearson bound), found by bisection; --period is where\n" +
+      fmt::format("the search starts. When the answer is over {:g}x every trial's completion p99, the misses were\n"
+                  "the machine's stalls, not the step's cost, and the output says so (\"set by stalls\").",
+                  kStallDominatedFactor));
   command->add_option("--sync", options->sync, "Synchronisation primitive (lockstep list)")->capture_default_str();
   command->add_option("--layout", options->layout, "Data layout (lockstep list)")->capture_default_str();
   auto* pin = command->add_option("--pin", options->pin, "Placement: none, compact, scatter, migrate")
