@@ -159,6 +159,16 @@ class basic_mailbox {
     return false;
   }
 
+  // Whether a consumer has set the waiter bit on one of `producer`'s slots
+  // (it is asleep on that word, or about to be). For tests: a producer that
+  // stalls on purpose can wait until its consumers took the sleep path.
+  bool sleeper_on(unsigned producer) const noexcept {
+    for (std::size_t slot = 0; slot < Depth; ++slot)
+      // relaxed: a snapshot for a test's pacing; nothing is read through it.
+      if ((first(producer, slot).epoch.load(std::memory_order_relaxed) & kWaiterBit) != 0) return true;
+    return false;
+  }
+
   // The regime participant `id` waits in (wait_policy.hpp): dedicated until
   // every participant has enrolled. Read it only while that participant is
   // not running (after the team joined): for tests.

@@ -269,37 +269,44 @@ void pin_to(int cpu) {
 
 // Four participants confined to one CPU, as a barrier (every participant
 // depends on all others), with the phase invariant of the conformance suite.
-// Now and then a participant naps before arriving (not runnable: yielding to
-// it cannot help), so the others use up their yields and must sleep on its
+// Every kNapEvery phases one participant (each in turn) naps before arriving
+// (not runnable: yielding to it cannot help) until a consumer has set the
+// waiter bit on its words, so the others use up their yields and sleep on its
 // epoch word. Two runs on one barrier: the first settles the regime (the
-// census needs every participant enrolled); the second's counters are all
-// from the oversubscribed regime.
+// census needs every participant enrolled); the second's counters are all from
+// the oversubscribed regime.
 TEST(MailboxOversubscribed, FourParticipantsOnOneCpuSleepAndKeepThePhaseInvariant) {
   watchdog guard(120s * kSlowdown, "mailbox: four participants on one CPU stuck (lost wake-up?)");
   testing::affinity_restorer restore;
   const int cpu = testing::first_cpu(restore.saved());
   constexpr unsigned kParticipants = 4;
+  // The nap lasts until a sleeper shows, not a fixed time: a waiter's 64
+  // yields take 20-60 us on an idle CPU, but each yield also hands the CPU to
+  // whatever else is runnable there, and under a loaded CI (ctest -j2, a
+  // sanitizer) even 20 ms naps ended before the yields ran out. The bound only
+  // keeps a broken sleep path from stretching the test; the counters then fail.
+  constexpr std::uint64_t kNapEvery = 50;  // 8 naps under a sanitizer, 40 otherwise
+  constexpr auto kLongestNap = 2s;
   channel_barrier<mailbox> barrier(kParticipants);
   sync_counters second_run;
   for (int run = 0; run < 2; ++run) {
     testing::phase_invariant invariant(kParticipants);
-    struct alignas(platform::kCacheLine) nap_source {
-      std::minstd_rand random;
+    struct alignas(platform::kCacheLine) pinned_flag {
       bool pinned = false;
     };
-    std::vector<nap_source> sources(kParticipants);
-    for (unsigned id = 0; id < kParticipants; ++id) sources[id].random.seed(97u + id + 13u * static_cast<unsigned>(run));
+    std::vector<pinned_flag> flags(kParticipants);
     const phase_run_result result =
         run_phases(barrier, kParticipants, {kPhases, std::chrono::hours(1)}, [&](participant& self, std::uint64_t phase) {
-          nap_source& mine = sources[self.id];
-          if (!mine.pinned) {
+          if (!flags[self.id].pinned) {
             pin_to(cpu);
-            mine.pinned = true;
+            flags[self.id].pinned = true;
           }
           invariant.before_arrival(self, phase);
-          // 1 ms: far longer than the waiters' bounded yields (64, about
-          // 20-60 us on one CPU), so they must sleep on its word.
-          if (mine.random() % 32 == 0) std::this_thread::sleep_for(1ms);
+          if (phase % kNapEvery == kNapEvery / 2 && self.id == (phase / kNapEvery) % kParticipants) {
+            const auto until = std::chrono::steady_clock::now() + kLongestNap;
+            while (!barrier.channel().sleeper_on(self.id) && std::chrono::steady_clock::now() < until)
+              std::this_thread::sleep_for(200us);
+          }
         });
     EXPECT_EQ(result.phases, kPhases);
     EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
