@@ -279,7 +279,9 @@ def run_document(c2c_context, serial_context, shifted, c2c_counter=25.0, c2c_tim
     return {"context": context, "benchmarks": benchmarks}
 
 
-class NoiseThreshold(unittest.TestCase):
+class ScratchFiles(unittest.TestCase):
+    """A test case with a scratch directory to write JSON documents into."""
+
     def setUp(self):
         self.directory = tempfile.TemporaryDirectory()
         self.addCleanup(self.directory.cleanup)
@@ -290,6 +292,8 @@ class NoiseThreshold(unittest.TestCase):
             json.dump(document, stream)
         return path
 
+
+class NoiseThreshold(ScratchFiles):
     def pair(self, shifted_b, c2c_b="25.0", serial_b="20.00", **contender):
         a = self.write("a.json", run_document("25.0", "20.00", 560.0))
         b = self.write("b.json", run_document(c2c_b, serial_b, shifted_b, **contender))
@@ -477,17 +481,7 @@ def paced_document(scale=1.0, c2c=25.0):
     return document
 
 
-class PowerAndPace(unittest.TestCase):
-    def setUp(self):
-        self.directory = tempfile.TemporaryDirectory()
-        self.addCleanup(self.directory.cleanup)
-
-    def write(self, name, document):
-        path = os.path.join(self.directory.name, name)
-        with open(path, "w", encoding="utf-8") as stream:
-            json.dump(document, stream)
-        return path
-
+class PowerAndPace(ScratchFiles):
     def test_a_known_difference_is_seen_a_b_power(self):
         # A default run of this VM (5 repetitions an entry, 236 combinations), against itself with the
         # entries of std_barrier and futex_spin exchanging names: at the default settings compare calls
@@ -616,17 +610,7 @@ def displays(keys):
     return sorted(key.display for key in keys)
 
 
-class Models(unittest.TestCase):
-    def setUp(self):
-        self.directory = tempfile.TemporaryDirectory()
-        self.addCleanup(self.directory.cleanup)
-
-    def write(self, name, document):
-        path = os.path.join(self.directory.name, name)
-        with open(path, "w", encoding="utf-8") as stream:
-            json.dump(document, stream)
-        return path
-
+class Models(ScratchFiles):
     def test_chain_entries_match_by_their_model(self):
         a = self.write("a.json", with_chain(run_document("25.0", "20.00", 560.0)))
         b = self.write("b.json", with_chain(run_document("25.0", "20.00", 560.0), chain_ns=900.0 * 1.4))
