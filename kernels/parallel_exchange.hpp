@@ -41,6 +41,7 @@
 #include <utility>
 #include <vector>
 
+#include "kernels/oscillator.hpp"
 #include "layouts/aligned_buffer.hpp"
 #include "layouts/partition.hpp"
 #include "layouts/per_thread.hpp"  // the board's slot numbering (kBoardNextState) every private_copy layout shares
@@ -57,6 +58,25 @@ struct participant_plan {
   std::vector<unsigned> producers;        // owners of those equations, ascending
   bool has_consumers = false;             // some other participant reads one of its equations
 };
+
+// Every participant's plan, for a model split into `blocks`: the one place
+// that derives who reads whom (the threaded step and the MPI ranks of
+// distributed/ both ask here). Not on the measured path (allocates).
+template <oscillator_model Model>
+[[nodiscard]] std::vector<participant_plan> plan_participants(const Model& model, const layouts::partition& blocks) {
+  std::vector<participant_plan> plans(blocks.participants());
+  for (unsigned participant = 0; participant < blocks.participants(); ++participant) {
+    participant_plan& entry = plans[participant];
+    entry.block = blocks.block(participant);
+    entry.dependencies = block_dependencies(model, entry.block.first, entry.block.last);
+    for (std::size_t equation : entry.dependencies) entry.producers.push_back(blocks.owner(equation));
+    std::sort(entry.producers.begin(), entry.producers.end());
+    entry.producers.erase(std::unique(entry.producers.begin(), entry.producers.end()), entry.producers.end());
+  }
+  for (const participant_plan& consumer : plans)
+    for (unsigned producer : consumer.producers) plans[producer].has_consumers = true;
+  return plans;
+}
 
 // ---------------------------------------------------------------------------
 template <class Barrier, class Layout>

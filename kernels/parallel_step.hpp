@@ -230,7 +230,7 @@ class parallel_rk4 {
       : model_(model),
         coefficients_(dt),
         blocks_(model_.equations(), threads),
-        plans_(plan(model_, blocks_)),
+        plans_(plan_participants(model_, blocks_)),
         exchange_(blocks_, plans_, std::forward<SyncArgs>(sync_args)...),
         records_(threads) {
     if (initial_state.size() != model_.equations())
@@ -413,21 +413,6 @@ class parallel_rk4 {
     } else {
       return {};
     }
-  }
-
-  static std::vector<participant_plan> plan(const Model& model, const layouts::partition& blocks) {
-    std::vector<participant_plan> plans(blocks.participants());
-    for (unsigned participant = 0; participant < blocks.participants(); ++participant) {
-      participant_plan& entry = plans[participant];
-      entry.block = blocks.block(participant);
-      entry.dependencies = block_dependencies(model, entry.block.first, entry.block.last);
-      for (std::size_t equation : entry.dependencies) entry.producers.push_back(blocks.owner(equation));
-      std::sort(entry.producers.begin(), entry.producers.end());
-      entry.producers.erase(std::unique(entry.producers.begin(), entry.producers.end()), entry.producers.end());
-    }
-    for (const participant_plan& consumer : plans)
-      for (unsigned producer : consumer.producers) plans[producer].has_consumers = true;
-    return plans;
   }
 
   Model model_;
