@@ -2,9 +2,14 @@
 // Linux futex calls on a std::atomic<std::uint32_t>, for the blocking
 // primitives in sync/ (futex_spin, the Win32 event emulation).
 //
-// What it is: thin wrappers over syscall(SYS_futex, ...) with the PRIVATE
-// flag (the word is never shared across processes, so the kernel may key the
-// wait queue by address without taking the mm-wide lock).
+// What it is: thin wrappers over syscall(SYS_futex, ...). By default with the
+// PRIVATE flag (futex_scope::process_private: the word is never shared across
+// processes, so the kernel may key the wait queue by address without taking
+// the mm-wide lock); futex_scope::process_shared for a word in memory that
+// several processes map (an MPI-3 shared window, distributed/shm_window): the
+// kernel then keys the queue by the page, so a wake in one process reaches a
+// waiter in another. A private wait and a shared wake on the same word miss
+// each other: every caller on one word must use one scope.
 // Progress: futex_wait blocks; futex_wake never blocks.
 // Who may call: any thread, on a word that lives as long as every caller.
 // Memory ordering: none. The kernel compares the word with `expected`
@@ -33,16 +38,24 @@ static_assert(std::atomic<std::uint32_t>::is_always_lock_free,
 
 enum class futex_result { woken, value_changed, timed_out, interrupted };
 
+// Who may wait on and wake a word: threads of one process, or processes that
+// map the same memory (see the header).
+enum class futex_scope { process_private, process_shared };
+
 namespace detail {
 inline std::uint32_t* futex_address(std::atomic<std::uint32_t>& word) noexcept {
   // The atomic holds nothing but the integer (asserted above); the kernel reads
   // and compares it atomically.
   return reinterpret_cast<std::uint32_t*>(&word);
 }
+constexpr int futex_operation(int operation, futex_scope scope) noexcept {
+  return scope == futex_scope::process_private ? (operation | FUTEX_PRIVATE_FLAG) : operation;
+}
 }  // namespace detail
 
 // Sleeps while `word` still holds `expected`, until a futex_wake on `word`, a
 // signal, or `timeout` (relative; negative means no timeout) elapses.
+template <futex_scope Scope = futex_scope::process_private>
 inline futex_result futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t expected,
                                std::chrono::nanoseconds timeout = std::chrono::nanoseconds(-1)) noexcept {
   timespec relative{};
@@ -52,7 +65,7 @@ inline futex_result futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t e
     relative.tv_nsec = static_cast<long>(timeout.count() % 1'000'000'000);
     relative_pointer = &relative;
   }
-  const long status = syscall(SYS_futex, detail::futex_address(word), FUTEX_WAIT_PRIVATE, expected,
+  const long status = syscall(SYS_futex, detail::futex_address(word), detail::futex_operation(FUTEX_WAIT, Scope), expected,
                               relative_pointer, nullptr, 0);
   if (status == 0) return futex_result::woken;
   switch (errno) {
@@ -63,8 +76,9 @@ inline futex_result futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t e
 }
 
 // Wakes up to `count` threads sleeping on `word`; returns how many it woke.
+template <futex_scope Scope = futex_scope::process_private>
 inline int futex_wake(std::atomic<std::uint32_t>& word, int count = INT_MAX) noexcept {
-  return static_cast<int>(syscall(SYS_futex, detail::futex_address(word), FUTEX_WAKE_PRIVATE, count, nullptr,
+  return static_cast<int>(syscall(SYS_futex, detail::futex_address(word), detail::futex_operation(FUTEX_WAKE, Scope), count, nullptr,
                                   nullptr, 0));
 }
 

@@ -43,6 +43,14 @@
 // out and it sleeps too), settling into sleeping every phase even with a core
 // per participant.
 //
+// Across processes (template parameter futex_scope, sync/futex.hpp): with
+// futex_scope::process_shared the barrier lives in memory that several
+// processes map (distributed/shm_window.hpp places it in an MPI-3 shared
+// window); it then holds everything inline (no heap pointer another process
+// could not follow: at most kSharedParticipantsMax participant slots) and its
+// futexes are the shared kind. The protocol is the same; the registry's
+// entries are the process-private ones.
+//
 // Phase-word layout (template parameter, phase_lines): the arrival counter,
 // the sense word and the sleepers count on one line (one_line, as in ck's
 // centralized barrier), or the counter on a prefetch pair of its own and the
@@ -63,6 +71,7 @@
 // from bare episodes alone; the step is what the suite measures.
 #include <sched.h>
 
+#include <array>
 #include <atomic>
 #include <cassert>
 #include <climits>
@@ -70,6 +79,7 @@
 #include <cstdint>
 #include <memory>
 #include <string_view>
+#include <type_traits>
 
 #include "platform/cache_line.hpp"
 #include "platform/cpu_relax.hpp"
@@ -120,9 +130,10 @@ static_assert(offsetof(futex_spin_phase<phase_lines::split_lines>, sleepers) / p
               "split_lines: the sleepers count shares the sense word's line");
 }  // namespace detail
 
-template <phase_lines Lines>
+template <phase_lines Lines, futex_scope Scope = futex_scope::process_private>
 class basic_futex_spin {
   using phase_word = detail::futex_spin_phase<Lines>;
+  static constexpr bool kInline = Scope == futex_scope::process_shared;
 
  public:
   static constexpr std::string_view kName = Lines == kDefaultPhaseLines ? "futex_spin" : phase_word::kAlternativeName;
@@ -154,10 +165,12 @@ class basic_futex_spin {
   // runnable participant (~1 us when one is queued here, ~0.3 us when not), so
   // 64 of them bound the wait at about the cost of two futex round trips.
   static constexpr std::uint32_t kOversubscribedYields = 64;
+  // The most participants a process-shared barrier holds (its slots are inline).
+  static constexpr unsigned kSharedParticipantsMax = 256;
 
-  explicit basic_futex_spin(unsigned participants)
-      : participants_(participants), slots_(std::make_unique<slot[]>(participants)) {
+  explicit basic_futex_spin(unsigned participants) : participants_(participants), slots_(make_slots(participants)) {
     assert(participants >= 1);
+    assert(!kInline || participants <= kSharedParticipantsMax);
     phase_.remaining.store(participants, std::memory_order_relaxed);  // published by the thread start
   }
   basic_futex_spin(const basic_futex_spin&) = delete;  // participants hold its address
@@ -196,7 +209,7 @@ class basic_futex_spin {
       phase_.sense.store(sense, std::memory_order_seq_cst);
       // (7) seq_cst: see (3) and (5).
       if (phase_.sleepers.load(std::memory_order_seq_cst) != 0) {
-        futex_wake(phase_.sense);
+        futex_wake<Scope>(phase_.sense);
         ++self.counters.futex_wakes;
       }
       return;
@@ -223,7 +236,7 @@ class basic_futex_spin {
     // kernel repeats atomically inside FUTEX_WAIT. A spurious or early return
     // (EINTR, EAGAIN, a wake-up for another word value) just loops here.
     while (phase_.sense.load(std::memory_order_seq_cst) != sense) {
-      futex_wait(phase_.sense, sense ^ 1u);
+      futex_wait<Scope>(phase_.sense, sense ^ 1u);
       ++self.counters.futex_waits;
     }
     // (8) relaxed: the count only steers (7); a late decrement costs at most
@@ -242,10 +255,20 @@ class basic_futex_spin {
   };
   static_assert(alignof(phase_word) >= platform::kCacheLine, "the phase words must not share a line with anything else");
   static_assert(sizeof(slot) % platform::kCacheLine == 0, "participant slots must not share a line");
+  // Private: one heap array of exactly the participants. Shared: inline, so
+  // that the whole barrier is one block another process can map.
+  using slot_storage = std::conditional_t<kInline, std::array<slot, kSharedParticipantsMax>, std::unique_ptr<slot[]>>;
+  static slot_storage make_slots(unsigned participants) {
+    if constexpr (kInline) {
+      return slot_storage{};
+    } else {
+      return std::make_unique<slot[]>(participants);
+    }
+  }
 
   const unsigned participants_;
   phase_word phase_;
-  std::unique_ptr<slot[]> slots_;
+  slot_storage slots_;
   cpu_union cpus_;
 };
 
@@ -255,5 +278,11 @@ using futex_spin_alternative = basic_futex_spin<kDefaultPhaseLines == phase_line
                                                                                             : phase_lines::one_line>;
 static_assert(phase_barrier<futex_spin>);
 static_assert(phase_barrier<futex_spin_alternative>);
+
+// The registry's futex_spin for processes that share its memory.
+using process_shared_futex_spin = basic_futex_spin<kDefaultPhaseLines, futex_scope::process_shared>;
+static_assert(phase_barrier<process_shared_futex_spin>);
+static_assert(std::is_trivially_destructible_v<process_shared_futex_spin>,
+              "a process-shared futex_spin owns no resource (no heap pointer another process could not follow)");
 
 }  // namespace lockstep::sync
