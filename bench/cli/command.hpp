@@ -36,6 +36,7 @@ void add_c2c(CLI::App& app, int& result);
 void add_delay(CLI::App& app, int& result);
 void add_falseshare(CLI::App& app, int& result);
 void add_migrate(CLI::App& app, int& result);
+void add_mpi(CLI::App& app, int& result);  // the step across MPI ranks (distributed/)
 void add_reports(CLI::App& app, int& result);  // compare and report (Python, reports/)
 
 }  // namespace lockstep::cli

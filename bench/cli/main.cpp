@@ -54,6 +54,7 @@ int main(int argc, char** argv) {
   lockstep::cli::add_delay(app, result);
   lockstep::cli::add_falseshare(app, result);
   lockstep::cli::add_migrate(app, result);
+  lockstep::cli::add_mpi(app, result);
   lockstep::cli::add_topology(app, result);
   lockstep::cli::add_list(app, result);
   lockstep::cli::add_reports(app, result);

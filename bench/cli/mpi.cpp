@@ -1,0 +1,486 @@
+// lockstep mpi: the RK4 step across MPI ranks (distributed/). Run directly,
+// it checks every option, then launches mpirun for --ranks N on this host (or
+// the hosts of --hostfile) and says the command it ran; run under mpirun, each
+// rank measures, rank 0 prints and writes the result (DESIGN.md, Distributed
+// memory).
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "bench/cli/command.hpp"
+#include "bench/cli/options.hpp"
+#include "kernels/model_choice.hpp"
+
+#if LOCKSTEP_HAVE_MPI
+#include <nlohmann/json.hpp>
+
+#include "bench/harness/machine_context.hpp"
+#include "bench/harness/result_file.hpp"
+#include "bench/harness/rk4_entries.hpp"
+#include "distributed/benchmark.hpp"
+#include "distributed/launcher.hpp"
+#include "distributed/registry.hpp"
+#include "distributed/watchdog.hpp"
+#include "distributed/world.hpp"
+#include "platform/placement.hpp"
+#include "platform/topology.hpp"
+#endif
+
+namespace lockstep::cli {
+namespace {
+
+struct mpi_options {
+  unsigned ranks = 0;  // 0: not given
+  std::optional<std::string> exchanges;
+  std::string transport = "shm";
+  std::string hostfile;
+  std::uint64_t steps = 5000;
+  std::uint64_t warmup = 500;
+  unsigned rounds = 3;
+  std::uint64_t pingpong = 10000;
+  std::string pin = "compact";
+  std::optional<std::size_t> masses;
+  std::string watchdog = "10s";
+  std::string mpirun = "mpirun";
+  std::string out;
+};
+
+// The variable the launcher hands its command line down in, and the tests'
+// fault injection ("stall:RANK:STEP" or "die:RANK:STEP").
+constexpr const char* kLaunchVariable = "LOCKSTEP_MPI_LAUNCH";
+constexpr const char* kFaultVariable = "LOCKSTEP_MPI_FAULT";
+// The launcher's status when the job failed otherwise (a rank died, stalled
+// and was ended by its watchdog, or mpirun could not start it).
+constexpr int kExitJobFailed = 3;
+
+#if LOCKSTEP_HAVE_MPI
+namespace dist = lockstep::distributed;
+
+// What every rank and the launcher derive from the options, checked: bad
+// input throws usage_error before anything is launched or measured.
+struct checked_options {
+  dist::transport how = dist::transport::shared_memory;
+  std::vector<std::string> hosts;  // from --hostfile; empty: this host
+  std::vector<std::string> exchange_names;
+  bool exchanges_named = false;
+  kernels::model_choice model;
+  platform::placement pin = platform::placement::compact;
+  std::int64_t watchdog_ns = 0;
+  dist::benchmark_settings::fault inject = dist::benchmark_settings::fault::none;
+  int fault_rank = -1;
+  std::uint64_t fault_step = 0;
+};
+
+checked_options check(const mpi_options& options, unsigned ranks) {
+  checked_options checked;
+  if (options.transport == "tcp")
+    checked.how = dist::transport::tcp;
+  else if (options.transport != "shm")
+    throw usage_error("--transport: '" + options.transport + "' is not one of shm, tcp");
+  if (!options.hostfile.empty()) {
+    try {
+      checked.hosts = dist::read_hostfile(options.hostfile);
+    } catch (const std::invalid_argument& e) {
+      throw usage_error(e.what());
+    }
+  }
+  checked.exchange_names = select_names(options.exchanges, dist::exchange_names(), "--exchange");
+  checked.exchanges_named = options.exchanges.has_value();
+  if (ranks < 2) throw usage_error("--ranks: the step needs at least 2 ranks to exchange anything (got " +
+                                   std::to_string(ranks) + ")");
+  checked.model = kernels::model_for(ranks, options.masses);
+  if (ranks > checked.model.equations())
+    throw usage_error("--ranks " + std::to_string(ranks) + " cannot split " + checked.model.description() +
+                      ": at most one rank per equation (" + std::to_string(checked.model.equations()) +
+                      "); give --masses " + std::to_string((ranks + 1) / 2) + " or more");
+  try {
+    checked.pin = platform::parse_placement(options.pin);
+  } catch (const std::invalid_argument& e) {
+    throw usage_error(std::string("--pin: ") + e.what());
+  }
+  if (checked.pin == platform::placement::migrate)
+    throw usage_error("--pin: migrate moves threads of one process; ranks take none, compact or scatter");
+  checked.watchdog_ns = parse_duration_ns(options.watchdog, "--watchdog", 100'000'000, 3'600'000'000'000);
+  check_out(options.out);
+
+  if (const char* fault = std::getenv(kFaultVariable); fault != nullptr && *fault != '\0') {
+    char kind[16] = {};
+    int rank = -1;
+    unsigned long long step = 0;
+    if (std::sscanf(fault, "%15[a-z]:%d:%llu", kind, &rank, &step) != 3 ||
+        (std::string(kind) != "stall" && std::string(kind) != "die"))
+      throw usage_error(std::string(kFaultVariable) + ": '" + fault + "' is not stall:RANK:STEP or die:RANK:STEP");
+    checked.inject = std::string(kind) == "stall" ? dist::benchmark_settings::fault::stall
+                                                  : dist::benchmark_settings::fault::die;
+    checked.fault_rank = rank;
+    checked.fault_step = step;
+  }
+  return checked;
+}
+
+// The exchanges that can run on this job, in the order asked; an exchange the
+// user named that cannot is bad input, one the default list holds is recorded
+// as not applicable.
+std::vector<const dist::exchange_entry*> applicable(const checked_options& checked, const dist::job_shape& job,
+                                                    std::map<std::string, std::string>& not_applicable) {
+  std::vector<const dist::exchange_entry*> result;
+  for (const std::string& name : checked.exchange_names) {
+    const dist::exchange_entry* entry = dist::find_exchange(name);
+    const std::string reason = entry->not_applicable(job);
+    if (reason.empty()) {
+      result.push_back(entry);
+    } else if (checked.exchanges_named) {
+      throw usage_error("--exchange " + name + ": " + reason);
+    } else {
+      not_applicable[name] = reason;
+    }
+  }
+  if (result.empty()) throw usage_error("--exchange: none of the exchanges can run on this job");
+  return result;
+}
+
+// The options again, for the ranks mpirun starts.
+std::vector<std::string> rank_arguments(const mpi_options& options, unsigned ranks) {
+  std::vector<std::string> arguments{"mpi", "--ranks", std::to_string(ranks), "--transport", options.transport,
+                                     "--steps", std::to_string(options.steps), "--warmup", std::to_string(options.warmup),
+                                     "--rounds", std::to_string(options.rounds), "--pingpong",
+                                     std::to_string(options.pingpong), "--pin", options.pin, "--watchdog",
+                                     options.watchdog};
+  if (options.exchanges) arguments.insert(arguments.end(), {"--exchange", *options.exchanges});
+  if (options.masses) arguments.insert(arguments.end(), {"--masses", std::to_string(*options.masses)});
+  if (!options.hostfile.empty()) arguments.insert(arguments.end(), {"--hostfile", options.hostfile});
+  if (!options.out.empty()) arguments.insert(arguments.end(), {"--out", options.out});
+  return arguments;
+}
+
+void launch(const mpi_options& options, int& result) {
+  if (options.ranks == 0) throw usage_error("--ranks N is required when lockstep mpi is not run under mpirun");
+  const checked_options checked = check(options, options.ranks);
+  const dist::job_shape shape{static_cast<int>(options.ranks),
+                              checked.hosts.empty() ? 1 : static_cast<int>(checked.hosts.size()), checked.how};
+  std::map<std::string, std::string> not_applicable;
+  (void)applicable(checked, shape, not_applicable);
+
+  const std::optional<std::string> mpirun = dist::find_program(options.mpirun);
+  if (!mpirun)
+    throw usage_error("cannot find " + options.mpirun +
+                      " (install Open MPI: scripts/setup.sh installs openmpi-bin; or name one with --mpirun)");
+  dist::launch_request request;
+  request.mpirun = *mpirun;
+  request.open_mpi = dist::is_open_mpi(*mpirun);
+  request.ranks = options.ranks;
+  request.how = checked.how;
+  request.hostfile = options.hostfile;
+  request.host_cpus = platform::affinity_cpu_count();
+  request.as_root = geteuid() == 0;
+  request.executable = dist::this_executable();
+  request.arguments = rank_arguments(options, options.ranks);
+  request.forwarded = {kLaunchVariable};
+  if (std::getenv(kFaultVariable) != nullptr) request.forwarded.emplace_back(kFaultVariable);
+  dist::launch_plan plan;
+  try {
+    plan = dist::plan_launch(request);
+  } catch (const std::invalid_argument& e) {
+    throw usage_error(e.what());
+  }
+  const std::string shown = plan.shown();
+  fmt::print(stderr, "lockstep mpi: running: {}\n", shown);
+  plan.environment.emplace_back(kLaunchVariable, shown);
+  const int status = dist::run_plan(plan);
+  if (status != 0) {
+    fmt::print(stderr, "lockstep mpi: the MPI job failed (mpirun exited with status {}); the lines above say which rank and why\n",
+               status);
+    result = status == kExitUsage || status == kExitCheckFailed ? status : kExitJobFailed;
+    return;
+  }
+  result = kExitOk;
+}
+
+std::string exchange_name(const dist::exchange_entry& entry, const dist::world& job) {
+  return fmt::format("mpi/{}/ranks:{}/hosts:{}", entry.segment, job.size, job.hosts);
+}
+std::string pingpong_name(const dist::world& job) { return fmt::format("mpi/pingpong/ranks:2/hosts:{}", job.hosts); }
+
+nlohmann::json distribution_json(const platform::distribution& d) {
+  return {{"min", d.min}, {"p50", d.p50}, {"p99", d.p99}, {"p999", d.p999}, {"max", d.max}, {"mean", d.mean},
+          {"count", d.count}};
+}
+
+std::string ns_text(double ns) {
+  if (ns >= 1e6) return fmt::format("{:.2f} ms", ns / 1e6);
+  if (ns >= 1e3) return fmt::format("{:.2f} us", ns / 1e3);
+  return fmt::format("{:.0f} ns", ns);
+}
+
+template <class Value>
+Value median_of(std::vector<Value> values) {
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
+void report(const mpi_options& options, const checked_options& checked, const dist::world& job,
+            const dist::benchmark_settings& settings, const dist::benchmark_result& measured,
+            const std::map<std::string, std::string>& not_applicable, const std::string& launch_text, int& result) {
+  const std::string library = dist::library_version();
+  const std::string library_short = library.substr(0, library.find(','));  // "Open MPI v4.1.4"
+  fmt::print("lockstep mpi: {} ranks on {} host{} ({} transport, {}), {}, pin {}, {} rounds of {} steps\n", job.size,
+             job.hosts, job.hosts == 1 ? "" : "s", dist::to_string(checked.how), library_short,
+             checked.model.description(), options.pin, settings.rounds, settings.steps);
+  if (!measured.plan.note.empty()) fmt::print("placement: {}\n", measured.plan.note);
+  std::vector<double> pingpong_means;
+  for (const auto& p : measured.pingpongs) pingpong_means.push_back(p.one_way_mean_ns);
+  const auto& last_pingpong = measured.pingpongs.back();
+  fmt::print("ping-pong, ranks 0 and 1, 0 bytes: one-way {} (OSU style: mean of {} round trips / 2; median of {} rounds, "
+             "range {}..{}); per round trip, last round: min {}, p50 {}, p99 {}\n",
+             ns_text(median_of(pingpong_means)), settings.pingpong_round_trips, measured.pingpongs.size(),
+             ns_text(*std::min_element(pingpong_means.begin(), pingpong_means.end())),
+             ns_text(*std::max_element(pingpong_means.begin(), pingpong_means.end())), ns_text(last_pingpong.one_way.min),
+             ns_text(last_pingpong.one_way.p50), ns_text(last_pingpong.one_way.p99));
+  fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>8}\n", "exchange",
+             "step (median, range)", "stage p50", "p99", "p99.9", "max", "skew p50", "skew p99", "slowest rank",
+             "bitwise");
+  bool all_bitwise = true;
+  for (const dist::exchange_entry* entry : settings.exchanges) {
+    std::vector<const dist::exchange_figures*> rounds;
+    for (const auto& figures : measured.exchanges)
+      if (figures.entry == entry) rounds.push_back(&figures);
+    std::vector<double> steps;
+    std::vector<double> p50, p99, p999, max, skew50, skew99;
+    std::vector<std::uint64_t> slowest(static_cast<std::size_t>(job.size), 0);
+    bool bitwise = true;
+    for (const auto* figures : rounds) {
+      steps.push_back(figures->step_ns);
+      p50.push_back(figures->stage_latency.p50);
+      p99.push_back(figures->stage_latency.p99);
+      p999.push_back(figures->stage_latency.p999);
+      max.push_back(figures->stage_latency.max);
+      skew50.push_back(figures->skew.p50);
+      skew99.push_back(figures->skew.p99);
+      for (std::size_t rank = 0; rank < slowest.size(); ++rank) slowest[rank] += figures->slowest_counts[rank];
+      bitwise = bitwise && figures->bitwise;
+    }
+    all_bitwise = all_bitwise && bitwise;
+    const auto most = std::max_element(slowest.begin(), slowest.end());
+    std::uint64_t total = 0;
+    for (std::uint64_t count : slowest) total += count;
+    fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>8}\n", entry->name,
+               fmt::format("{} ({}..{})", ns_text(median_of(steps)), ns_text(*std::min_element(steps.begin(), steps.end())),
+                           ns_text(*std::max_element(steps.begin(), steps.end()))),
+               ns_text(median_of(p50)), ns_text(median_of(p99)), ns_text(median_of(p999)), ns_text(median_of(max)),
+               ns_text(median_of(skew50)), ns_text(median_of(skew99)),
+               fmt::format("{} ({:.0f}%)", most - slowest.begin(),
+                           total ? 100.0 * static_cast<double>(*most) / static_cast<double>(total) : 0.0),
+               bitwise ? "yes" : "NO");
+  }
+  fmt::print("stage figures: medians over rounds of each round's pooled per-stage exchange times (every rank, every "
+             "stage); skew: latest minus earliest arrival at a stage{}\n",
+             measured.one_clock ? "" : " (clocks of several hosts, offsets estimated against rank 0)");
+  for (const auto& [name, reason] : not_applicable) fmt::print("not applicable: {}: {}\n", name, reason);
+
+  if (!options.out.empty()) {
+    const platform::topology machine = platform::topology::this_machine();
+    nlohmann::json document = bench::result_document("mpi", machine);
+    bench::merge_into_result(document, bench::context_map{
+                                           {"mpi_library", library},
+                                           {"mpi_standard", dist::standard_version()},
+                                           {"mpi_transport", std::string(dist::to_string(checked.how))},
+                                           {"mpi_hosts", std::to_string(job.hosts)},
+                                           {"mpi_ranks", std::to_string(job.size)},
+                                           {"mpi_ranks_per_host", std::to_string(job.ranks_per_host_max)},
+                                           {"mpi_launch", launch_text},
+                                           {"lockstep_mode", "mpi"},
+                                       });
+    nlohmann::json names = nlohmann::json::array();
+    for (const auto* entry : settings.exchanges) names.push_back(entry->name);
+    document["settings"] = {{"ranks", job.size},
+                            {"hosts", job.hosts},
+                            {"transport", dist::to_string(checked.how)},
+                            {"model", checked.model.key()},
+                            {"equations", checked.model.equations()},
+                            {"steps", settings.steps},
+                            {"warmup_steps", settings.warmup_steps},
+                            {"rounds", settings.rounds},
+                            {"pin", options.pin},
+                            {"exchanges", names},
+                            {"pingpong_round_trips", settings.pingpong_round_trips},
+                            {"watchdog_ns", checked.watchdog_ns},
+                            {"arrival_clock", measured.one_clock ? "one host" : "offset-estimated"}};
+    nlohmann::json benchmarks = nlohmann::json::array();
+    for (const auto& p : measured.pingpongs) {
+      const std::string name = pingpong_name(job);
+      benchmarks.push_back({{"name", name}, {"run_name", name}, {"run_type", "iteration"},
+                            {"repetitions", settings.rounds}, {"repetition_index", p.round}, {"threads", 1},
+                            {"iterations", p.round_trips}, {"real_time", p.one_way_mean_ns},
+                            {"cpu_time", p.one_way_mean_ns}, {"time_unit", "ns"}, {"one_way_min_ns", p.one_way.min},
+                            {"one_way_p50_ns", p.one_way.p50}, {"one_way_p99_ns", p.one_way.p99}});
+    }
+    for (const auto& figures : measured.exchanges) {
+      const std::string name = exchange_name(*figures.entry, job);
+      const auto most = std::max_element(figures.slowest_counts.begin(), figures.slowest_counts.end());
+      const double stages = static_cast<double>(figures.skew.count);
+      std::int64_t switches = 0;
+      std::int64_t migrations = 0;
+      bool migrations_known = true;  // every rank's count is available
+      for (const auto& rank : figures.ranks) {
+        switches += rank.context_switches;
+        migrations += rank.migrations.value_or(0);
+        migrations_known = migrations_known && rank.migrations.has_value();
+      }
+      const double timed_steps = static_cast<double>(settings.steps);
+      nlohmann::json entry = {{"name", name}, {"run_name", name}, {"run_type", "iteration"},
+                              {"repetitions", settings.rounds}, {"repetition_index", figures.round}, {"threads", 1},
+                              {"iterations", settings.steps}, {"real_time", figures.step_ns},
+                              {"cpu_time", figures.step_ns}, {"time_unit", "ns"},
+                              {"stage_p50_ns", figures.stage_latency.p50}, {"stage_p99_ns", figures.stage_latency.p99},
+                              {"stage_p999_ns", figures.stage_latency.p999}, {"stage_max_ns", figures.stage_latency.max},
+                              {"skew_p50_ns", figures.skew.p50}, {"skew_p99_ns", figures.skew.p99},
+                              {"skew_max_ns", figures.skew.max}, {"slowest_rank", most - figures.slowest_counts.begin()},
+                              {"slowest_rank_share", stages > 0 ? static_cast<double>(*most) / stages : 0.0},
+                              {"context_switches_per_step", static_cast<double>(switches) / timed_steps},
+                              {"bitwise", figures.bitwise ? 1 : 0}};
+      if (migrations_known) entry["migrations_per_step"] = static_cast<double>(migrations) / timed_steps;
+      benchmarks.push_back(std::move(entry));
+    }
+    document["benchmarks"] = std::move(benchmarks);
+    nlohmann::json details = nlohmann::json::array();
+    for (const auto& figures : measured.exchanges) {
+      if (figures.round + 1 != settings.rounds) continue;  // the last round's details
+      nlohmann::json ranks = nlohmann::json::array();
+      for (const auto& rank : figures.ranks)
+        ranks.push_back({{"rank", rank.rank}, {"host", rank.host},
+                         {"cpu", rank.cpu ? nlohmann::json(*rank.cpu) : nlohmann::json(nullptr)},
+                         {"stage_p50_ns", rank.stage_p50_ns}, {"stage_p99_ns", rank.stage_p99_ns},
+                         {"context_switches", rank.context_switches},
+                         {"migrations", rank.migrations ? nlohmann::json(*rank.migrations) : nlohmann::json("unavailable")},
+                         {"futex_waits", rank.futex_waits}});
+      details.push_back({{"exchange", figures.entry->name}, {"name", exchange_name(*figures.entry, job)},
+                         {"description", figures.entry->description}, {"round", figures.round},
+                         {"stage_latency_ns", distribution_json(figures.stage_latency)},
+                         {"skew_ns", distribution_json(figures.skew)}, {"slowest_rank_counts", figures.slowest_counts},
+                         {"per_rank", ranks}});
+    }
+    document["exchanges"] = std::move(details);
+    document["not_applicable"] = not_applicable;
+    bench::write_result_file(options.out, document.dump(2) + "\n");
+    fmt::print("wrote {}\n", options.out);
+  }
+  if (!all_bitwise) {
+    fmt::print(stderr, "lockstep mpi: a rank's block differs from the serial RK4 (bitwise column): the exchange is wrong\n");
+    result = kExitCheckFailed;
+    return;
+  }
+  result = kExitOk;
+}
+
+void run_as_rank(const mpi_options& options, int& result) {
+  dist::mpi_session session;
+  const dist::world job = dist::describe_world();
+  // Every rank checks the same options the same way; rank 0 alone says why.
+  checked_options checked;
+  std::map<std::string, std::string> not_applicable;
+  std::vector<const dist::exchange_entry*> exchanges;
+  try {
+    if (options.ranks != 0 && options.ranks != static_cast<unsigned>(job.size))
+      throw usage_error("--ranks " + std::to_string(options.ranks) + " but mpirun started " +
+                        std::to_string(job.size) + " ranks");
+    checked = check(options, static_cast<unsigned>(job.size));
+    exchanges = applicable(checked, dist::job_shape{job.size, job.hosts, checked.how}, not_applicable);
+  } catch (const usage_error& e) {
+    if (job.rank == 0) fmt::print(stderr, "lockstep: {}\n", e.what());
+    result = kExitUsage;
+    return;
+  }
+  const char* launch_text = std::getenv(kLaunchVariable);
+
+  dist::benchmark_settings settings;
+  settings.exchanges = exchanges;
+  settings.model = checked.model;
+  settings.dt = bench::kBenchmarkStepSeconds;
+  settings.steps = options.steps;
+  settings.warmup_steps = options.warmup;
+  settings.rounds = options.rounds;
+  settings.pingpong_round_trips = options.pingpong;
+  settings.pin = checked.pin;
+  settings.inject = checked.inject;
+  settings.fault_rank = checked.fault_rank;
+  settings.fault_step = checked.fault_step;
+
+  dist::watchdog dog(std::chrono::nanoseconds(checked.watchdog_ns),
+                     fmt::format("rank {} on {}", job.rank, job.host));
+  const dist::benchmark_result measured = dist::run_benchmark(
+      job, settings, dog, [](const std::string& line) { fmt::print(stderr, "lockstep mpi: {}\n", line); });
+  dog.phase("reporting");
+  int status = kExitOk;
+  if (job.rank == 0)
+    report(options, checked, job, settings, measured, not_applicable,
+           launch_text != nullptr ? launch_text : "external (started by the user's mpirun)", status);
+  MPI_Bcast(&status, 1, MPI_INT, 0, job.comm);
+  dog.phase("finalising MPI");
+  result = status;
+}
+#endif  // LOCKSTEP_HAVE_MPI
+
+void run_mpi(const mpi_options& options, int& result) {
+#if LOCKSTEP_HAVE_MPI
+  if (distributed::launched_by_mpi())
+    run_as_rank(options, result);
+  else
+    launch(options, result);
+#else
+  (void)options;
+  (void)result;
+  throw usage_error("this lockstep was built without MPI (install libopenmpi-dev: scripts/setup.sh, then rebuild)");
+#endif
+}
+
+}  // namespace
+
+void add_mpi(CLI::App& app, int& result) {
+  auto options = std::make_shared<mpi_options>();
+  auto* command = app.add_subcommand(
+      "mpi",
+      "The RK4 step across MPI ranks: per-stage exchange latency (p50..max), per-rank skew, step time and an OSU-style "
+      "ping-pong, for each exchange (p2p, allgather, rma_put, shm_window). Exit status: 0 measured, 1 a rank's "
+      "trajectory differs from the serial RK4, 2 bad input, 3 the job failed (a rank died or stalled)");
+  command->add_option("--ranks", options->ranks,
+                      "MPI ranks (one equation block each); lockstep launches mpirun for them, or checks the count it "
+                      "runs under")
+      ->check(CLI::Range(1U, 4096U));
+  command->add_option("--exchange", options->exchanges,
+                      "Comma list of exchanges: p2p, allgather, rma_put, shm_window (default: every one that applies)");
+  command->add_option("--transport", options->transport,
+                      "shm (shared memory between ranks on one host) or tcp (the TCP path, on loopback for one host)")
+      ->capture_default_str();
+  command->add_option("--hostfile", options->hostfile, "Open MPI hostfile: run the ranks on these hosts");
+  command->add_option("--steps", options->steps, "Steps per measurement (untimed for the step time, then timed)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{10'000'000}))
+      ->capture_default_str();
+  command->add_option("--warmup", options->warmup, "Steps before each measurement")
+      ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{10'000'000}))
+      ->capture_default_str();
+  command->add_option("--rounds", options->rounds, "Rounds; each measures the ping-pong and every exchange in turn")
+      ->check(CLI::Range(1U, 1000U))
+      ->capture_default_str();
+  command->add_option("--pingpong", options->pingpong, "Ping-pong round trips per round (after 1000 warm-up)")
+      ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}))
+      ->capture_default_str();
+  command->add_option("--pin", options->pin, "Placement of a host's ranks: none, compact, scatter")
+      ->capture_default_str();
+  add_masses_option(*command, options->masses);
+  command->add_option("--watchdog", options->watchdog,
+                      "A rank that makes no progress for this long ends the job with a message")
+      ->capture_default_str();
+  command->add_option("--mpirun", options->mpirun, "The mpirun to launch (a name in PATH or a path)")
+      ->capture_default_str();
+  add_out_option(*command, options->out);
+  command->callback([options, &result] { run_mpi(*options, result); });
+}
+
+}  // namespace lockstep::cli

@@ -1,0 +1,46 @@
+#include "distributed/p2p.hpp"
+
+namespace lockstep::distributed {
+
+std::vector<int> exchange_setup::consumers() const {
+  std::vector<int> result;
+  for (int consumer = 0; consumer < size; ++consumer) {
+    const auto& producers = plans[static_cast<std::size_t>(consumer)].producers;
+    if (std::find(producers.begin(), producers.end(), static_cast<unsigned>(rank)) != producers.end())
+      result.push_back(consumer);
+  }
+  return result;
+}
+
+p2p_exchange::p2p_exchange(const exchange_setup& setup)
+    : private_copies(setup.blocks.equations()),
+      comm_(setup.comm),
+      own_first_(setup.mine().block.first),
+      own_count_(static_cast<int>(setup.mine().block.size())),
+      consumers_(setup.consumers()) {
+  for (unsigned producer : setup.mine().producers) {
+    const layouts::equation_block block = setup.blocks.block(producer);
+    producers_.push_back({static_cast<int>(producer), block.first, static_cast<int>(block.size())});
+  }
+  requests_.resize(producers_.size() + consumers_.size());
+}
+
+void p2p_exchange::share(std::uint64_t global_stage) {
+  double* const values = values_of(global_stage);
+  const int tag = static_cast<int>(global_stage % 4);
+  std::size_t request = 0;
+  // Receives first, so that a message that arrives while the sends are
+  // posted lands in its buffer rather than in the unexpected queue.
+  for (const peer& producer : producers_)
+    MPI_Irecv(values + producer.first, producer.count, MPI_DOUBLE, producer.rank, tag, comm_, &requests_[request++]);
+  for (int consumer : consumers_)
+    MPI_Isend(values + own_first_, own_count_, MPI_DOUBLE, consumer, tag, comm_, &requests_[request++]);
+  MPI_Waitall(static_cast<int>(request), requests_.data(), MPI_STATUSES_IGNORE);
+}
+
+void p2p_exchange::reset(std::span<const double> initial) {
+  reset_copies(initial);
+  MPI_Barrier(comm_);
+}
+
+}  // namespace lockstep::distributed

@@ -1,0 +1,43 @@
+#pragma once
+// p2p: the dataflow exchange. Each rank receives only the blocks its own block
+// reads (the producers of kernels::participant_plan) and sends its block only
+// to the ranks that read it, with nonblocking MPI_Isend / MPI_Irecv completed
+// by one MPI_Waitall per stage: the message-passing counterpart of the
+// threaded mailbox and seqlock.
+//
+// Contract (exchange.hpp): after share(g) the rank's dependencies of stage g
+// are in its private copy. Ordering: MPI's non-overtaking rule (messages
+// between one pair on one communicator and tag match in the order sent) keeps
+// a producer that runs stages ahead from being received out of order; tags
+// carry the stage within the step for readability of traces only.
+// Flow control: none of its own. A producer that leads a consumer by many
+// stages leaves its messages in the consumer's unexpected queue (eager
+// protocol for blocks this small), as any MPI dataflow code would; the
+// consumer's later stages then find their data already there.
+#include <vector>
+
+#include "distributed/exchange.hpp"
+
+namespace lockstep::distributed {
+
+class p2p_exchange final : public private_copies {
+ public:
+  explicit p2p_exchange(const exchange_setup& setup);
+  void share(std::uint64_t global_stage) override;
+  void reset(std::span<const double> initial) override;
+
+ private:
+  struct peer {
+    int rank;
+    std::size_t first;
+    int count;
+  };
+  MPI_Comm comm_;
+  std::size_t own_first_;
+  int own_count_;
+  std::vector<peer> producers_;
+  std::vector<int> consumers_;
+  std::vector<MPI_Request> requests_;
+};
+
+}  // namespace lockstep::distributed

@@ -1,0 +1,50 @@
+#pragma once
+// shm_window: when every rank runs on one host, the ranks share one MPI-3
+// shared-memory window (MPI_Win_allocate_shared) and synchronise through it
+// with lockstep's own futex_spin barrier, built for processes
+// (sync::process_shared_futex_spin: the same protocol, its slots inline, its
+// futexes the shared kind). No message moves: the stage values are read in
+// place, as the threaded step's barrier with the packed layout reads them.
+//
+// The window (rank 0 allocates it, the others map it with
+// MPI_Win_shared_query):
+//     the barrier, then (from the next cache line) x[2][n], k[3][n] doubles
+// x has two parities (a rank writes x_{n+1} while a slower one may still read
+// x_n); k_3 stays private to the step.
+// Contract (exchange.hpp): share(g) is one arrive_and_wait: every rank's
+// writes of stage g happen-before every read after it (futex_spin's ordering
+// contract, which holds across processes: the words are lock-free atomics in
+// coherent shared memory).
+// Applicability: every rank on one host; at most the barrier's
+// kSharedParticipantsMax ranks.
+#include <span>
+
+#include "distributed/exchange.hpp"
+#include "sync/futex_spin.hpp"
+
+namespace lockstep::distributed {
+
+class shm_window_exchange final : public exchange {
+ public:
+  explicit shm_window_exchange(const exchange_setup& setup);
+  ~shm_window_exchange() override;
+  shm_window_exchange(const shm_window_exchange&) = delete;
+  shm_window_exchange& operator=(const shm_window_exchange&) = delete;
+
+  const double* state(unsigned parity) override { return values_ + parity * equations_; }
+  double* next_state(unsigned parity) override { return values_ + (parity ^ 1U) * equations_; }
+  double* stage(unsigned stage) override { return values_ + (2 + stage) * equations_; }
+  void share(std::uint64_t global_stage) override;
+  void reset(std::span<const double> initial) override;
+  [[nodiscard]] sync::sync_counters counters() const override { return self_.counters; }
+
+ private:
+  MPI_Comm comm_;
+  std::size_t equations_;
+  MPI_Win window_ = MPI_WIN_NULL;
+  sync::process_shared_futex_spin* barrier_ = nullptr;
+  double* values_ = nullptr;
+  sync::participant self_{};
+};
+
+}  // namespace lockstep::distributed
