@@ -1,0 +1,105 @@
+// The mpirun command lines `lockstep mpi` builds (distributed/launcher.hpp),
+// and the hostfile reader: pure functions, no MPI job started.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "distributed/launcher.hpp"
+#include "tests/support/scratch_directory.hpp"
+
+namespace {
+
+using lockstep::distributed::launch_request;
+using lockstep::distributed::plan_launch;
+using lockstep::distributed::transport;
+
+bool has_sequence(const std::vector<std::string>& argv, const std::vector<std::string>& words) {
+  return std::search(argv.begin(), argv.end(), words.begin(), words.end()) != argv.end();
+}
+
+launch_request open_mpi_request() {
+  launch_request request;
+  request.mpirun = "/usr/bin/mpirun";
+  request.ranks = 4;
+  request.host_cpus = 2;
+  request.executable = "/opt/lockstep";
+  request.arguments = {"mpi", "--ranks", "4"};
+  request.forwarded = {"LOCKSTEP_MPI_LAUNCH"};
+  return request;
+}
+
+TEST(MpiLauncher, SharedMemoryOversubscribedAsRoot) {
+  launch_request request = open_mpi_request();
+  request.as_root = true;
+  const auto plan = plan_launch(request);
+  EXPECT_TRUE(has_sequence(plan.argv, {"/usr/bin/mpirun", "--np", "4"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--oversubscribe"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--bind-to", "none"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl", "self,vader"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl_vader_single_copy_mechanism", "none"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"-x", "LOCKSTEP_MPI_LAUNCH", "/opt/lockstep", "mpi", "--ranks", "4"}));
+  ASSERT_EQ(plan.environment.size(), 2U);
+  EXPECT_EQ(plan.environment[0].first, "OMPI_ALLOW_RUN_AS_ROOT");
+  EXPECT_EQ(plan.shown().rfind("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 /usr/bin/mpirun --np 4", 0),
+            0U)
+      << plan.shown();
+}
+
+TEST(MpiLauncher, NotRootNotOversubscribed) {
+  launch_request request = open_mpi_request();
+  request.ranks = 2;
+  const auto plan = plan_launch(request);
+  EXPECT_FALSE(has_sequence(plan.argv, {"--oversubscribe"}));
+  EXPECT_TRUE(plan.environment.empty());
+}
+
+TEST(MpiLauncher, TcpOnLoopbackTakesOneSidedTrafficAlong) {
+  launch_request request = open_mpi_request();
+  request.how = transport::tcp;
+  const auto plan = plan_launch(request);
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl", "self,tcp", "--mca", "btl_tcp_if_include", "lo"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "osc", "pt2pt"}));
+  EXPECT_FALSE(has_sequence(plan.argv, {"--mca", "btl", "self,vader"}));
+}
+
+TEST(MpiLauncher, HostfileSpansHosts) {
+  launch_request request = open_mpi_request();
+  request.hostfile = "hosts.txt";
+  const auto plan = plan_launch(request);
+  EXPECT_TRUE(has_sequence(plan.argv, {"--hostfile", "hosts.txt"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl", "self,vader,tcp"}));
+  EXPECT_FALSE(has_sequence(plan.argv, {"--oversubscribe"})) << "the hosts' slots decide, not this host's CPUs";
+}
+
+TEST(MpiLauncher, AnotherMpiGetsItsOwnGrammarAndNoTransportChoice) {
+  launch_request request = open_mpi_request();
+  request.open_mpi = false;
+  request.hostfile = "hosts.txt";
+  const auto plan = plan_launch(request);
+  EXPECT_TRUE(has_sequence(plan.argv, {"/usr/bin/mpirun", "-n", "4", "-f", "hosts.txt", "/opt/lockstep"}));
+  request.how = transport::tcp;
+  EXPECT_THROW((void)plan_launch(request), std::invalid_argument);
+}
+
+TEST(MpiLauncher, ShownCommandQuotesWhatTheShellWouldSplit) {
+  launch_request request = open_mpi_request();
+  request.arguments = {"mpi", "--out", "my results.json"};
+  EXPECT_NE(plan_launch(request).shown().find("'my results.json'"), std::string::npos);
+}
+
+TEST(MpiLauncher, HostfileNamesItsHosts) {
+  lockstep::testing::scratch_directory scratch("lockstep-mpi-launcher");
+  const std::string path = scratch.file("hosts");
+  std::ofstream(path) << "# two hosts\nnode1 slots=2\n\n  node2\n";
+  EXPECT_EQ(lockstep::distributed::read_hostfile(path), (std::vector<std::string>{"node1", "node2"}));
+  const std::string empty = scratch.file("empty");
+  std::ofstream(empty) << "# nothing\n";
+  EXPECT_THROW((void)lockstep::distributed::read_hostfile(empty), std::invalid_argument);
+  EXPECT_THROW((void)lockstep::distributed::read_hostfile(scratch.file("missing")), std::invalid_argument);
+}
+
+}  // namespace

@@ -1,0 +1,214 @@
+// `lockstep mpi` as a user runs it: the binary launches mpirun for its ranks
+// (as root with the run-as-root variables, oversubscribed on this 2-CPU
+// machine), measures few steps, and writes its JSON; these tests check what
+// it did, never how fast (DESIGN.md, Distributed memory).
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
+
+namespace {
+
+using lockstep::testing::command_result;
+using lockstep::testing::count_lines;
+using lockstep::testing::run_command;
+using lockstep::testing::scratch_directory;
+
+// Few steps: the tests check behaviour; the oversubscribed 4-rank runs cost
+// about 10-100 us a step here.
+std::vector<std::string> small_run(const std::string& ranks, const std::string& out) {
+  return {LOCKSTEP_BINARY, "mpi", "--ranks", ranks, "--steps", "200", "--warmup", "20", "--rounds", "2",
+          "--pingpong", "200", "--watchdog", "20s", "--out", out};
+}
+
+nlohmann::json read_json(const std::string& path) {
+  std::ifstream file(path);
+  return nlohmann::json::parse(file);
+}
+
+// Every exchange entry bitwise, with its figures; one ping-pong per round.
+void expect_complete(const nlohmann::json& document, int ranks, const std::set<std::string>& exchanges,
+                     const std::string& transport) {
+  EXPECT_EQ(document.at("kind"), "mpi");
+  EXPECT_EQ(document.at("context").at("mpi_transport"), transport);
+  EXPECT_EQ(document.at("context").at("mpi_ranks"), std::to_string(ranks));
+  EXPECT_EQ(document.at("context").at("mpi_hosts"), "1");
+  EXPECT_NE(document.at("context").at("mpi_library").get<std::string>().find("MPI"), std::string::npos);
+  EXPECT_EQ(document.at("settings").at("ranks"), ranks);
+  std::set<std::string> seen;
+  int pingpongs = 0;
+  for (const auto& entry : document.at("benchmarks")) {
+    const std::string name = entry.at("name");
+    if (name.rfind("mpi/pingpong/", 0) == 0) {
+      ++pingpongs;
+      EXPECT_GT(entry.at("real_time").get<double>(), 0.0);
+      EXPECT_LE(entry.at("one_way_min_ns").get<double>(), entry.at("one_way_p99_ns").get<double>());
+      continue;
+    }
+    const std::string exchange = name.substr(name.find("exchange:") + 9, name.find('/', name.find("exchange:")) -
+                                                                            name.find("exchange:") - 9);
+    seen.insert(exchange);
+    EXPECT_NE(name.find("/ranks:" + std::to_string(ranks) + "/hosts:1"), std::string::npos) << name;
+    EXPECT_EQ(entry.at("bitwise"), 1) << name;
+    EXPECT_GT(entry.at("real_time").get<double>(), 0.0) << name;
+    EXPECT_LE(entry.at("stage_p50_ns").get<double>(), entry.at("stage_p99_ns").get<double>()) << name;
+    EXPECT_LE(entry.at("stage_p99_ns").get<double>(), entry.at("stage_max_ns").get<double>()) << name;
+    EXPECT_LE(entry.at("skew_p50_ns").get<double>(), entry.at("skew_max_ns").get<double>()) << name;
+    EXPECT_LT(entry.at("slowest_rank").get<int>(), ranks) << name;
+  }
+  EXPECT_EQ(seen, exchanges);
+  EXPECT_EQ(pingpongs, 2);
+  ASSERT_EQ(document.at("exchanges").size(), exchanges.size());
+  for (const auto& details : document.at("exchanges")) {
+    EXPECT_EQ(details.at("per_rank").size(), static_cast<std::size_t>(ranks));
+    EXPECT_EQ(details.at("slowest_rank_counts").size(), static_cast<std::size_t>(ranks));
+  }
+}
+
+const std::set<std::string> kEveryExchange{"p2p", "allgather", "rma_put", "shm_window"};
+const std::set<std::string> kNetworkExchanges{"p2p", "allgather", "rma_put"};
+
+TEST(MpiCommand, TwoRanksSharedMemoryEveryExchangeBitwise) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("two.json");
+  const command_result result = run_command(small_run("2", out));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.err.find("lockstep mpi: running: "), std::string::npos) << "the launcher shows its command";
+  EXPECT_NE(result.err.find("OMPI_ALLOW_RUN_AS_ROOT"), std::string::npos);
+  EXPECT_NE(result.out.find("ping-pong"), std::string::npos);
+  expect_complete(read_json(out), 2, kEveryExchange, "shm");
+}
+
+TEST(MpiCommand, FourRanksOversubscribedEveryExchangeBitwise) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("four.json");
+  const command_result result = run_command(small_run("4", out));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  expect_complete(read_json(out), 4, kEveryExchange, "shm");
+}
+
+TEST(MpiCommand, TcpTransportTwoAndFourRanks) {
+  for (const std::string ranks : {"2", "4"}) {
+    scratch_directory scratch("lockstep-mpi-test");
+    const std::string out = scratch.file("tcp.json");
+    auto argv = small_run(ranks, out);
+    argv.insert(argv.end(), {"--transport", "tcp"});
+    const command_result result = run_command(argv);
+    ASSERT_EQ(result.exit_status, 0) << result.err;
+    EXPECT_NE(result.err.find("btl self,tcp"), std::string::npos) << result.err;
+    const nlohmann::json document = read_json(out);
+    expect_complete(document, std::stoi(ranks), kNetworkExchanges, "tcp");
+    EXPECT_TRUE(document.at("not_applicable").contains("shm_window"));
+  }
+}
+
+TEST(MpiCommand, BeyondFourRanksIntegratesTheChain) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("chain.json");
+  auto argv = small_run("6", out);
+  argv.insert(argv.end(), {"--exchange", "p2p,shm_window"});
+  const command_result result = run_command(argv);
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const nlohmann::json document = read_json(out);
+  EXPECT_EQ(document.at("settings").at("model"), "chain3");
+  expect_complete(document, 6, {"p2p", "shm_window"}, "shm");
+}
+
+TEST(MpiCommand, CompareReadsTwoRuns) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string a = scratch.file("a.json");
+  const std::string b = scratch.file("b.json");
+  for (const std::string& out : {a, b}) {
+    auto argv = small_run("2", out);
+    argv.insert(argv.end(), {"--exchange", "p2p,shm_window"});
+    ASSERT_EQ(run_command(argv).exit_status, 0);
+  }
+  const command_result result = run_command({LOCKSTEP_BINARY, "compare", a, b});
+  EXPECT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("exchange:p2p"), std::string::npos) << result.out;
+}
+
+TEST(MpiCommand, UnderTheUsersMpirun) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("external.json");
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const std::vector<std::string> mpirun{"mpirun", "--np", "2", "--oversubscribe", "--mca", "btl", "self,vader",
+                                        "--mca", "btl_vader_single_copy_mechanism", "none"};
+  auto argv = mpirun;
+  argv.insert(argv.end(), {LOCKSTEP_BINARY, "mpi", "--exchange", "allgather", "--steps", "100", "--rounds", "1",
+                           "--pingpong", "100", "--out", out});
+  const command_result result = run_command(argv);
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_EQ(read_json(out).at("context").at("mpi_launch").get<std::string>().rfind("external", 0), 0U);
+
+  // --ranks that disagree with the job: every rank refuses, one line says why.
+  argv = mpirun;
+  argv.insert(argv.end(), {LOCKSTEP_BINARY, "mpi", "--ranks", "3", "--steps", "100"});
+  const command_result mismatch = run_command(argv);
+  EXPECT_NE(mismatch.exit_status, 0);
+  EXPECT_NE(mismatch.err.find("--ranks 3 but mpirun started 2 ranks"), std::string::npos) << mismatch.err;
+}
+
+// A rank that stops (or dies) ends the job within the watchdog's bound, with
+// a message; never a hang (the CTest timeout is far behind).
+TEST(MpiCommand, StalledRankEndsTheJobWithAMessage) {
+  ::setenv("LOCKSTEP_MPI_FAULT", "stall:1:50", 1);
+  const command_result result = run_command({LOCKSTEP_BINARY, "mpi", "--ranks", "4", "--steps", "200", "--rounds",
+                                             "1", "--pingpong", "100", "--watchdog", "1s"});
+  ::unsetenv("LOCKSTEP_MPI_FAULT");
+  EXPECT_EQ(result.exit_status, 3) << result.err;
+  EXPECT_NE(result.err.find("made no progress for 1 s"), std::string::npos) << result.err;
+  EXPECT_NE(result.err.find("the MPI job failed"), std::string::npos) << result.err;
+}
+
+TEST(MpiCommand, KilledRankEndsTheJobWithAMessage) {
+  ::setenv("LOCKSTEP_MPI_FAULT", "die:2:50", 1);
+  const command_result result = run_command({LOCKSTEP_BINARY, "mpi", "--ranks", "4", "--steps", "200", "--rounds",
+                                             "1", "--pingpong", "100", "--watchdog", "5s"});
+  ::unsetenv("LOCKSTEP_MPI_FAULT");
+  EXPECT_EQ(result.exit_status, 3) << result.err;
+  EXPECT_NE(result.err.find("the MPI job failed"), std::string::npos) << result.err;
+}
+
+// Bad input: one line, exit 2, before anything is launched, nothing written.
+TEST(MpiCommand, BadInputIsOneLineAndNothingLaunched) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("never.json");
+  const std::string hostfile = scratch.file("no-such-hostfile");
+  const std::vector<std::vector<std::string>> cases{
+      {"--steps", "10"},                                    // no --ranks outside mpirun
+      {"--ranks", "1"},                                     // nothing to exchange
+      {"--ranks", "5", "--masses", "2"},                    // the model cannot be split
+      {"--ranks", "2", "--exchange", "nope"},               // unknown exchange
+      {"--ranks", "2", "--transport", "udp"},               // unknown transport
+      {"--ranks", "2", "--transport", "tcp", "--exchange", "shm_window"},  // conflicting
+      {"--ranks", "2", "--hostfile", hostfile},             // unreadable hostfile
+      {"--ranks", "2", "--mpirun", "/nonexistent/mpirun"},  // mpirun missing
+      {"--ranks", "2", "--pin", "migrate"},                 // a placement ranks cannot take
+      {"--ranks", "2", "--watchdog", "10"},                 // a duration without its unit
+      {"--ranks", "2", "--out", scratch.file("missing/dir.json")},  // unwritable output
+  };
+  for (const auto& arguments : cases) {
+    std::vector<std::string> argv{LOCKSTEP_BINARY, "mpi"};
+    argv.insert(argv.end(), arguments.begin(), arguments.end());
+    if (std::find(arguments.begin(), arguments.end(), "--out") == arguments.end()) argv.insert(argv.end(), {"--out", out});
+    const command_result result = run_command(argv);
+    std::string shown;
+    for (const auto& word : arguments) shown += word + " ";
+    EXPECT_EQ(result.exit_status, 2) << shown << result.err;
+    EXPECT_EQ(count_lines(result.err), 1) << shown << result.err;
+    EXPECT_EQ(result.err.find("running:"), std::string::npos) << shown << "launched anyway";
+  }
+  EXPECT_TRUE(scratch.entries().empty()) << "nothing written";
+}
+
+}  // namespace

@@ -1,0 +1,93 @@
+// The process-shared futex_spin (sync/futex_spin.hpp with
+// futex_scope::process_shared): the barrier that distributed/shm_window.hpp
+// places in an MPI-3 shared window, here in an anonymous shared mapping
+// between forked processes. No phase is left early, and it makes progress
+// when the processes outnumber the CPUs (so they sleep on shared futexes and
+// must be woken across processes).
+#include <gtest/gtest.h>
+
+#include <sched.h>
+#include <sys/mman.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <cstdint>
+#include <cstdlib>
+#include <new>
+#include <vector>
+
+#include "sync/futex_spin.hpp"
+
+namespace {
+
+using lockstep::sync::participant;
+using lockstep::sync::process_shared_futex_spin;
+
+struct shared_region {
+  process_shared_futex_spin barrier;
+  std::atomic<std::uint64_t> arrivals{0};
+  std::atomic<std::uint64_t> futex_waits{0};
+  std::atomic<int> failures{0};
+
+  explicit shared_region(unsigned processes) : barrier(processes) {}
+};
+
+// Each process: per phase, count its arrival, wait, then check that every
+// process of this phase arrived (none left early). Returns through the shared
+// failure count; the child's exit status says it finished.
+void take_part(shared_region& region, unsigned id, unsigned processes, unsigned phases) {
+  participant self;
+  self.id = id;
+  for (unsigned phase = 1; phase <= phases; ++phase) {
+    region.arrivals.fetch_add(1, std::memory_order_relaxed);
+    region.barrier.arrive_and_wait(self);
+    // The barrier orders every arrival of this phase before this load.
+    if (region.arrivals.load(std::memory_order_relaxed) < std::uint64_t{phase} * processes)
+      region.failures.fetch_add(1, std::memory_order_relaxed);
+    region.barrier.arrive_and_wait(self);  // nobody starts the next phase's count before all checked
+  }
+  region.futex_waits.fetch_add(self.counters.futex_waits, std::memory_order_relaxed);
+}
+
+void run_processes(unsigned processes, unsigned phases, bool one_cpu) {
+  void* memory = mmap(nullptr, sizeof(shared_region), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  ASSERT_NE(memory, MAP_FAILED);
+  auto* region = new (memory) shared_region(processes);
+  std::vector<pid_t> children;
+  for (unsigned id = 0; id < processes; ++id) {
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      alarm(60);  // the test's watchdog: a hang kills the child, and the parent sees the signal
+      if (one_cpu) {
+        cpu_set_t set;
+        CPU_ZERO(&set);
+        CPU_SET(0, &set);
+        sched_setaffinity(0, sizeof(set), &set);
+      }
+      take_part(*region, id, processes, phases);
+      _exit(0);
+    }
+    children.push_back(child);
+  }
+  for (pid_t child : children) {
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a process did not finish (status " << status << ")";
+  }
+  EXPECT_EQ(region->failures.load(), 0) << "a process left a phase before every process arrived";
+  EXPECT_EQ(region->arrivals.load(), std::uint64_t{phases} * processes);
+  if (one_cpu) {
+    EXPECT_GT(region->futex_waits.load(), 0U) << "oversubscribed, some waits must have slept";
+  }
+  munmap(memory, sizeof(shared_region));
+}
+
+TEST(ProcessSharedFutexSpin, TwoProcessesNoPhaseLeftEarly) { run_processes(2, 2000, false); }
+
+// Four processes on one CPU: waiters run out of their budget and sleep on the
+// shared futex; only a wake from another process frees them.
+TEST(ProcessSharedFutexSpin, FourProcessesOnOneCpuSleepAndAreWoken) { run_processes(4, 300, true); }
+
+}  // namespace
