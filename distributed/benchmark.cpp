@@ -181,23 +181,28 @@ class exchange_runner {
     std::vector<double> pooled(latencies.begin(), latencies.end());
     figures.stage_latency = platform::summarize(std::move(pooled));
     std::vector<double> skews(stages);
+    std::vector<double> transfers(stages);
     figures.slowest_counts.assign(size, 0);
     for (std::size_t stage = 0; stage < stages; ++stage) {
       std::int64_t earliest = std::numeric_limits<std::int64_t>::max();
       std::int64_t latest = std::numeric_limits<std::int64_t>::min();
+      std::int64_t last_departure = std::numeric_limits<std::int64_t>::min();
       std::size_t latest_rank = 0;
       for (std::size_t rank = 0; rank < size; ++rank) {
         const std::int64_t arrival = arrivals[rank * stages + stage];
         earliest = std::min(earliest, arrival);
+        last_departure = std::max(last_departure, arrival + latencies[rank * stages + stage]);
         if (arrival > latest) {
           latest = arrival;
           latest_rank = rank;
         }
       }
       skews[stage] = static_cast<double>(latest - earliest);
+      transfers[stage] = static_cast<double>(last_departure - latest);
       ++figures.slowest_counts[latest_rank];
     }
     figures.skew = platform::summarize(std::move(skews));
+    figures.transfer = platform::summarize(std::move(transfers));
     for (std::size_t rank = 0; rank < size; ++rank) {
       rank_figures entry;
       entry.rank = static_cast<int>(rank);

@@ -16,6 +16,10 @@
 //      check of every rank's block against the serial RK4 after the same
 //      number of steps.
 // Skew of a stage: the latest rank's arrival at share() minus the earliest's.
+// Transfer of a stage: the latest rank's departure from share() minus the
+// latest arrival: what the exchange itself took once every rank was there
+// (the counterpart of a ping-pong's one-way time; a stage's latency at a rank
+// is its wait for the others, up to the skew, plus this).
 // Ranks on one host read one CLOCK_MONOTONIC; across hosts each rank's clock
 // offset to rank 0 is estimated first (the ping-pong with the smallest round
 // trip of 64 wins; offset = its reading minus the midpoint of rank 0's) and
@@ -71,6 +75,7 @@ struct exchange_figures {
   double step_ns = 0;                       // slowest rank's untimed wall time / steps
   platform::distribution stage_latency;     // every rank's every timed share(), pooled
   platform::distribution skew;              // per stage: latest arrival - earliest
+  platform::distribution transfer;          // per stage: latest departure - latest arrival
   std::vector<std::uint64_t> slowest_counts;  // per rank: stages where it arrived last
   bool bitwise = false;                     // every rank's block equals the serial RK4
   std::vector<rank_figures> ranks;

@@ -243,16 +243,19 @@ void report(const mpi_options& options, const checked_options& checked, const di
              ns_text(*std::min_element(pingpong_means.begin(), pingpong_means.end())),
              ns_text(*std::max_element(pingpong_means.begin(), pingpong_means.end())), ns_text(last_pingpong.one_way.min),
              ns_text(last_pingpong.one_way.p50), ns_text(last_pingpong.one_way.p99));
-  fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>8}\n", "exchange",
+  // Each round's ping-pong, for the ratio measured side by side with it.
+  std::map<unsigned, double> pingpong_of_round;
+  for (const auto& p : measured.pingpongs) pingpong_of_round[p.round] = p.one_way_mean_ns;
+  fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", "exchange",
              "step (median, range)", "stage p50", "p99", "p99.9", "max", "skew p50", "skew p99", "slowest rank",
-             "bitwise");
+             "transfer p50", "bitwise");
   bool all_bitwise = true;
   for (const dist::exchange_entry* entry : settings.exchanges) {
     std::vector<const dist::exchange_figures*> rounds;
     for (const auto& figures : measured.exchanges)
       if (figures.entry == entry) rounds.push_back(&figures);
     std::vector<double> steps;
-    std::vector<double> p50, p99, p999, max, skew50, skew99;
+    std::vector<double> p50, p99, p999, max, skew50, skew99, transfer50, over_pingpong;
     std::vector<std::uint64_t> slowest(static_cast<std::size_t>(job.size), 0);
     bool bitwise = true;
     for (const auto* figures : rounds) {
@@ -263,6 +266,8 @@ void report(const mpi_options& options, const checked_options& checked, const di
       max.push_back(figures->stage_latency.max);
       skew50.push_back(figures->skew.p50);
       skew99.push_back(figures->skew.p99);
+      over_pingpong.push_back(figures->transfer.p50 / pingpong_of_round.at(figures->round));
+      transfer50.push_back(figures->transfer.p50);
       for (std::size_t rank = 0; rank < slowest.size(); ++rank) slowest[rank] += figures->slowest_counts[rank];
       bitwise = bitwise && figures->bitwise;
     }
@@ -270,17 +275,21 @@ void report(const mpi_options& options, const checked_options& checked, const di
     const auto most = std::max_element(slowest.begin(), slowest.end());
     std::uint64_t total = 0;
     for (std::uint64_t count : slowest) total += count;
-    fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>8}\n", entry->name,
+    fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", entry->name,
                fmt::format("{} ({}..{})", ns_text(median_of(steps)), ns_text(*std::min_element(steps.begin(), steps.end())),
                            ns_text(*std::max_element(steps.begin(), steps.end()))),
                ns_text(median_of(p50)), ns_text(median_of(p99)), ns_text(median_of(p999)), ns_text(median_of(max)),
                ns_text(median_of(skew50)), ns_text(median_of(skew99)),
                fmt::format("{} ({:.0f}%)", most - slowest.begin(),
                            total ? 100.0 * static_cast<double>(*most) / static_cast<double>(total) : 0.0),
+               fmt::format("{} {:.2f}x ({:.2f}..{:.2f})", ns_text(median_of(transfer50)), median_of(over_pingpong),
+                           *std::min_element(over_pingpong.begin(), over_pingpong.end()),
+                           *std::max_element(over_pingpong.begin(), over_pingpong.end())),
                bitwise ? "yes" : "NO");
   }
   fmt::print("stage figures: medians over rounds of each round's pooled per-stage exchange times (every rank, every "
-             "stage); skew: latest minus earliest arrival at a stage{}\n",
+             "stage); skew: latest minus earliest arrival at a stage{}; transfer: latest departure minus latest arrival, "
+             "p50, and over the ping-pong one-way mean of the same round (median and range over rounds)\n",
              measured.one_clock ? "" : " (clocks of several hosts, offsets estimated against rank 0)");
   for (const auto& [name, reason] : not_applicable) fmt::print("not applicable: {}: {}\n", name, reason);
 
@@ -342,6 +351,9 @@ void report(const mpi_options& options, const checked_options& checked, const di
                               {"stage_p999_ns", figures.stage_latency.p999}, {"stage_max_ns", figures.stage_latency.max},
                               {"skew_p50_ns", figures.skew.p50}, {"skew_p99_ns", figures.skew.p99},
                               {"skew_max_ns", figures.skew.max}, {"slowest_rank", most - figures.slowest_counts.begin()},
+                              {"transfer_p50_ns", figures.transfer.p50}, {"transfer_p99_ns", figures.transfer.p99},
+                              {"transfer_p50_over_pingpong", figures.transfer.p50 / pingpong_of_round.at(figures.round)},
+                              {"stage_p50_over_pingpong", figures.stage_latency.p50 / pingpong_of_round.at(figures.round)},
                               {"slowest_rank_share", stages > 0 ? static_cast<double>(*most) / stages : 0.0},
                               {"context_switches_per_step", static_cast<double>(switches) / timed_steps},
                               {"bitwise", figures.bitwise ? 1 : 0}};
@@ -363,7 +375,9 @@ void report(const mpi_options& options, const checked_options& checked, const di
       details.push_back({{"exchange", figures.entry->name}, {"name", exchange_name(*figures.entry, job)},
                          {"description", figures.entry->description}, {"round", figures.round},
                          {"stage_latency_ns", distribution_json(figures.stage_latency)},
-                         {"skew_ns", distribution_json(figures.skew)}, {"slowest_rank_counts", figures.slowest_counts},
+                         {"skew_ns", distribution_json(figures.skew)},
+                         {"transfer_ns", distribution_json(figures.transfer)},
+                         {"slowest_rank_counts", figures.slowest_counts},
                          {"per_rank", ranks}});
     }
     document["exchanges"] = std::move(details);
