@@ -124,7 +124,7 @@ class exchange_runner {
         for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
       };
     }
-    dog.phase(entry.name.data());
+    dog.phase(entry.label.data());
     step.reset();
     step.run(settings_.warmup_steps, hooks);
 
@@ -247,7 +247,7 @@ void run_exchanges(const world& job, const benchmark_settings& settings, const M
       result.exchanges.push_back(runner.measure(*settings.exchanges[index], *built[index], round, dog));
       if (job.rank == 0)
         progress("round " + std::to_string(round + 1) + "/" + std::to_string(settings.rounds) + ": " +
-                 std::string(settings.exchanges[index]->name) + " " +
+                 std::string(settings.exchanges[index]->label) + " " +
                  std::to_string(static_cast<long long>(result.exchanges.back().step_ns)) + " ns/step");
     }
   }

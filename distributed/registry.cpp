@@ -1,5 +1,6 @@
 #include "distributed/registry.hpp"
 
+#include <algorithm>
 #include <array>
 
 #include "distributed/allgather.hpp"
@@ -28,17 +29,20 @@ std::unique_ptr<exchange> make(const exchange_setup& setup) {
 }
 
 constexpr std::array kExchanges{
-    exchange_entry{"p2p", "exchange:p2p",
+    exchange_entry{"p2p", "", "p2p", "exchange:p2p",
                    "dataflow: nonblocking sends to the ranks that read the block, receives from the ranks it reads",
                    always, make<p2p_exchange>},
-    exchange_entry{"allgather", "exchange:allgather", "one MPI_Allgatherv per stage: every block to every rank",
+    exchange_entry{"allgather", "", "allgather", "exchange:allgather", "one MPI_Allgatherv per stage: every block to every rank",
                    always, make<allgather_exchange>},
-    exchange_entry{"rma_put", "exchange:rma_put",
+    exchange_entry{"rma_put", "", "rma_put", "exchange:rma_put",
                    "one-sided: MPI_Put into the readers' windows, flush, then a flag (passive target)", always,
                    make<rma_put_exchange>},
-    exchange_entry{"shm_window", "exchange:shm_window/sync:futex_spin",
+    exchange_entry{"shm_window", "futex_spin", "shm_window/futex_spin", "exchange:shm_window/sync:futex_spin",
                    "one MPI-3 shared window, stage values read in place, futex_spin across processes (shared futexes)",
                    one_host_without_tcp, make<shm_window_exchange>},
+    exchange_entry{"shm_window", "mailbox", "shm_window/mailbox", "exchange:shm_window/sync:mailbox",
+                   "one MPI-3 shared window holding lockstep's mailbox: dataflow between processes (shared futexes)",
+                   one_host_without_tcp, make<shm_mailbox_exchange>},
 };
 
 }  // namespace
@@ -47,16 +51,19 @@ std::string_view to_string(transport how) noexcept { return how == transport::tc
 
 std::span<const exchange_entry> exchanges() noexcept { return kExchanges; }
 
-std::vector<std::string> exchange_names() {
-  std::vector<std::string> names;
-  for (const exchange_entry& entry : kExchanges) names.emplace_back(entry.name);
-  return names;
+namespace {
+template <class Field>
+std::vector<std::string> distinct(Field field) {
+  std::vector<std::string> values;
+  for (const exchange_entry& entry : kExchanges) {
+    const std::string value(entry.*field);
+    if (!value.empty() && std::find(values.begin(), values.end(), value) == values.end()) values.push_back(value);
+  }
+  return values;
 }
+}  // namespace
 
-const exchange_entry* find_exchange(std::string_view name) noexcept {
-  for (const exchange_entry& entry : kExchanges)
-    if (entry.name == name) return &entry;
-  return nullptr;
-}
+std::vector<std::string> exchange_names() { return distinct(&exchange_entry::name); }
+std::vector<std::string> exchange_syncs() { return distinct(&exchange_entry::sync); }
 
 }  // namespace lockstep::distributed

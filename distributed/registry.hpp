@@ -8,7 +8,10 @@
 //   allgather    mpi/exchange:allgather/...             MPI_Allgatherv, every block to every rank
 //   rma_put      mpi/exchange:rma_put/...               MPI_Put + flush + flag, passive target
 //   shm_window   mpi/exchange:shm_window/sync:futex_spin/...
-//                                                       nothing: a shared window and futex_spin across processes
+//                mpi/exchange:shm_window/sync:mailbox/...
+//                                                       a shared window and lockstep's own primitive across
+//                                                       processes: futex_spin (values read in place) or
+//                                                       mailbox (dataflow into private copies)
 #include <memory>
 #include <span>
 #include <string>
@@ -31,7 +34,9 @@ struct job_shape {
 };
 
 struct exchange_entry {
-  std::string_view name;
+  std::string_view name;         // what --exchange selects: "p2p", "shm_window"
+  std::string_view sync;         // lockstep's primitive inside it ("futex_spin", "mailbox"), or empty
+  std::string_view label;        // one entry in the output: "p2p", "shm_window/mailbox"
   std::string_view segment;      // the name's key:value segments: "exchange:p2p"
   std::string_view description;  // one line, for --help and the JSON
   // Why it cannot run on this job; empty when it can.
@@ -41,8 +46,8 @@ struct exchange_entry {
 };
 
 [[nodiscard]] std::span<const exchange_entry> exchanges() noexcept;
+// The names --exchange takes, and the primitives --sync takes (each once, in order).
 [[nodiscard]] std::vector<std::string> exchange_names();
-// nullptr when there is no such exchange.
-[[nodiscard]] const exchange_entry* find_exchange(std::string_view name) noexcept;
+[[nodiscard]] std::vector<std::string> exchange_syncs();
 
 }  // namespace lockstep::distributed

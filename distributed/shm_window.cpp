@@ -56,4 +56,82 @@ void shm_window_exchange::reset(std::span<const double> initial) {
   MPI_Win_sync(window_);
 }
 
+namespace {
+sync::dependency_graph graph_of(const std::vector<kernels::participant_plan>& plans) {
+  sync::dependency_graph graph;
+  for (const kernels::participant_plan& plan : plans) graph.producers_of.push_back(plan.producers);
+  return graph;
+}
+}  // namespace
+
+shm_mailbox_exchange::shm_mailbox_exchange(const exchange_setup& setup)
+    : private_copies(setup.blocks.equations()),
+      comm_(setup.comm),
+      own_first_(setup.mine().block.first),
+      own_count_(setup.mine().block.size()),
+      has_consumers_(setup.mine().has_consumers),
+      width_(setup.blocks.largest_block()),
+      staging_(width_, 0.0) {
+  int host_size = 0;
+  MPI_Comm_size(setup.host_comm, &host_size);
+  if (host_size != setup.size) throw std::logic_error("shm_window needs every rank on one host");
+  for (unsigned producer : setup.mine().producers) {
+    const layouts::equation_block block = setup.blocks.block(producer);
+    producers_.push_back({producer, block.first, block.size()});
+  }
+  const sync::dependency_graph graph = graph_of(setup.plans);
+  // How large a block the mailbox's shared words need: the same mailbox on the
+  // heap counts them (sync/storage.hpp), plus room to align the start.
+  const std::size_t bytes = sync::mailbox(graph, width_).storage_bytes() + platform::kPrefetchPair;
+  void* base = nullptr;
+  MPI_Win_allocate_shared(static_cast<MPI_Aint>(setup.rank == 0 ? bytes : 0), 1, MPI_INFO_NULL, setup.host_comm,
+                          &base, &window_);
+  MPI_Aint size = 0;
+  int unit = 0;
+  MPI_Win_shared_query(window_, 0, &size, &unit, &base);
+  auto address = reinterpret_cast<std::uintptr_t>(base);
+  const std::uintptr_t aligned = (address + platform::kPrefetchPair - 1) / platform::kPrefetchPair * platform::kPrefetchPair;
+  auto* block = static_cast<std::byte*>(base) + (aligned - address);
+  channel_ = std::make_unique<sync::process_shared_mailbox>(
+      graph, width_, sync::process_shared_storage(block, bytes - (aligned - address), setup.rank == 0));
+  self_.id = static_cast<unsigned>(setup.rank);
+  MPI_Win_lock_all(MPI_MODE_NOCHECK, window_);
+  MPI_Win_sync(window_);
+  MPI_Barrier(comm_);  // rank 0 wrote the first words before anyone publishes
+}
+
+shm_mailbox_exchange::~shm_mailbox_exchange() {
+  channel_.reset();  // this process's view; the shared words go with the window
+  MPI_Win_unlock_all(window_);
+  MPI_Win_free(&window_);
+}
+
+void shm_mailbox_exchange::share(std::uint64_t global_stage) {
+  double* const values = values_of(global_stage);
+  const std::uint64_t stage = first_stage_ + global_stage;
+  if (has_consumers_) {
+    const double* source = values + own_first_;
+    if (own_count_ != width_) {
+      std::copy(source, source + own_count_, staging_.data());
+      source = staging_.data();
+    }
+    channel_->publish(self_, stage, std::span<const double>(source, width_));
+  }
+  for (const peer& producer : producers_) {
+    if (producer.count == width_) {
+      channel_->receive(self_, producer.rank, stage, std::span<double>(values + producer.first, width_));
+    } else {
+      channel_->receive(self_, producer.rank, stage, std::span<double>(staging_.data(), width_));
+      std::copy(staging_.data(), staging_.data() + producer.count, values + producer.first);
+    }
+  }
+  next_stage_ = stage + 1;
+}
+
+void shm_mailbox_exchange::reset(std::span<const double> initial) {
+  reset_copies(initial);
+  first_stage_ = next_stage_;  // every rank ran the same stages, so they agree
+  MPI_Barrier(comm_);
+}
+
 }  // namespace lockstep::distributed

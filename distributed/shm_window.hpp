@@ -17,10 +17,20 @@
 // coherent shared memory).
 // Applicability: every rank on one host; at most the barrier's
 // kSharedParticipantsMax ranks.
+//
+// shm_mailbox_exchange: the same window, with lockstep's dataflow mailbox
+// across processes instead (sync::process_shared_mailbox: its rings, received
+// rows and census in the window, shared futexes): each rank publishes its
+// block and receives only the blocks it reads, into private copies, as the
+// threaded step's channel_copy_in does. The mailbox's stage numbers never
+// restart: reset() continues them where the last run stopped.
+#include <memory>
 #include <span>
+#include <vector>
 
 #include "distributed/exchange.hpp"
 #include "sync/futex_spin.hpp"
+#include "sync/mailbox.hpp"
 
 namespace lockstep::distributed {
 
@@ -44,6 +54,37 @@ class shm_window_exchange final : public exchange {
   MPI_Win window_ = MPI_WIN_NULL;
   sync::process_shared_futex_spin* barrier_ = nullptr;
   double* values_ = nullptr;
+  sync::participant self_{};
+};
+
+class shm_mailbox_exchange final : public private_copies {
+ public:
+  explicit shm_mailbox_exchange(const exchange_setup& setup);
+  ~shm_mailbox_exchange() override;
+  shm_mailbox_exchange(const shm_mailbox_exchange&) = delete;
+  shm_mailbox_exchange& operator=(const shm_mailbox_exchange&) = delete;
+
+  void share(std::uint64_t global_stage) override;
+  void reset(std::span<const double> initial) override;
+  [[nodiscard]] sync::sync_counters counters() const override { return self_.counters; }
+
+ private:
+  struct peer {
+    unsigned rank;
+    std::size_t first;
+    std::size_t count;
+  };
+  MPI_Comm comm_;
+  std::size_t own_first_;
+  std::size_t own_count_;
+  bool has_consumers_;
+  std::size_t width_;  // doubles per message: the largest block (the channel's contract)
+  std::vector<peer> producers_;
+  std::vector<double> staging_;  // for blocks smaller than width_
+  MPI_Win window_ = MPI_WIN_NULL;
+  std::unique_ptr<sync::process_shared_mailbox> channel_;
+  std::uint64_t first_stage_ = 0;  // the channel's stage of global stage 0 in this run
+  std::uint64_t next_stage_ = 0;   // the channel's next stage
   sync::participant self_{};
 };
 

@@ -26,7 +26,15 @@ class received_table {
   explicit received_table(unsigned participants)
       : participants_(participants),
         lines_per_row_((participants + kPerLine - 1) / kPerLine),
-        lines_(std::make_unique<row_line[]>(static_cast<std::size_t>(participants) * lines_per_row_)) {}
+        owned_(std::make_unique<row_line[]>(static_cast<std::size_t>(participants) * lines_per_row_)),
+        lines_(owned_.get()) {}
+  // The rows in a primitive's storage (sync/storage.hpp): the heap, or a
+  // block that several processes share.
+  template <class Storage>
+  received_table(unsigned participants, Storage& storage)
+      : participants_(participants),
+        lines_per_row_((participants + kPerLine - 1) / kPerLine),
+        lines_(storage.template make_array<row_line>(static_cast<std::size_t>(participants) * lines_per_row_)) {}
 
   std::atomic<std::uint64_t>& at(unsigned consumer, unsigned producer) const noexcept {
     return lines_[static_cast<std::size_t>(consumer) * lines_per_row_ + producer / kPerLine]
@@ -43,7 +51,8 @@ class received_table {
                 "one consumer's row never shares a line, or a prefetch pair, with another's");
   unsigned participants_;
   unsigned lines_per_row_;
-  std::unique_ptr<row_line[]> lines_;
+  std::unique_ptr<row_line[]> owned_;  // empty when the rows live in a primitive's storage
+  row_line* lines_;
 };
 
 // A stage was (or was about to be) overwritten before a consumer received it:

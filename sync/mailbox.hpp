@@ -65,6 +65,12 @@
 //    returns at once.
 //  * (P2) first: (C4) finds the new word instead of the expected old one and
 //    fails; the consumer re-checks (C3) and sees the stage published.
+// Across processes (template parameter Storage, sync/storage.hpp): with
+// process_shared_storage the rings, the received rows and the regime census
+// live in a block several processes map, every process constructs its own
+// mailbox over it (its graph, its participant's state), and the futexes are
+// the shared kind; distributed/shm_window.hpp runs the RK4 ranks on it. The
+// protocol is the same; the registry's `mailbox` is the heap one.
 // Counters (self.counters): futex_waits per FUTEX_WAIT (slept or returned at
 // once), futex_wakes per FUTEX_WAKE issued, yields and spins_exhausted
 // (wait_policy.hpp). timeouts stay 0. Every futex wait is counted.
@@ -83,11 +89,12 @@
 #include "sync/channel_rows.hpp"
 #include "sync/concepts.hpp"
 #include "sync/futex.hpp"
+#include "sync/storage.hpp"
 #include "sync/wait_policy.hpp"
 
 namespace lockstep::sync {
 
-template <std::size_t Depth = 4>
+template <std::size_t Depth = 4, class Storage = heap_storage>
 class basic_mailbox {
  public:
   static constexpr std::string_view kName = "mailbox";
@@ -110,16 +117,19 @@ class basic_mailbox {
   static constexpr std::size_t kValuesInFirstLine = 7;
   static constexpr std::size_t kValuesPerLine = 8;
 
-  basic_mailbox(const dependency_graph& graph, std::size_t width)
-      : width_(width),
+  // `storage`: where the shared words go (sync/storage.hpp; the heap unless
+  // the caller hands a shared block).
+  basic_mailbox(const dependency_graph& graph, std::size_t width, Storage storage = Storage{})
+      : storage_(std::move(storage)),
+        width_(width),
         participants_(graph.participants()),
         extra_lines_per_slot_(extra_lines(width)),
-        rings_(std::make_unique<ring[]>(participants_)),
-        extra_lines_(std::make_unique<extra_line[]>(static_cast<std::size_t>(participants_) * Depth *
-                                                    extra_lines_per_slot_)),
+        rings_(storage_.template make_array<ring>(participants_)),
+        extra_lines_(storage_.template make_array<extra_line>(static_cast<std::size_t>(participants_) * Depth *
+                                                             extra_lines_per_slot_)),
         states_(std::make_unique<participant_state[]>(participants_)),
-        received_(participants_),
-        census_(participants_) {
+        received_(participants_, storage_),
+        census_(*storage_.template make<regime_census>(participants_)) {
     graph.validate();
     producers_of_ = graph.producers_of;
     consumers_of_.resize(participants_);
@@ -133,6 +143,7 @@ class basic_mailbox {
       }
       states_[producer].acknowledged = !acknowledging_consumers_[producer].empty();
     }
+    if (!storage_.initialises()) return;  // another process wrote the first values
     // Slot j's word starts as if it held stage j - Depth (its predecessor in
     // the ring): the first stage to land there then looks like any other.
     for (unsigned producer = 0; producer < participants_; ++producer)
@@ -150,6 +161,8 @@ class basic_mailbox {
   basic_mailbox& operator=(const basic_mailbox&) = delete;
 
   std::size_t width() const noexcept { return width_; }
+  // The shared words' bytes (for a shared block the same arguments need).
+  std::size_t storage_bytes() const noexcept { return storage_.bytes(); }
 
   // Whether the edge producer -> consumer relies on acknowledgements (false:
   // the ring alone keeps it safe; see the header). For tests and curiosity.
@@ -201,7 +214,7 @@ class basic_mailbox {
       detail::channel_overrun(kName, self.id, stage - Depth, version_of(old));
     if ((old & kWaiterBit) != 0) {
       // (P3) after (P2): see the header.
-      futex_wake(line.epoch, INT_MAX);
+      futex_wake<Storage::kScope>(line.epoch, INT_MAX);
       ++self.counters.futex_wakes;
     }
     mine.next_publish = stage + 1;
@@ -276,7 +289,7 @@ class basic_mailbox {
     return rings_[producer].slots[slot];
   }
   extra_line* extras(unsigned producer, std::size_t slot) const noexcept {
-    return extra_lines_.get() + (static_cast<std::size_t>(producer) * Depth + slot) * extra_lines_per_slot_;
+    return extra_lines_ + (static_cast<std::size_t>(producer) * Depth + slot) * extra_lines_per_slot_;
   }
 
   void write_payload(unsigned producer, std::size_t slot, std::span<const double> values) noexcept {
@@ -336,7 +349,7 @@ class basic_mailbox {
             expected != (previous | kWaiterBit))
           continue;
         // (C5) sleeps only while the word still holds previous | kWaiterBit.
-        futex_wait(line.epoch, previous | kWaiterBit);
+        futex_wait<Storage::kScope>(line.epoch, previous | kWaiterBit);
         ++self.counters.futex_waits;
       }
     };
@@ -407,20 +420,24 @@ class basic_mailbox {
     std::abort();
   }
 
+  Storage storage_;  // first: the members below take their shared words from it
   std::size_t width_;
   unsigned participants_;
   std::size_t extra_lines_per_slot_;
-  std::unique_ptr<ring[]> rings_;              // [producer]
-  std::unique_ptr<extra_line[]> extra_lines_;  // [(producer * Depth + slot) * extra_lines_per_slot_ + line]
-  std::unique_ptr<participant_state[]> states_;
+  ring* rings_;              // [producer], in storage_
+  extra_line* extra_lines_;  // [(producer * Depth + slot) * extra_lines_per_slot_ + line], in storage_
+  std::unique_ptr<participant_state[]> states_;  // this process's own: each touched by its participant only
   std::vector<std::vector<unsigned>> producers_of_;
   std::vector<std::vector<unsigned>> consumers_of_;
   std::vector<std::vector<unsigned>> acknowledging_consumers_;  // per producer: edges the ring alone does not cover
-  detail::received_table received_;
-  regime_census census_;
+  detail::received_table received_;  // rows in storage_
+  regime_census& census_;            // in storage_
 };
 
 using mailbox = basic_mailbox<>;
 static_assert(graph_channel<mailbox>);
+
+// The mailbox for processes that map one block (distributed/shm_window.hpp).
+using process_shared_mailbox = basic_mailbox<4, process_shared_storage>;
 
 }  // namespace lockstep::sync

@@ -7,6 +7,7 @@
 #include <fmt/core.h>
 
 #include <cstdlib>
+#include <algorithm>
 #include <map>
 #include <memory>
 #include <optional>
@@ -39,6 +40,7 @@ namespace {
 struct mpi_options {
   unsigned ranks = 0;  // 0: not given
   std::optional<std::string> exchanges;
+  std::optional<std::string> syncs;
   std::string transport = "shm";
   std::string hostfile;
   std::uint64_t steps = 5000;
@@ -69,6 +71,7 @@ struct checked_options {
   dist::transport how = dist::transport::shared_memory;
   std::vector<std::string> hosts;  // from --hostfile; empty: this host
   std::vector<std::string> exchange_names;
+  std::vector<std::string> sync_names;
   bool exchanges_named = false;
   kernels::model_choice model;
   platform::placement pin = platform::placement::compact;
@@ -92,7 +95,8 @@ checked_options check(const mpi_options& options, unsigned ranks) {
     }
   }
   checked.exchange_names = select_names(options.exchanges, dist::exchange_names(), "--exchange");
-  checked.exchanges_named = options.exchanges.has_value();
+  checked.sync_names = select_names(options.syncs, dist::exchange_syncs(), "--sync");
+  checked.exchanges_named = options.exchanges.has_value() || options.syncs.has_value();
   if (ranks < 2) throw usage_error("--ranks: the step needs at least 2 ranks to exchange anything (got " +
                                    std::to_string(ranks) + ")");
   checked.model = kernels::model_for(ranks, options.masses);
@@ -131,15 +135,20 @@ checked_options check(const mpi_options& options, unsigned ranks) {
 std::vector<const dist::exchange_entry*> applicable(const checked_options& checked, const dist::job_shape& job,
                                                     std::map<std::string, std::string>& not_applicable) {
   std::vector<const dist::exchange_entry*> result;
+  const auto chosen = [](const std::vector<std::string>& names, std::string_view value) {
+    return value.empty() || std::find(names.begin(), names.end(), value) != names.end();
+  };
   for (const std::string& name : checked.exchange_names) {
-    const dist::exchange_entry* entry = dist::find_exchange(name);
-    const std::string reason = entry->not_applicable(job);
-    if (reason.empty()) {
-      result.push_back(entry);
-    } else if (checked.exchanges_named) {
-      throw usage_error("--exchange " + name + ": " + reason);
-    } else {
-      not_applicable[name] = reason;
+    for (const dist::exchange_entry& entry : dist::exchanges()) {
+      if (entry.name != name || !chosen(checked.sync_names, entry.sync)) continue;
+      const std::string reason = entry.not_applicable(job);
+      if (reason.empty()) {
+        result.push_back(&entry);
+      } else if (checked.exchanges_named) {
+        throw usage_error("--exchange " + std::string(entry.label) + ": " + reason);
+      } else {
+        not_applicable[std::string(entry.label)] = reason;
+      }
     }
   }
   if (result.empty()) throw usage_error("--exchange: none of the exchanges can run on this job");
@@ -154,6 +163,7 @@ std::vector<std::string> rank_arguments(const mpi_options& options, unsigned ran
                                      std::to_string(options.pingpong), "--pin", options.pin, "--watchdog",
                                      options.watchdog};
   if (options.exchanges) arguments.insert(arguments.end(), {"--exchange", *options.exchanges});
+  if (options.syncs) arguments.insert(arguments.end(), {"--sync", *options.syncs});
   if (options.masses) arguments.insert(arguments.end(), {"--masses", std::to_string(*options.masses)});
   if (!options.hostfile.empty()) arguments.insert(arguments.end(), {"--hostfile", options.hostfile});
   if (!options.out.empty()) arguments.insert(arguments.end(), {"--out", options.out});
@@ -246,7 +256,7 @@ void report(const mpi_options& options, const checked_options& checked, const di
   // Each round's ping-pong, for the ratio measured side by side with it.
   std::map<unsigned, double> pingpong_of_round;
   for (const auto& p : measured.pingpongs) pingpong_of_round[p.round] = p.one_way_mean_ns;
-  fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", "exchange",
+  fmt::print("{:<21} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", "exchange",
              "step (median, range)", "stage p50", "p99", "p99.9", "max", "skew p50", "skew p99", "slowest rank",
              "transfer p50", "bitwise");
   bool all_bitwise = true;
@@ -275,7 +285,7 @@ void report(const mpi_options& options, const checked_options& checked, const di
     const auto most = std::max_element(slowest.begin(), slowest.end());
     std::uint64_t total = 0;
     for (std::uint64_t count : slowest) total += count;
-    fmt::print("{:<12} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", entry->name,
+    fmt::print("{:<21} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", entry->label,
                fmt::format("{} ({}..{})", ns_text(median_of(steps)), ns_text(*std::min_element(steps.begin(), steps.end())),
                            ns_text(*std::max_element(steps.begin(), steps.end()))),
                ns_text(median_of(p50)), ns_text(median_of(p99)), ns_text(median_of(p999)), ns_text(median_of(max)),
@@ -307,7 +317,7 @@ void report(const mpi_options& options, const checked_options& checked, const di
                                            {"lockstep_mode", "mpi"},
                                        });
     nlohmann::json names = nlohmann::json::array();
-    for (const auto* entry : settings.exchanges) names.push_back(entry->name);
+    for (const auto* entry : settings.exchanges) names.push_back(entry->label);
     document["settings"] = {{"ranks", job.size},
                             {"hosts", job.hosts},
                             {"transport", dist::to_string(checked.how)},
@@ -372,7 +382,8 @@ void report(const mpi_options& options, const checked_options& checked, const di
                          {"context_switches", rank.context_switches},
                          {"migrations", rank.migrations ? nlohmann::json(*rank.migrations) : nlohmann::json("unavailable")},
                          {"futex_waits", rank.futex_waits}});
-      details.push_back({{"exchange", figures.entry->name}, {"name", exchange_name(*figures.entry, job)},
+      details.push_back({{"exchange", figures.entry->name}, {"sync", figures.entry->sync},
+                         {"label", figures.entry->label}, {"name", exchange_name(*figures.entry, job)},
                          {"description", figures.entry->description}, {"round", figures.round},
                          {"stage_latency_ns", distribution_json(figures.stage_latency)},
                          {"skew_ns", distribution_json(figures.skew)},
@@ -469,6 +480,8 @@ void add_mpi(CLI::App& app, int& result) {
       ->check(CLI::Range(1U, 4096U));
   command->add_option("--exchange", options->exchanges,
                       "Comma list of exchanges: p2p, allgather, rma_put, shm_window (default: every one that applies)");
+  command->add_option("--sync", options->syncs,
+                      "Comma list of lockstep's primitives inside shm_window: futex_spin, mailbox (default: both)");
   command->add_option("--transport", options->transport,
                       "shm (shared memory between ranks on one host) or tcp (the TCP path, on loopback for one host)")
       ->capture_default_str();

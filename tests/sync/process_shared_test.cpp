@@ -18,6 +18,8 @@
 #include <vector>
 
 #include "sync/futex_spin.hpp"
+#include "sync/mailbox.hpp"
+#include "sync/storage.hpp"
 
 namespace {
 
@@ -89,5 +91,53 @@ TEST(ProcessSharedFutexSpin, TwoProcessesNoPhaseLeftEarly) { run_processes(2, 20
 // Four processes on one CPU: waiters run out of their budget and sleep on the
 // shared futex; only a wake from another process frees them.
 TEST(ProcessSharedFutexSpin, FourProcessesOnOneCpuSleepAndAreWoken) { run_processes(4, 300, true); }
+
+// The process-shared mailbox: two processes, each a producer and a consumer
+// of the other (all to all), over one anonymous shared mapping; every value
+// arrives, in order, and the storage's size is the heap mailbox's.
+TEST(ProcessSharedMailbox, TwoProcessesExchangeEveryStageInOrder) {
+  using lockstep::sync::dependency_graph;
+  using lockstep::sync::process_shared_mailbox;
+  using lockstep::sync::process_shared_storage;
+  constexpr std::size_t kWidth = 9;  // a first line and one more
+  constexpr std::uint64_t kStages = 3000;
+  const dependency_graph graph = dependency_graph::all_to_all(2);
+  const std::size_t bytes = lockstep::sync::mailbox(graph, kWidth).storage_bytes();
+  void* memory = mmap(nullptr, bytes + sizeof(std::atomic<int>) * 2, PROT_READ | PROT_WRITE,
+                      MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+  ASSERT_NE(memory, MAP_FAILED);
+  auto* block = static_cast<std::byte*>(memory);
+  auto* failures = new (block + bytes) std::atomic<int>(0);
+  // The initialiser builds the shared words before any process forks.
+  process_shared_mailbox first(graph, kWidth, process_shared_storage(block, bytes, true));
+  std::vector<pid_t> children;
+  for (unsigned id = 0; id < 2; ++id) {
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+      alarm(60);
+      process_shared_mailbox mine(graph, kWidth, process_shared_storage(block, bytes, false));
+      participant self;
+      self.id = id;
+      std::vector<double> out(kWidth);
+      for (std::uint64_t stage = 0; stage < kStages; ++stage) {
+        std::vector<double> values(kWidth, static_cast<double>(stage * 10 + id));
+        mine.publish(self, stage, values);
+        mine.receive(self, 1 - id, stage, out);
+        for (double value : out)
+          if (value != static_cast<double>(stage * 10 + (1 - id))) failures->fetch_add(1, std::memory_order_relaxed);
+      }
+      _exit(0);
+    }
+    children.push_back(child);
+  }
+  for (pid_t child : children) {
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a process did not finish (status " << status << ")";
+  }
+  EXPECT_EQ(failures->load(), 0) << "a value arrived torn, late or from another stage";
+  munmap(memory, bytes + sizeof(std::atomic<int>) * 2);
+}
 
 }  // namespace
