@@ -1,5 +1,5 @@
-// lockstep list: every synchronisation primitive, layout and placement, one
-// line each, from the registries the benchmark matrix iterates (so the list
+// lockstep list: every synchronisation primitive, layout and placement (and
+// the MPI exchanges, when built with MPI), one line each, from the registries the benchmark matrix iterates (so the list
 // cannot drift from what `lockstep run` accepts).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -11,6 +11,9 @@
 #include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "sync/registry.hpp"
+#if LOCKSTEP_HAVE_MPI
+#include "distributed/registry.hpp"
+#endif
 
 namespace lockstep::cli {
 
@@ -57,15 +60,25 @@ void print_list(const std::string& what) {
     for (const auto& placement : platform::placements())
       fmt::print("  {:<20} {}\n", placement.name, placement.description);
   }
+  if (what.empty() || what == "exchange") {
+    if (what.empty()) fmt::print("\n");
+    fmt::print("MPI exchanges (lockstep mpi --exchange, --sync for shm_window):\n");
+#if LOCKSTEP_HAVE_MPI
+    for (const auto& entry : distributed::exchanges())
+      fmt::print("  {:<22} {}\n", entry.label, entry.description);
+#else
+    fmt::print("  (this lockstep was built without MPI)\n");
+#endif
+  }
 }
 
 }  // namespace
 
 void add_list(CLI::App& app, int& result) {
   auto what = std::make_shared<std::string>();
-  CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout and placement");
-  list->add_option("what", *what, "Only one group: sync, layout, placement")
-      ->check(CLI::IsMember({"sync", "layout", "placement"}));
+  CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout, placement and MPI exchange");
+  list->add_option("what", *what, "Only one group: sync, layout, placement, exchange")
+      ->check(CLI::IsMember({"sync", "layout", "placement", "exchange"}));
   list->callback([what, &result] {
     print_list(*what);
     result = kExitOk;
