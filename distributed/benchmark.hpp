@@ -46,7 +46,7 @@ struct benchmark_settings {
   double dt = 1e-4;
   std::uint64_t steps = 5000;
   std::uint64_t warmup_steps = 500;
-  unsigned rounds = 3;
+  unsigned rounds = 5;
   std::uint64_t pingpong_round_trips = 10000;
   std::uint64_t pingpong_warmup = 1000;
   platform::placement pin = platform::placement::compact;

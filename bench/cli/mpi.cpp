@@ -45,7 +45,7 @@ struct mpi_options {
   std::string hostfile;
   std::uint64_t steps = 5000;
   std::uint64_t warmup = 500;
-  unsigned rounds = 3;
+  unsigned rounds = 5;  // compare needs 5 repetitions a side for an interval
   std::uint64_t pingpong = 10000;
   std::string pin = "compact";
   std::optional<std::size_t> masses;

@@ -29,7 +29,7 @@ repetition's time divided by the c2c reading taken around it (pace_c2c_ns).
 The headline count of changed entries counts what changed beyond the pace:
 the pace-aware verdict where there is one, else the raw one.
 
-Calibrations: `rk4/serial` (and a chain's `rk4/model:chainS/serial`), `c2c/...`
+Calibrations: `rk4/serial` (and a chain's `rk4/model:chainS/serial`), `mpi/pingpong/...`, `c2c/...`
 and the `overhead/...` pair measure the machine and the instrumentation, not a
 combination of primitive, layout and placement. They are compared in a block of their own (c2c by its one_way_ns
 counter: its iteration time is thread start-up plus the measurement), tested
@@ -225,8 +225,10 @@ class Comparison:
 
 
 def is_calibration(key: BenchmarkKey) -> bool:
-    # The serial step of every model the run integrates: rk4/serial, and rk4/model:chainS/serial for a chain.
-    return key.family in CALIBRATION_FAMILIES or key.without("model").display == SERIAL_ENTRY
+    # The serial step of every model the run integrates: rk4/serial, and rk4/model:chainS/serial for a chain;
+    # and `lockstep mpi`'s ping-pong (mpi/pingpong/...), the MPI counterpart of c2c.
+    return (key.family in CALIBRATION_FAMILIES or key.without("model").display == SERIAL_ENTRY
+            or (key.family == "mpi" and key.get("pingpong") == ""))
 
 
 def sample(run, time_kind: str = "real") -> tuple[list[float], bool]:

@@ -636,3 +636,31 @@ def scaling_curve(curve) -> str:
     axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     axes.set_title(f"Scaling at pin:{curve.pin}, each primitive on its best layout", fontsize=9)
     return to_svg(figure)
+
+
+def mpi_distributions(exchanges, field: str, keys, title: str, reference_ns: float | None = None,
+                      reference_label: str = "") -> str:
+    """Grouped bars on a log axis: one group per exchange of a `lockstep mpi` file (inputs.MpiExchange),
+    one bar per statistic of its `field` distribution (stage, skew); a dashed line at reference_ns."""
+    labels = [exchange.label for exchange in exchanges]
+    width = 0.8 / len(keys)
+    figure, axes = plt.subplots(figsize=(max(6.0, 1.4 * len(labels) + 2.0), 3.8))
+    positive = []
+    for index, key in enumerate(keys):
+        values = [getattr(exchange, field).get(key) for exchange in exchanges]
+        shown = [value if value and value > 0 else np.nan for value in values]
+        positive += [value for value in shown if math.isfinite(value)]
+        axes.bar(np.arange(len(labels)) + (index - (len(keys) - 1) / 2) * width, shown, width,
+                 label=key.replace("p999", "p99.9"))
+    if reference_ns:
+        axes.axhline(reference_ns, linestyle="--", color="black", linewidth=1.0, label=reference_label)
+        positive.append(reference_ns)
+    axes.set_yscale("log")
+    if positive:
+        axes.set_ylim(log_floor(min(positive)), log_ceiling(max(positive)) * 1.5)
+    duration_axis(axes.yaxis)
+    axes.set_xticks(range(len(labels)), labels, fontsize=8, rotation=15, ha="right")
+    axes.set_title(title, fontsize=10)
+    axes.legend(fontsize=7, ncol=len(keys) + 1)
+    figure.tight_layout()
+    return to_svg(figure)

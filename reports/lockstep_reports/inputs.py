@@ -367,6 +367,7 @@ class RunFile:
     pace: PaceTrace | None = None  # None: written before the pace trace
     pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
     scaling: ScalingCurve | None = None  # None: not a --scaling run
+    mpi: "MpiDetails | None" = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""
@@ -606,6 +607,59 @@ def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
                                      nullable=True, unit=" ns"))
 
 
+# ---------------------------------------------------------------- mpi files
+
+@dataclass(frozen=True)
+class MpiExchange:
+    """One exchange of a `lockstep mpi` file, its last round's details (the "exchanges" list)."""
+    label: str      # "p2p", "shm_window/mailbox"
+    name: str       # its benchmark name, mpi/exchange:.../ranks:R/hosts:H
+    stage: dict     # per-stage latency, ns: min, p50, p99, p999, max
+    skew: dict      # per-stage arrival skew, ns: the same keys
+    transfer: dict  # latest departure - latest arrival, ns (files before it: empty)
+    slowest_counts: tuple[int, ...]  # per rank: stages where it arrived last
+
+
+@dataclass(frozen=True)
+class MpiDetails:
+    ranks: int
+    hosts: int
+    transport: str
+    model: str
+    exchanges: tuple[MpiExchange, ...]
+    not_applicable: tuple[tuple[str, str], ...]
+
+
+MPI_DISTRIBUTION_KEYS = ("min", "p50", "p99", "p999", "max")
+
+
+def _mpi_distribution(owner: _Object, key: str, required: bool = True) -> dict:
+    values = owner.object(key, required=required)
+    if values is None:
+        return {}
+    return {name: values.number(name, 0.0, fields.LONGEST_NS, unit=" ns") for name in MPI_DISTRIBUTION_KEYS}
+
+
+def _read_mpi(path: str, document: dict) -> MpiDetails:
+    top = _Object(path, document, "the file")
+    settings = top.object("settings")
+    exchanges = []
+    for index, raw in enumerate(top.array("exchanges")):
+        entry = _Object(path, raw, f"exchanges entry {index}")
+        label = entry.text("label", required=False, empty=False) or entry.text("exchange", empty=False)
+        counts = entry.array("slowest_rank_counts")
+        if not all(isinstance(count, int) and not isinstance(count, bool) and count >= 0 for count in counts):
+            entry.fail("slowest_rank_counts", "holds something that is not a count")
+        exchanges.append(MpiExchange(label, entry.text("name", empty=False),
+                                     _mpi_distribution(entry, "stage_latency_ns"), _mpi_distribution(entry, "skew_ns"),
+                                     _mpi_distribution(entry, "transfer_ns", required=False), tuple(counts)))
+    not_applicable = top.object("not_applicable", required=False)
+    reasons = tuple(sorted((key, str(value)) for key, value in (not_applicable.value if not_applicable else {}).items()))
+    return MpiDetails(settings.integer("ranks", low=1), settings.integer("hosts", low=1),
+                      settings.text("transport", empty=False), settings.text("model", empty=False),
+                      tuple(exchanges), reasons)
+
+
 def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not isinstance(document, dict):
         raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
@@ -696,7 +750,8 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs, scaling=_read_scaling(path, document))
+                   pairs=pairs, scaling=_read_scaling(path, document),
+                   mpi=_read_mpi(path, document) if document.get("kind") == "mpi" else None)
 
 
 def _same_counters(entry: _Object, counters: frozenset, first: tuple[int, frozenset]) -> None:
@@ -989,7 +1044,8 @@ def load_verify_csv(path: str, text: str, label: str) -> VerifyFile:
 # ---------------------------------------------------------------- any file
 
 def load_any(path: str, label: str | None = None):
-    """Any of the four kinds, recognised by content (never by the file name)."""
+    """Any of the five kinds (run and mpi results, c2c, delay, a verify trajectory), recognised by content
+    (never by the file name)."""
     label = label or os.path.basename(path)
     text = read_text(path)
     if text.lstrip()[:1] not in ("{", "["):
@@ -1002,6 +1058,8 @@ def load_any(path: str, label: str | None = None):
         return _read_c2c(path, label, _Object(path, document, ""))
     if kind == "delay":
         return _read_delay(path, label, _Object(path, document, ""))
+    if kind == "mpi":
+        return run_file_from_document(path, label, document)
     if kind is not None:
         raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
     return run_file_from_document(path, label, document)

@@ -6,6 +6,8 @@
     barrier/sync:ck_centralized/pin:compact/threads:2
     rk4/serial
     c2c/pin:compact/threads:2
+    mpi/exchange:shm_window/sync:mailbox/ranks:4/hosts:1          (`lockstep mpi`)
+    mpi/pingpong/ranks:2/hosts:1
 
 Two entries are the same benchmark when their family and identity segments are
 equal, whatever their order. Segments that Google Benchmark appends to describe
@@ -22,7 +24,7 @@ from dataclasses import dataclass
 RUN_CONFIGURATION_KEYS = {"min_time", "min_warmup_time", "repeats", "iterations"}
 RUN_CONFIGURATION_WORDS = {"real_time", "process_time", "manual_time"}
 # The order in which lockstep's own segments are shown.
-SEGMENT_ORDER = ("model", "sync", "layout", "pin", "threads")
+SEGMENT_ORDER = ("pingpong", "model", "exchange", "sync", "layout", "pin", "threads", "ranks", "hosts")
 
 
 @dataclass(frozen=True, order=True)

@@ -22,12 +22,13 @@ import jinja2
 import markupsafe
 
 from . import figures, paper, statistics
-from .compare import calibration, fingerprint, layout_effects, rank_tables
+from .compare import calibration, fingerprint, layout_effects, rank_tables, run_median
 from .fields import (CPU_LIMIT, DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
                      SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, _Object, load_any, parse_json, read_text, unique_labels
 from .inputs import _distribution as inputs_distribution
+from .names import parse_name
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
@@ -60,7 +61,8 @@ class Section:
 def inputs_section(loaded) -> Section:
     kinds = {RunFile: "benchmark results (`lockstep run`)", C2cFile: "core-to-core latency (`lockstep c2c`)",
              DelayFile: "paced delay run (`lockstep delay`)", VerifyFile: "trajectory (`lockstep verify --csv`)"}
-    rows = [[item.label, kinds[type(item)]] for item in loaded]
+    rows = [[item.label, "the step across MPI ranks (`lockstep mpi`)" if getattr(item, "mpi", None) else
+             kinds[type(item)]] for item in loaded]
     return Section("Inputs", tables=[Table(["file", "kind"], rows)])
 
 
@@ -125,6 +127,45 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                             tables=[Table(["group", "rank", "sync/layout", "step (median)", "x serial"], rank_rows)]))
     counter[0] += 1
     return sections
+
+
+def mpi_section(run_file: RunFile, counter: list[int]) -> Section:
+    """A `lockstep mpi` file: per-stage exchange latency and arrival skew per exchange (its last round's
+    details), beside the ping-pong; the step time per exchange over the rounds."""
+    mpi = run_file.mpi
+    pingpongs = [run for key, run in run_file.runs.items() if key.family == "mpi" and key.get("pingpong") == ""]
+    pingpong = run_median(run_file, pingpongs[0].key) if pingpongs else None
+    title = (f"{mpi.ranks} ranks on {mpi.hosts} host{'s' if mpi.hosts != 1 else ''}, {mpi.transport} transport, "
+             f"model {mpi.model}")
+    latency = Figure(f"mpi-latency-{counter[0]}", f"per-stage exchange latency, {run_file.label}",
+                     figures.mpi_distributions(mpi.exchanges, "stage", ("p50", "p99", "p999", "max"),
+                                               f"per-stage exchange latency ({title})", pingpong,
+                                               "ping-pong one-way (OSU style)"))
+    skew = Figure(f"mpi-skew-{counter[0]}", f"per-stage arrival skew, {run_file.label}",
+                  figures.mpi_distributions(mpi.exchanges, "skew", ("p50", "p99", "max"),
+                                            f"arrival skew per stage: latest minus earliest rank ({title})"))
+    rows = []
+    for exchange in mpi.exchanges:
+        run = run_file.runs.get(parse_name(exchange.name))
+        step = run_median(run_file, run.key) if run else None
+        counts = exchange.slowest_counts
+        total = sum(counts)
+        slowest = max(range(len(counts)), key=counts.__getitem__) if counts else None
+        rows.append([exchange.label, format_ns(step)] +
+                    [format_ns(exchange.stage.get(key)) for key in ("p50", "p99", "p999", "max")] +
+                    [format_ns(exchange.skew.get(key)) for key in ("p50", "p99", "max")] +
+                    [f"{slowest} ({100.0 * counts[slowest] / total:.0f} %)" if total else UNAVAILABLE])
+    paragraphs = [f"{title}. Per exchange: the step time (median over the rounds), each stage's exchange "
+                  "latency at each rank (the last round, every rank and stage pooled), and the arrival skew per "
+                  "stage (the latest rank's arrival minus the earliest's) with the rank that arrived last most "
+                  "often. The dashed line is the 2-rank ping-pong's one-way time, timed as osu_latency times it "
+                  "(median over the rounds)" + (f": {format_ns(pingpong)}." if pingpong else ".")]
+    for label, reason in mpi.not_applicable:
+        paragraphs.append(f"Not applicable: {label}: {reason}")
+    counter[0] += 1
+    return Section(f"The step across MPI ranks: {run_file.label}", paragraphs=paragraphs, figures=[latency, skew],
+                   tables=[Table(["exchange", "step (median)", "stage p50", "p99", "p99.9", "max", "skew p50",
+                                  "skew p99", "skew max", "slowest rank"], rows)])
 
 
 def _separation(curve, by_sync) -> str:
@@ -731,7 +772,7 @@ def build_sections(loaded) -> list[Section]:
         sections.append(machines)
     for item in loaded:
         if isinstance(item, RunFile):
-            sections += run_sections(item, counter)
+            sections += [mpi_section(item, counter)] if item.mpi else run_sections(item, counter)
     for item in loaded:
         if isinstance(item, C2cFile):
             sections.append(c2c_section(item, counter))
