@@ -60,6 +60,13 @@ class exchange {
   [[nodiscard]] virtual sync::sync_counters counters() const { return {}; }
 };
 
+// A block this rank receives: its owner, where it starts, how many equations.
+struct producer_block {
+  int rank;
+  std::size_t first;
+  std::size_t count;
+};
+
 // What an exchange is built from: this rank, the job, the blocks, the plans.
 struct exchange_setup {
   MPI_Comm comm;
@@ -73,6 +80,8 @@ struct exchange_setup {
   [[nodiscard]] const kernels::participant_plan& mine() const { return plans[static_cast<std::size_t>(rank)]; }
   // The ranks that read this rank's block, ascending.
   [[nodiscard]] std::vector<int> consumers() const;
+  // The blocks this rank reads from others, by producer ascending.
+  [[nodiscard]] std::vector<producer_block> producer_blocks() const;
 };
 
 // The values in private copies, one full-size vector per slot, for the

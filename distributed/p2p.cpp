@@ -12,16 +12,22 @@ std::vector<int> exchange_setup::consumers() const {
   return result;
 }
 
+std::vector<producer_block> exchange_setup::producer_blocks() const {
+  std::vector<producer_block> result;
+  for (unsigned producer : mine().producers) {
+    const layouts::equation_block block = blocks.block(producer);
+    result.push_back({static_cast<int>(producer), block.first, block.size()});
+  }
+  return result;
+}
+
 p2p_exchange::p2p_exchange(const exchange_setup& setup)
     : private_copies(setup.blocks.equations()),
       comm_(setup.comm),
       own_first_(setup.mine().block.first),
       own_count_(static_cast<int>(setup.mine().block.size())),
+      producers_(setup.producer_blocks()),
       consumers_(setup.consumers()) {
-  for (unsigned producer : setup.mine().producers) {
-    const layouts::equation_block block = setup.blocks.block(producer);
-    producers_.push_back({static_cast<int>(producer), block.first, static_cast<int>(block.size())});
-  }
   requests_.resize(producers_.size() + consumers_.size());
 }
 
@@ -31,8 +37,8 @@ void p2p_exchange::share(std::uint64_t global_stage) {
   std::size_t request = 0;
   // Receives first, so that a message that arrives while the sends are
   // posted lands in its buffer rather than in the unexpected queue.
-  for (const peer& producer : producers_)
-    MPI_Irecv(values + producer.first, producer.count, MPI_DOUBLE, producer.rank, tag, comm_, &requests_[request++]);
+  for (const producer_block& producer : producers_)
+    MPI_Irecv(values + producer.first, static_cast<int>(producer.count), MPI_DOUBLE, producer.rank, tag, comm_, &requests_[request++]);
   for (int consumer : consumers_)
     MPI_Isend(values + own_first_, own_count_, MPI_DOUBLE, consumer, tag, comm_, &requests_[request++]);
   MPI_Waitall(static_cast<int>(request), requests_.data(), MPI_STATUSES_IGNORE);

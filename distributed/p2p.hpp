@@ -27,15 +27,10 @@ class p2p_exchange final : public private_copies {
   void reset(std::span<const double> initial) override;
 
  private:
-  struct peer {
-    int rank;
-    std::size_t first;
-    int count;
-  };
   MPI_Comm comm_;
   std::size_t own_first_;
   int own_count_;
-  std::vector<peer> producers_;
+  std::vector<producer_block> producers_;
   std::vector<int> consumers_;
   std::vector<MPI_Request> requests_;
 };

@@ -15,11 +15,8 @@ rma_put_exchange::rma_put_exchange(const exchange_setup& setup)
       equations_(setup.blocks.equations()),
       own_first_(setup.mine().block.first),
       own_count_(static_cast<int>(setup.mine().block.size())),
+      producers_(setup.producer_blocks()),
       consumers_(setup.consumers()) {
-  for (unsigned producer : setup.mine().producers) {
-    const layouts::equation_block block = setup.blocks.block(producer);
-    producers_.push_back({static_cast<int>(producer), block.first, static_cast<int>(block.size())});
-  }
   ready_seen_.assign(producers_.size(), 0);
   consumed_seen_.assign(consumers_.size(), 0);
   bytes_ = kDepth * equations_ * sizeof(double) + 2 * static_cast<std::size_t>(setup.size) * sizeof(std::uint64_t);
@@ -78,15 +75,14 @@ void rma_put_exchange::share(std::uint64_t global_stage) {
     wait_local(ready_displacement(producers_[index].rank), ready_seen_[index], global_stage + 1);
   MPI_Win_sync(window_);
   const auto* slot_values = reinterpret_cast<const double*>(base_ + data_displacement(slot, 0));
-  for (const peer& producer : producers_)
-    std::memcpy(values + producer.first, slot_values + producer.first,
-                static_cast<std::size_t>(producer.count) * sizeof(double));
+  for (const producer_block& producer : producers_)
+    std::memcpy(values + producer.first, slot_values + producer.first, producer.count * sizeof(double));
   if (global_stage % 4 == 3) {
     ack_ = global_stage + 1;
-    for (const peer& producer : producers_)
+    for (const producer_block& producer : producers_)
       MPI_Accumulate(&ack_, 1, MPI_UINT64_T, producer.rank, consumed_displacement(rank_), 1, MPI_UINT64_T,
                      MPI_REPLACE, window_);
-    for (const peer& producer : producers_) MPI_Win_flush(producer.rank, window_);
+    for (const producer_block& producer : producers_) MPI_Win_flush(producer.rank, window_);
   }
 }
 

@@ -47,11 +47,6 @@ class rma_put_exchange final : public private_copies {
   void reset(std::span<const double> initial) override;
 
  private:
-  struct peer {
-    int rank;
-    std::size_t first;
-    int count;
-  };
   [[nodiscard]] MPI_Aint data_displacement(std::uint64_t slot, std::size_t equation) const noexcept;
   [[nodiscard]] MPI_Aint ready_displacement(int producer) const noexcept;
   [[nodiscard]] MPI_Aint consumed_displacement(int consumer) const noexcept;
@@ -66,7 +61,7 @@ class rma_put_exchange final : public private_copies {
   std::size_t equations_;
   std::size_t own_first_;
   int own_count_;
-  std::vector<peer> producers_;
+  std::vector<producer_block> producers_;
   std::vector<int> consumers_;
   std::vector<std::uint64_t> ready_seen_;     // per producer (index into producers_)
   std::vector<std::uint64_t> consumed_seen_;  // per consumer (index into consumers_)

@@ -12,35 +12,49 @@ namespace {
 // that no value shares a line with the barrier's words.
 constexpr std::size_t kValuesOffset =
     (sizeof(sync::process_shared_futex_spin) + platform::kCacheLine - 1) / platform::kCacheLine * platform::kCacheLine;
+// Every rank on one host maps one window of `bytes` that rank 0 allocates;
+// returns its start (the same memory in every rank).
+std::byte* map_shared_window(const exchange_setup& setup, std::size_t bytes, MPI_Win& window) {
+  int host_size = 0;
+  MPI_Comm_size(setup.host_comm, &host_size);
+  if (host_size != setup.size) throw std::logic_error("shm_window needs every rank on one host");
+  void* base = nullptr;
+  MPI_Win_allocate_shared(static_cast<MPI_Aint>(setup.rank == 0 ? bytes : 0), 1, MPI_INFO_NULL, setup.host_comm,
+                          &base, &window);
+  MPI_Aint size = 0;
+  int unit = 0;
+  MPI_Win_shared_query(window, 0, &size, &unit, &base);
+  return static_cast<std::byte*>(base);
+}
+
+// The window is ready for everyone: locked for load/store access (passive
+// target, for MPI_Win_sync) and rank 0's first writes visible.
+void open_shared_window(MPI_Comm comm, MPI_Win window) {
+  MPI_Win_lock_all(MPI_MODE_NOCHECK, window);
+  MPI_Win_sync(window);
+  MPI_Barrier(comm);
+}
+
+void close_shared_window(MPI_Win& window) {
+  MPI_Win_unlock_all(window);
+  MPI_Win_free(&window);
+}
 }  // namespace
 
 shm_window_exchange::shm_window_exchange(const exchange_setup& setup)
     : comm_(setup.comm), equations_(setup.blocks.equations()) {
-  int host_size = 0;
-  MPI_Comm_size(setup.host_comm, &host_size);
-  if (host_size != setup.size) throw std::logic_error("shm_window needs every rank on one host");
-  const std::size_t bytes = kValuesOffset + 5 * equations_ * sizeof(double);
-  void* base = nullptr;
-  MPI_Win_allocate_shared(static_cast<MPI_Aint>(setup.rank == 0 ? bytes : 0), 1, MPI_INFO_NULL, setup.host_comm,
-                          &base, &window_);
-  MPI_Aint size = 0;
-  int unit = 0;
-  MPI_Win_shared_query(window_, 0, &size, &unit, &base);
-  auto* bytes_base = static_cast<std::byte*>(base);
+  std::byte* const bytes_base = map_shared_window(setup, kValuesOffset + 5 * equations_ * sizeof(double), window_);
   if (setup.rank == 0) new (bytes_base) sync::process_shared_futex_spin(static_cast<unsigned>(setup.size));
   barrier_ = std::launder(reinterpret_cast<sync::process_shared_futex_spin*>(bytes_base));
   values_ = reinterpret_cast<double*>(bytes_base + kValuesOffset);
   self_.id = static_cast<unsigned>(setup.rank);
-  MPI_Win_lock_all(MPI_MODE_NOCHECK, window_);
-  MPI_Win_sync(window_);
-  MPI_Barrier(comm_);  // the barrier is built before anyone arrives at it
+  open_shared_window(comm_, window_);  // the barrier is built before anyone arrives at it
 }
 
 shm_window_exchange::~shm_window_exchange() {
   // process_shared_futex_spin is trivially destructible (asserted where it is
   // declared): freeing the window is all there is to do.
-  MPI_Win_unlock_all(window_);
-  MPI_Win_free(&window_);
+  close_shared_window(window_);
 }
 
 void shm_window_exchange::share(std::uint64_t /*global_stage*/) { barrier_->arrive_and_wait(self_); }
@@ -71,39 +85,25 @@ shm_mailbox_exchange::shm_mailbox_exchange(const exchange_setup& setup)
       own_count_(setup.mine().block.size()),
       has_consumers_(setup.mine().has_consumers),
       width_(setup.blocks.largest_block()),
+      producers_(setup.producer_blocks()),
       staging_(width_, 0.0) {
-  int host_size = 0;
-  MPI_Comm_size(setup.host_comm, &host_size);
-  if (host_size != setup.size) throw std::logic_error("shm_window needs every rank on one host");
-  for (unsigned producer : setup.mine().producers) {
-    const layouts::equation_block block = setup.blocks.block(producer);
-    producers_.push_back({producer, block.first, block.size()});
-  }
   const sync::dependency_graph graph = graph_of(setup.plans);
   // How large a block the mailbox's shared words need: the same mailbox on the
   // heap counts them (sync/storage.hpp), plus room to align the start.
   const std::size_t bytes = sync::mailbox(graph, width_).storage_bytes() + platform::kPrefetchPair;
-  void* base = nullptr;
-  MPI_Win_allocate_shared(static_cast<MPI_Aint>(setup.rank == 0 ? bytes : 0), 1, MPI_INFO_NULL, setup.host_comm,
-                          &base, &window_);
-  MPI_Aint size = 0;
-  int unit = 0;
-  MPI_Win_shared_query(window_, 0, &size, &unit, &base);
+  std::byte* const base = map_shared_window(setup, bytes, window_);
   auto address = reinterpret_cast<std::uintptr_t>(base);
   const std::uintptr_t aligned = (address + platform::kPrefetchPair - 1) / platform::kPrefetchPair * platform::kPrefetchPair;
-  auto* block = static_cast<std::byte*>(base) + (aligned - address);
+  std::byte* const block = base + (aligned - address);
   channel_ = std::make_unique<sync::process_shared_mailbox>(
       graph, width_, sync::process_shared_storage(block, bytes - (aligned - address), setup.rank == 0));
   self_.id = static_cast<unsigned>(setup.rank);
-  MPI_Win_lock_all(MPI_MODE_NOCHECK, window_);
-  MPI_Win_sync(window_);
-  MPI_Barrier(comm_);  // rank 0 wrote the first words before anyone publishes
+  open_shared_window(comm_, window_);  // rank 0 wrote the first words before anyone publishes
 }
 
 shm_mailbox_exchange::~shm_mailbox_exchange() {
   channel_.reset();  // this process's view; the shared words go with the window
-  MPI_Win_unlock_all(window_);
-  MPI_Win_free(&window_);
+  close_shared_window(window_);
 }
 
 void shm_mailbox_exchange::share(std::uint64_t global_stage) {
@@ -117,11 +117,12 @@ void shm_mailbox_exchange::share(std::uint64_t global_stage) {
     }
     channel_->publish(self_, stage, std::span<const double>(source, width_));
   }
-  for (const peer& producer : producers_) {
+  for (const producer_block& producer : producers_) {
+    const auto rank = static_cast<unsigned>(producer.rank);
     if (producer.count == width_) {
-      channel_->receive(self_, producer.rank, stage, std::span<double>(values + producer.first, width_));
+      channel_->receive(self_, rank, stage, std::span<double>(values + producer.first, width_));
     } else {
-      channel_->receive(self_, producer.rank, stage, std::span<double>(staging_.data(), width_));
+      channel_->receive(self_, rank, stage, std::span<double>(staging_.data(), width_));
       std::copy(staging_.data(), staging_.data() + producer.count, values + producer.first);
     }
   }

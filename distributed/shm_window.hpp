@@ -69,17 +69,12 @@ class shm_mailbox_exchange final : public private_copies {
   [[nodiscard]] sync::sync_counters counters() const override { return self_.counters; }
 
  private:
-  struct peer {
-    unsigned rank;
-    std::size_t first;
-    std::size_t count;
-  };
   MPI_Comm comm_;
   std::size_t own_first_;
   std::size_t own_count_;
   bool has_consumers_;
   std::size_t width_;  // doubles per message: the largest block (the channel's contract)
-  std::vector<peer> producers_;
+  std::vector<producer_block> producers_;
   std::vector<double> staging_;  // for blocks smaller than width_
   MPI_Win window_ = MPI_WIN_NULL;
   std::unique_ptr<sync::process_shared_mailbox> channel_;

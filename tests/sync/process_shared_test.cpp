@@ -52,6 +52,15 @@ void take_part(shared_region& region, unsigned id, unsigned processes, unsigned 
   region.futex_waits.fetch_add(self.counters.futex_waits, std::memory_order_relaxed);
 }
 
+// Every child exited 0 (a hang ends by its alarm, a signal the status shows).
+void expect_children_finish(const std::vector<pid_t>& children) {
+  for (pid_t child : children) {
+    int status = 0;
+    ASSERT_EQ(waitpid(child, &status, 0), child);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a process did not finish (status " << status << ")";
+  }
+}
+
 void run_processes(unsigned processes, unsigned phases, bool one_cpu) {
   void* memory = mmap(nullptr, sizeof(shared_region), PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
   ASSERT_NE(memory, MAP_FAILED);
@@ -73,11 +82,7 @@ void run_processes(unsigned processes, unsigned phases, bool one_cpu) {
     }
     children.push_back(child);
   }
-  for (pid_t child : children) {
-    int status = 0;
-    ASSERT_EQ(waitpid(child, &status, 0), child);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a process did not finish (status " << status << ")";
-  }
+  expect_children_finish(children);
   EXPECT_EQ(region->failures.load(), 0) << "a process left a phase before every process arrived";
   EXPECT_EQ(region->arrivals.load(), std::uint64_t{phases} * processes);
   if (one_cpu) {
@@ -131,11 +136,7 @@ TEST(ProcessSharedMailbox, TwoProcessesExchangeEveryStageInOrder) {
     }
     children.push_back(child);
   }
-  for (pid_t child : children) {
-    int status = 0;
-    ASSERT_EQ(waitpid(child, &status, 0), child);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "a process did not finish (status " << status << ")";
-  }
+  expect_children_finish(children);
   EXPECT_EQ(failures->load(), 0) << "a value arrived torn, late or from another stage";
   munmap(memory, bytes + sizeof(std::atomic<int>) * 2);
 }
