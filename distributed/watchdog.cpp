@@ -1,45 +1,106 @@
 #include "distributed/watchdog.hpp"
 
+#include <signal.h>
+#include <sys/time.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
 #include <cstdio>
-#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
 
 namespace lockstep::distributed {
+namespace {
 
-watchdog::watchdog(std::chrono::nanoseconds limit, std::string who)
-    : limit_(limit), who_(std::move(who)), thread_([this] { watch(); }) {}
+// The one armed watchdog's state, read by the signal handler: lock-free
+// atomics and a message prefix written before the timer starts.
+static_assert(std::atomic<std::uint64_t>::is_always_lock_free && std::atomic<const char*>::is_always_lock_free,
+              "the handler reads only lock-free atomics");
+std::atomic<std::uint64_t> progress{0};
+std::atomic<const char*> current_phase{"start-up"};
+std::atomic<bool> armed{false};
+std::array<char, 512> prefix{};  // "lockstep mpi: rank R on HOST made no progress for 10 s (in "
+std::size_t prefix_length = 0;
+constexpr unsigned kChecksPerLimit = 16;
+// Touched only by the handler (SIGALRM is not re-entered: it is blocked while its handler runs).
+std::uint64_t last_seen = 0;
+unsigned unchanged_checks = 0;
+struct sigaction previous_action {};
+
+void write_all(const char* text, std::size_t length) noexcept {
+  while (length > 0) {
+    const ssize_t written = ::write(STDERR_FILENO, text, length);
+    if (written <= 0) return;
+    text += written;
+    length -= static_cast<std::size_t>(written);
+  }
+}
+
+void on_alarm(int /*signal*/) noexcept {
+  const std::uint64_t now = progress.load(std::memory_order_relaxed);
+  if (now != last_seen) {
+    last_seen = now;
+    unchanged_checks = 0;
+    return;
+  }
+  if (++unchanged_checks < kChecksPerLimit) return;
+  write_all(prefix.data(), prefix_length);
+  const char* what = current_phase.load(std::memory_order_relaxed);
+  write_all(what, std::strlen(what));
+  char digits[24];
+  std::size_t at = sizeof digits;
+  std::uint64_t value = now;
+  do {
+    digits[--at] = static_cast<char>('0' + value % 10);
+    value /= 10;
+  } while (value != 0 && at > 0);
+  write_all(", at ", 5);
+  write_all(digits + at, sizeof digits - at);
+  static constexpr char kSuffix[] =
+      "): another rank died or stalled, or this one did; ending the job (--watchdog sets the limit)\n";
+  write_all(kSuffix, sizeof kSuffix - 1);
+  ::_exit(kExitStalled);
+}
+
+}  // namespace
+
+watchdog::watchdog(std::chrono::nanoseconds limit, const std::string& who) {
+  if (armed.exchange(true)) throw std::runtime_error("one watchdog per process");
+  const double seconds = std::chrono::duration<double>(limit).count();
+  const int length = std::snprintf(prefix.data(), prefix.size(), "lockstep mpi: %s made no progress for %.3g s (in ",
+                                   who.c_str(), seconds);
+  prefix_length = length < 0 ? 0 : std::min(static_cast<std::size_t>(length), prefix.size() - 1);
+  last_seen = progress.load(std::memory_order_relaxed);
+  unchanged_checks = 0;
+
+  struct sigaction action {};
+  action.sa_handler = on_alarm;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;  // interrupted system calls resume; MPI's polls see EINTR and poll again
+  if (sigaction(SIGALRM, &action, &previous_action) != 0) throw std::runtime_error("cannot install SIGALRM");
+  const auto interval_us = std::chrono::duration_cast<std::chrono::microseconds>(limit / kChecksPerLimit).count();
+  itimerval timer{};
+  timer.it_interval.tv_sec = static_cast<time_t>(interval_us / 1'000'000);
+  timer.it_interval.tv_usec = static_cast<suseconds_t>(interval_us % 1'000'000);
+  timer.it_value = timer.it_interval;
+  if (setitimer(ITIMER_REAL, &timer, nullptr) != 0) throw std::runtime_error("cannot start the watchdog's timer");
+}
 
 watchdog::~watchdog() {
-  {
-    std::lock_guard lock(mutex_);
-    stop_ = true;
-  }
-  stop_signal_.notify_all();
-  thread_.join();
+  itimerval off{};
+  setitimer(ITIMER_REAL, &off, nullptr);
+  sigaction(SIGALRM, &previous_action, nullptr);
+  armed.store(false);
 }
 
-void watchdog::watch() {
-  std::uint64_t last = progress_.load(std::memory_order_relaxed);
-  auto last_change = std::chrono::steady_clock::now();
-  std::unique_lock lock(mutex_);
-  while (!stop_signal_.wait_for(lock, limit_ / 16, [this] { return stop_; })) {
-    const std::uint64_t now_value = progress_.load(std::memory_order_relaxed);
-    const auto now = std::chrono::steady_clock::now();
-    if (now_value != last) {
-      last = now_value;
-      last_change = now;
-      continue;
-    }
-    if (now - last_change >= limit_) {
-      const double seconds = std::chrono::duration<double>(limit_).count();
-      std::fprintf(stderr,
-                   "lockstep mpi: %s made no progress for %.3g s (in %s, at %llu): another rank died or stalled, "
-                   "or this one did; ending the job (--watchdog sets the limit)\n",
-                   who_.c_str(), seconds, phase_.load(std::memory_order_relaxed),
-                   static_cast<unsigned long long>(now_value));
-      std::fflush(stderr);
-      std::_Exit(kExitStalled);
-    }
-  }
+void watchdog::phase(const char* what) noexcept {
+  current_phase.store(what, std::memory_order_relaxed);
+  progress.fetch_add(1, std::memory_order_relaxed);
 }
+
+void watchdog::beat(std::uint64_t value) noexcept { progress.store(value, std::memory_order_relaxed); }
+
+std::atomic<std::uint64_t>& watchdog::heartbeat() noexcept { return progress; }
 
 }  // namespace lockstep::distributed

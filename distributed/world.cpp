@@ -7,9 +7,7 @@
 namespace lockstep::distributed {
 
 mpi_session::mpi_session() {
-  int provided = 0;
-  if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS)
-    throw std::runtime_error("MPI_Init_thread failed");
+  if (MPI_Init(nullptr, nullptr) != MPI_SUCCESS) throw std::runtime_error("MPI_Init failed");
 }
 
 mpi_session::~mpi_session() { MPI_Finalize(); }

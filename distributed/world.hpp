@@ -1,9 +1,9 @@
 #pragma once
 // The MPI job a rank belongs to: who it is, where it runs, what library runs it.
 //
-// mpi_session initialises MPI once for the process (MPI_Init_thread with
-// MPI_THREAD_FUNNELED: only the main thread calls MPI; the watchdog thread
-// never does) and finalises it when it goes. world describes
+// mpi_session initialises MPI once for the process (MPI_Init: a rank is one
+// thread; its watchdog is a timer signal, not a thread, see watchdog.hpp)
+// and finalises it when it goes. world describes
 // MPI_COMM_WORLD: the rank, the size, the host this rank runs on and how many
 // hosts the job spans (ranks that share memory, MPI_COMM_TYPE_SHARED, count as
 // one host), and this rank's place among the ranks of its host (what
