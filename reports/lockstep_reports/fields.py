@@ -61,9 +61,14 @@ COUNTERS_SHOWN = (
     ("migrations_per_kstep", "migr/kstep"),
     ("futex_waits_per_step", "futex/step"),
     ("timeouts", "timeouts"),
+    # `lockstep mpi`'s exchange entries: the tail of the per-stage exchange latency and of the arrival skew.
+    ("stage_p99_ns", "stage p99 ns"),
+    ("skew_p99_ns", "skew p99 ns"),
 )
+# `lockstep mpi`'s ping-pong entries: the median one-way time (their real_time is the OSU-style mean).
+PINGPONG_P50_COUNTER = "one_way_p50_ns"
 # Every counter the tools read, by what it may hold; all other counters are ignored.
-DURATION_COUNTERS = UNIT_COUNTERS + (C2C_COUNTER,)  # ns, in [SHORTEST_NS, LONGEST_NS]
+DURATION_COUNTERS = UNIT_COUNTERS + (C2C_COUNTER, PINGPONG_P50_COUNTER)  # ns, in [SHORTEST_NS, LONGEST_NS]
 SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_NS
 AMOUNT_COUNTERS = tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS

@@ -643,20 +643,31 @@ def _mpi_distribution(owner: _Object, key: str, required: bool = True) -> dict:
 def _read_mpi(path: str, document: dict) -> MpiDetails:
     top = _Object(path, document, "the file")
     settings = top.object("settings")
-    exchanges = []
+    ranks, hosts = settings.integer("ranks", low=1), settings.integer("hosts", low=1)
+    exchanges, labels = [], {}
     for index, raw in enumerate(top.array("exchanges")):
         entry = _Object(path, raw, f"exchanges entry {index}")
-        label = entry.text("label", required=False, empty=False) or entry.text("exchange", empty=False)
+        exchange = entry.text("exchange", empty=False)
+        sync = entry.text("sync", required=False) or ""
+        # label and name: what `lockstep mpi` writes; a file that holds only exchange (and sync) gets them
+        # as the writer makes them (bench/cli/mpi.cpp, exchange_name).
+        label = entry.text("label", required=False, empty=False) or (f"{exchange}/{sync}" if sync else exchange)
+        name = entry.text("name", required=False, empty=False) or (
+            f"mpi/exchange:{exchange}" + (f"/sync:{sync}" if sync else "") + f"/ranks:{ranks}/hosts:{hosts}")
+        if label in labels:
+            entry.fail("label", f"{_shown(label)} is also exchanges entry {labels[label]}'s: an exchange appears once")
+        labels[label] = index
         counts = entry.array("slowest_rank_counts")
         if not all(isinstance(count, int) and not isinstance(count, bool) and count >= 0 for count in counts):
             entry.fail("slowest_rank_counts", "holds something that is not a count")
-        exchanges.append(MpiExchange(label, entry.text("name", empty=False),
+        if len(counts) != ranks:
+            entry.fail("slowest_rank_counts", f"holds {len(counts)} counts for {ranks} ranks (settings): one per rank")
+        exchanges.append(MpiExchange(label, name,
                                      _mpi_distribution(entry, "stage_latency_ns"), _mpi_distribution(entry, "skew_ns"),
                                      _mpi_distribution(entry, "transfer_ns", required=False), tuple(counts)))
     not_applicable = top.object("not_applicable", required=False)
-    reasons = tuple(sorted((key, str(value)) for key, value in (not_applicable.value if not_applicable else {}).items()))
-    return MpiDetails(settings.integer("ranks", low=1), settings.integer("hosts", low=1),
-                      settings.text("transport", empty=False), settings.text("model", empty=False),
+    reasons = tuple(sorted((key, not_applicable.text(key)) for key in (not_applicable.value if not_applicable else {})))
+    return MpiDetails(ranks, hosts, settings.text("transport", empty=False), settings.text("model", empty=False),
                       tuple(exchanges), reasons)
 
 
@@ -672,7 +683,8 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
     context = document.get("context")
     if not isinstance(benchmarks, list) or not isinstance(context, dict):
         missing = "\"benchmarks\" list" if not isinstance(benchmarks, list) else "\"context\" object"
-        raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `lockstep run` result file")
+        tool = "lockstep mpi" if document.get("kind") == "mpi" else "lockstep run"
+        raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `{tool}` result file")
     if not benchmarks:
         raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
     context_values, warnings = _read_context(path, label, context)
@@ -786,7 +798,7 @@ class ContextFile:
 
 
 def load_for_compare(path: str, label: str | None = None) -> "RunFile | ContextFile":
-    """A `lockstep run` file, or the context of another kind of lockstep result."""
+    """A `lockstep run` or `lockstep mpi` file, or the context of another kind of lockstep result."""
     label = label or os.path.basename(path)
     document = parse_json(path, read_text(path))
     kind = document.get("kind") if isinstance(document, dict) else None
@@ -795,6 +807,8 @@ def load_for_compare(path: str, label: str | None = None) -> "RunFile | ContextF
             raise InputError(path, f"is `lockstep {kind}` output without a \"context\" object")
         context, warnings = _read_context(path, label, document["context"])
         return ContextFile(path=path, label=label, kind=kind, context=context, warnings=warnings)
+    if kind is not None and kind != "mpi":  # as load_any: a kind this reader does not know is not a run file
+        raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
     return run_file_from_document(path, label, document)
 
 
