@@ -420,10 +420,14 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                         f"ran at that moment, with a tiny p; `lockstep run` without --no-interleave (its default) "
                         f"spreads it over every entry")
     if untested:
+        enough = max(statistics.MIN_REPETITIONS, 10)
+        # A `lockstep mpi` file's repetitions are its rounds.
+        more = (f"lockstep mpi --rounds {enough}" if baseline.mpi and contender.mpi
+                else f"lockstep run --repetitions {enough}")
         warnings.append(f"{len(untested)} of {len(rows)} matched entries have too few repetitions for a "
                         f"{int(statistics.CONFIDENCE * 100)} % interval (fewer than 4 on a side, or fewer than "
                         f"{statistics.MIN_REPETITIONS} repetitions on a side for the Mann-Whitney U test): untested "
-                        f"(`lockstep run --repetitions {max(statistics.MIN_REPETITIONS, 10)}` or more)")
+                        f"(`{more}` or more)")
     unpaced = [row for row in rows if different_modes is not None and row.pace is None]
     if unpaced:
         warnings.append(f"{len(unpaced)} of {len(rows)} matched entries have a repetition without its pace: their "
@@ -650,11 +654,19 @@ def _counts_text(counts: dict[str, int]) -> str:
             f"{counts['within noise']} within noise, {counts['untested']} untested")
 
 
+def _tool(run_file: RunFile) -> str:
+    return "lockstep mpi" if run_file.mpi else "lockstep run"
+
+
 def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     a, b = "A", letter
     noise = comparison.noise_percent
     limit = 1.0 + noise / 100.0
     out = [f"== {b} ({comparison.contender.label}) against A ({comparison.baseline.label})", ""]
+    if not set(comparison.baseline.runs) & set(comparison.contender.runs):
+        out += [f"no entries in common: A ({_tool(comparison.baseline)}) and {b} ({_tool(comparison.contender)}) "
+                f"name different benchmarks, so nothing below is compared; each file's entries are listed at the "
+                f"end", ""]
     out.append(calibration_move_line(comparison, b))
     out.append("")
     kind = "real" if comparison.time_kind == "real" else "CPU"
@@ -721,9 +733,10 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
         out.append("")
         out.append(f"calibrations ({len(comparison.calibrations)}): the machine and the instrumentation, not a "
                    f"combination; c2c compared by its {C2C_COUNTER} counter (its iteration time is thread start-up "
-                   f"plus the measurement), the overhead pair and rk4/serial by their time (they measure the pace: "
-                   f"raw only); q Benjamini-Hochberg over these {sum(r.p_raw is not None for r in comparison.calibrations)} "
-                   f"tests on their own; not in the geometric mean, the counts above or --fail-above.")
+                   f"plus the measurement), the overhead pair, rk4/serial and the MPI ping-pong (its OSU-style mean "
+                   f"one-way time) by their time (they measure the pace: raw only); q Benjamini-Hochberg over these "
+                   f"{sum(r.p_raw is not None for r in comparison.calibrations)} tests on their own; not in the "
+                   f"geometric mean, the counts above or --fail-above.")
         calibration_rows = [[row.key.display, row.measure] + _row_cells(comparison, row)
                             for row in comparison.calibrations]
         out += _table(["calibration", "measure", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps",
@@ -809,7 +822,7 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
     for index, comparison in enumerate(comparisons, start=1):
         out += comparison_lines(comparison, file_letter(index))
         out.append("")
-    if run_files:
+    if run_files and not all(run_file.mpi for run_file in run_files):  # MPI files hold no rk4 entries to normalise
         out += across_machines_lines(run_files, time_kind)
     if warnings:
         out.append("")

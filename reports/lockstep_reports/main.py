@@ -52,14 +52,15 @@ def compare_parser() -> argparse.ArgumentParser:
 
     parser = tool_parser(
         "compare",
-        "Compare Google Benchmark JSON results of `lockstep run` across runs and machines. "
+        "Compare Google Benchmark JSON results of `lockstep run` (or of `lockstep mpi`) across runs "
+        "and machines. "
                     "The first file is the baseline A; every other file is compared with it. An entry is "
                     "slower or faster only when the whole exact 95% interval of its ratio lies beyond the noise "
                     "band, 'within noise' when it lies inside, 'unsure' across an edge; the Mann-Whitney p-values "
                     "are Benjamini-Hochberg adjusted (false discovery rate). When both files carry the pace trace, "
                     "every entry also gets a pace-aware verdict (within matching pace modes, or on the time "
                     "divided by the pace's c2c reading), and the headline counts what changed beyond the pace. "
-                    "rk4/serial, c2c (by its one_way_ns counter) and the overhead "
+                    "rk4/serial, c2c (by its one_way_ns counter), the MPI ping-pong and the overhead "
                     "pair are compared apart, as calibrations, and the context's calibrations say how far the "
                     "machine itself moved between the runs.",
         "RESULT.json", "two or more result files")
@@ -88,8 +89,8 @@ def report_parser() -> argparse.ArgumentParser:
         "report",
         "Write a self-contained HTML page and a Markdown file with figures from lockstep's "
         "result files: `lockstep run` JSON, `lockstep c2c --json`, `lockstep delay --json`, "
-        "`lockstep verify --csv` (recognised by their content).",
-        "RESULT", "result files of any of the four kinds")
+        "`lockstep mpi --out`, `lockstep verify --csv` (recognised by their content).",
+        "RESULT", "result files of any of the five kinds")
     parser.add_argument("--out", default="lockstep-report", metavar="DIR",
                         help="directory for report.html, report.md and figures/ (default: lockstep-report); its "
                              "parent must exist; an earlier report there is replaced whole, any other content "
