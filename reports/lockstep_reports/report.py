@@ -24,7 +24,7 @@ import markupsafe
 from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, rank_tables, run_median
 from .fields import (CPU_LIMIT, DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
-                     SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
+                     PINGPONG_P50_COUNTER, SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, _Object, load_any, parse_json, read_text, unique_labels
 from .inputs import _distribution as inputs_distribution
@@ -129,18 +129,30 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     return sections
 
 
+def _pingpong_one_way(run_file: RunFile) -> tuple[float | None, str]:
+    """The ping-pong's one-way time, median over the rounds, and what it is: the p50 of the round trips / 2
+    where every round has it (one_way_p50_ns), else their mean (the entry's time, OSU style)."""
+    pingpongs = [run for key, run in run_file.runs.items() if key.family == "mpi" and key.get("pingpong") == ""]
+    if not pingpongs or pingpongs[0].errored:
+        return None, "p50"
+    run = pingpongs[0]
+    values = run.counter_values(PINGPONG_P50_COUNTER)
+    if values and len(values) == len(run.repetitions):
+        return statistics.median(values), "p50"
+    return run_median(run_file, run.key), "mean"
+
+
 def mpi_section(run_file: RunFile, counter: list[int]) -> Section:
     """A `lockstep mpi` file: per-stage exchange latency and arrival skew per exchange (its last round's
     details), beside the ping-pong; the step time per exchange over the rounds."""
     mpi = run_file.mpi
-    pingpongs = [run for key, run in run_file.runs.items() if key.family == "mpi" and key.get("pingpong") == ""]
-    pingpong = run_median(run_file, pingpongs[0].key) if pingpongs else None
+    pingpong, pingpong_what = _pingpong_one_way(run_file)
     title = (f"{mpi.ranks} ranks on {mpi.hosts} host{'s' if mpi.hosts != 1 else ''}, {mpi.transport} transport, "
              f"model {mpi.model}")
     latency = Figure(f"mpi-latency-{counter[0]}", f"per-stage exchange latency, {run_file.label}",
                      figures.mpi_distributions(mpi.exchanges, "stage", ("p50", "p99", "p999", "max"),
                                                f"per-stage exchange latency ({title})", pingpong,
-                                               "ping-pong one-way (OSU style)"))
+                                               f"ping-pong one-way {pingpong_what}"))
     skew = Figure(f"mpi-skew-{counter[0]}", f"per-stage arrival skew, {run_file.label}",
                   figures.mpi_distributions(mpi.exchanges, "skew", ("p50", "p99", "max"),
                                             f"arrival skew per stage: latest minus earliest rank ({title})"))
@@ -159,7 +171,7 @@ def mpi_section(run_file: RunFile, counter: list[int]) -> Section:
                   "latency at each rank (the last round, every rank and stage pooled), and the arrival skew per "
                   "stage (the latest rank's arrival minus the earliest's) with the rank that arrived last most "
                   "often. The dashed line is the 2-rank ping-pong's one-way time, timed as osu_latency times it "
-                  "(median over the rounds)" + (f": {format_ns(pingpong)}." if pingpong else ".")]
+                  f"({pingpong_what}, median over the rounds)" + (f": {format_ns(pingpong)}." if pingpong else ".")]
     for label, reason in mpi.not_applicable:
         paragraphs.append(f"Not applicable: {label}: {reason}")
     counter[0] += 1
