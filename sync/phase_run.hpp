@@ -15,8 +15,12 @@
 // its arrive_and_wait of phase q returns, asks should_stop_after(q). The
 // barrier of phase p orders the leader's request before every participant's
 // question after phase p, so all of them stop after phase p; a question after
-// an earlier phase q < p can see the request early, but it names p, not q, so
-// nobody stops early.
+// an earlier phase q < p can see the request early, but it names p, so nobody
+// stops early. The question is "is the named phase at or before mine?", not
+// "is it mine?": a barrier that no longer synchronises (win_event_faithful
+// after lost wake-ups: its counter is off by one) can let a participant run a
+// phase ahead of the leader, and that participant must stop too, not wait out
+// timeouts alone for ever.
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -40,7 +44,7 @@ class phase_stop {
   // Any participant, after its arrive_and_wait of `phase` returned.
   bool should_stop_after(std::uint64_t phase) const noexcept {
     // relaxed: pairs with request_after through the barrier, as above.
-    return stop_after_.load(std::memory_order_relaxed) == phase;
+    return stop_after_.load(std::memory_order_relaxed) <= phase;
   }
 
  private:

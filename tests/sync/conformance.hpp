@@ -107,6 +107,12 @@ inline constexpr std::uint64_t kPhases = 2000;
 // time budget: a test asserts behaviour, not speed; the watchdog bounds it.)
 inline constexpr std::uint64_t kPhasesWhenStalling = 30;
 
+// A primitive that may lose wake-ups stops after about this long (the leader
+// looks at the clock every phase_run_limits::kClockInterval phases, so a run
+// whose every phase times out ends 16 timeouts later at worst: 15 s + 16 s
+// stays well inside the watchdog's 90 s).
+inline constexpr std::chrono::seconds kBudgetWhenLosingWakeups{15};
+
 inline unsigned cpus_available() noexcept {
   cpu_set_t set;
   CPU_ZERO(&set);
@@ -197,8 +203,14 @@ void run_conformance(const scenario& setup) {
   const bool oversubscribed = setup.participants > cpus;
   const bool may_stall = Primitive::kPureSpin && oversubscribed;
   const std::uint64_t phases = may_stall ? kPhasesWhenStalling : kPhases;
-  // A few lost wake-ups (win_event_faithful: 1 s each) and the stalling
-  // pure-spin phases fit well inside the watchdog's deadline.
+  // The stalling pure-spin phases fit well inside the watchdog's deadline. A
+  // primitive that may lose wake-ups (win_event_faithful: 1 s each) does not:
+  // with 8 participants on 2 CPUs shared with other tests it can lose dozens,
+  // and once its counter is off by one a phase can cost a timeout every time
+  // (a CI run took over 90 s). It runs against a time budget instead; the
+  // invariant is checked on the phases it completed.
+  const std::chrono::nanoseconds budget =
+      Primitive::kMayLoseWakeups ? kBudgetWhenLosingWakeups : std::chrono::nanoseconds(std::chrono::hours(1));
   lockstep::testing::watchdog guard(std::chrono::seconds(90) * lockstep::testing::kSlowdown,
                                     std::string(Primitive::kName) + " did not finish its phases");
 
@@ -214,7 +226,7 @@ void run_conformance(const scenario& setup) {
   for (unsigned id = 0; id < setup.participants; ++id) sources[id].random.seed(12345u + id);
 
   const phase_run_result result = run_phases(
-      barrier, setup.participants, {phases, std::chrono::hours(1)},
+      barrier, setup.participants, {phases, budget},
       [&](participant& self, std::uint64_t phase) {
         delay_source& mine = sources[self.id];
         if (setup.confine_to_one_cpu && !mine.pinned) {
@@ -235,8 +247,15 @@ void run_conformance(const scenario& setup) {
         }
       });
 
-  EXPECT_EQ(result.phases, phases);
   const sync_counters total = result.total();
+  if (result.stopped_by_time) {
+    // (No claim that it lost a wake-up: on a loaded machine a slow phase is
+    // no fault, and a test asserts no timing.)
+    EXPECT_TRUE(Primitive::kMayLoseWakeups) << "only a primitive that may lose wake-ups runs against a budget";
+    EXPECT_GT(result.phases, 0u);
+  } else {
+    EXPECT_EQ(result.phases, phases);
+  }
   if (!Primitive::kMayLoseWakeups) {
     EXPECT_EQ(total.timeouts, 0u) << "a primitive that cannot lose a wake-up timed out";
     EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
