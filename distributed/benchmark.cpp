@@ -53,7 +53,22 @@ std::int64_t clock_offset(const world& job) {
   return offset;
 }
 
-// Ranks 0 and 1; the others wait at the closing barrier.
+// Every rank waits here until every rank has arrived, beating while it
+// waits. Not MPI_Barrier: a blocking wait beats no more, and the ranks that
+// wait for the ping-pong of ranks 0 and 1 can wait longer than the watchdog's
+// limit when the machine is busy (9 ranks on 2 CPUs under a build: over 10 s,
+// and the watchdogs ended a healthy job). A stall is still caught: a ping-pong
+// rank whose peer stalls waits in a blocking receive, beats no more and ends
+// the job; a rank that dies, mpirun ends it.
+void barrier_beating(const world& job, watchdog& dog) {
+  MPI_Request request = MPI_REQUEST_NULL;
+  MPI_Ibarrier(job.comm, &request);
+  int done = 0;
+  for (std::uint64_t polls = 0; MPI_Test(&request, &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done == 0; ++polls)
+    dog.beat(polls);
+}
+
+// Ranks 0 and 1; the others wait for them (barrier_beating).
 pingpong_figures pingpong(const world& job, const benchmark_settings& settings, unsigned round, watchdog& dog) {
   dog.phase("the ping-pong");
   pingpong_figures figures;
@@ -69,7 +84,10 @@ pingpong_figures pingpong(const world& job, const benchmark_settings& settings, 
     }
   };
   if (job.rank < 2) {
-    for (std::uint64_t done = 0; done < settings.pingpong_warmup; ++done) trip(job.rank);
+    for (std::uint64_t done = 0; done < settings.pingpong_warmup; ++done) {
+      trip(job.rank);
+      if ((done & 1023U) == 0) dog.beat(done);
+    }
     dog.phase("the ping-pong (timed)");
     const std::int64_t start = platform::now_ns();
     for (std::uint64_t done = 0; done < settings.pingpong_round_trips; ++done) {
@@ -89,7 +107,7 @@ pingpong_figures pingpong(const world& job, const benchmark_settings& settings, 
     }
     figures.one_way = platform::summarize(std::move(one_way));
   }
-  MPI_Barrier(job.comm);
+  barrier_beating(job, dog);
   return figures;
 }
 
