@@ -7,6 +7,7 @@
 // One rank owns one block of equations (layouts::partition) and runs, per
 // step (distributed/rank_step.hpp):
 //     for stage s in 0..3:
+//         prepare(step * 4 + s)
 //         k_s of its block from the stage inputs (state(parity), stage(s-1))
 //         at s = 3: x_{n+1} of its block into next_state(parity)
 //         share(step * 4 + s)
@@ -17,6 +18,10 @@
 // or x_{n+1} at s = 3) before the call, and must not write them again before
 // the call returns. `global_stage` increases by one per call, from 0 after
 // every reset().
+// prepare(g) comes before the rank computes its values of stage g, outside
+// the timed share(g): an exchange may post there what share(g) will wait for
+// (p2p's receives), as a dataflow MPI code pre-posts its receives. share(g)
+// must not depend on it having been called.
 //
 // Where the values live is the exchange's choice: private copies per rank
 // (private_copies below) or one shared window (shm_window). Every exchange
@@ -49,6 +54,7 @@ class exchange {
   // dependencies' there. (k_3 is nobody else's business: the step keeps it.)
   [[nodiscard]] virtual double* stage(unsigned stage) = 0;
 
+  virtual void prepare(std::uint64_t /*global_stage*/) {}
   virtual void share(std::uint64_t global_stage) = 0;
 
   // Collective: x_0 in place for every rank (parity 0), global stages restart
@@ -85,31 +91,36 @@ struct exchange_setup {
 };
 
 // The values in private copies, one full-size vector per slot, for the
-// exchanges that move values by messages (p2p, allgather, rma_put).
+// exchanges that move values by messages (p2p, allgather, rma_put). The state
+// has two copies, x_n at parity n % 2 and x_{n+1} at the other: stage 3
+// publishes into x_{n+1} while the rank's stage-3 derivatives still read x_n,
+// so a receive posted before them (prepare) has a buffer nobody reads.
 class private_copies : public exchange {
  public:
-  explicit private_copies(std::size_t equations) : state_(equations, 0.0) {
+  explicit private_copies(std::size_t equations) {
+    for (auto& values : states_) values.assign(equations, 0.0);
     for (auto& values : stages_) values.assign(equations, 0.0);
   }
-  const double* state(unsigned /*parity*/) override { return state_.data(); }
-  double* next_state(unsigned /*parity*/) override { return state_.data(); }  // in place: see values_of
+  const double* state(unsigned parity) override { return states_[parity].data(); }
+  double* next_state(unsigned parity) override { return states_[parity ^ 1U].data(); }
   double* stage(unsigned stage) override { return stages_[stage].data(); }
 
  protected:
-  // The vector stage g % 4 published into: k_s, or the state at s = 3 (the
-  // owner overwrites x_n of its block with x_{n+1} once its k_3 is computed;
-  // its consumers overwrite theirs on receipt).
+  // The vector stage g % 4 published into: k_s, or x_{n+1} at s = 3 (the
+  // owner's block from its update, its consumers' copies on receipt). Step n
+  // = g / 4 reads x_n at parity n % 2 (reset() restarts both at 0).
   double* values_of(std::uint64_t global_stage) noexcept {
     const auto stage_in_step = static_cast<unsigned>(global_stage % 4);
-    return stage_in_step == 3 ? state_.data() : stages_[stage_in_step].data();
+    const auto next_parity = static_cast<unsigned>((global_stage / 4 + 1) % 2);
+    return stage_in_step == 3 ? states_[next_parity].data() : stages_[stage_in_step].data();
   }
   void reset_copies(std::span<const double> initial) {
-    state_.assign(initial.begin(), initial.end());
+    for (auto& values : states_) values.assign(initial.begin(), initial.end());
     for (auto& values : stages_) std::fill(values.begin(), values.end(), 0.0);
   }
 
  private:
-  std::vector<double> state_;
+  std::vector<double> states_[2];
   std::vector<double> stages_[3];
 };
 

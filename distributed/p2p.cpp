@@ -31,16 +31,24 @@ p2p_exchange::p2p_exchange(const exchange_setup& setup)
   requests_.resize(producers_.size() + consumers_.size());
 }
 
-void p2p_exchange::share(std::uint64_t global_stage) {
+void p2p_exchange::prepare(std::uint64_t global_stage) {
   double* const values = values_of(global_stage);
   const int tag = static_cast<int>(global_stage % 4);
   std::size_t request = 0;
-  // Receives first, so that a message that arrives while the sends are
-  // posted lands in its buffer rather than in the unexpected queue.
   for (const producer_block& producer : producers_)
-    MPI_Irecv(values + producer.first, static_cast<int>(producer.count), MPI_DOUBLE, producer.rank, tag, comm_, &requests_[request++]);
+    MPI_Irecv(values + producer.first, static_cast<int>(producer.count), MPI_DOUBLE, producer.rank, tag, comm_,
+              &requests_[request++]);
+  posted_ = global_stage + 1;
+}
+
+void p2p_exchange::share(std::uint64_t global_stage) {
+  if (posted_ != global_stage + 1) prepare(global_stage);
+  posted_ = 0;
+  const int tag = static_cast<int>(global_stage % 4);
+  std::size_t request = producers_.size();
   for (int consumer : consumers_)
-    MPI_Isend(values + own_first_, own_count_, MPI_DOUBLE, consumer, tag, comm_, &requests_[request++]);
+    MPI_Isend(values_of(global_stage) + own_first_, own_count_, MPI_DOUBLE, consumer, tag, comm_,
+              &requests_[request++]);
   MPI_Waitall(static_cast<int>(request), requests_.data(), MPI_STATUSES_IGNORE);
 }
 

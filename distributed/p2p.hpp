@@ -23,6 +23,7 @@ namespace lockstep::distributed {
 class p2p_exchange final : public private_copies {
  public:
   explicit p2p_exchange(const exchange_setup& setup);
+  void prepare(std::uint64_t global_stage) override;
   void share(std::uint64_t global_stage) override;
   void reset(std::span<const double> initial) override;
 
@@ -32,7 +33,8 @@ class p2p_exchange final : public private_copies {
   int own_count_;
   std::vector<producer_block> producers_;
   std::vector<int> consumers_;
-  std::vector<MPI_Request> requests_;
+  std::vector<MPI_Request> requests_;  // the receives, one per producer, then the sends
+  std::uint64_t posted_ = 0;           // 1 + the global stage whose receives are posted; 0: none
 };
 
 }  // namespace lockstep::distributed

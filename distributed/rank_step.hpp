@@ -10,7 +10,8 @@
 //   step.run_timed(steps, record, hooks)
 //                                      each share() timed: its arrival (the
 //                                      clock when the rank entered it) and how
-//                                      long it took, into record (sized by the caller)
+//                                      long it took, into record (sized by the caller);
+//                                      prepare() and the arithmetic are outside it
 //   step.own_block()                   x_n of the rank's block
 // hooks.heartbeat, when set, is stored every step (relaxed: the watchdog only
 // needs to see it move); hooks.at_step, when set, is called with the step
@@ -75,6 +76,8 @@ class rank_step {
       if (hooks.at_step) hooks.at_step(steps_taken_);
       const double* const x = values_->state(parity_);
       for (unsigned stage = 0; stage < kernels::kRk4Stages; ++stage) {
+        const std::uint64_t global_stage = steps_taken_ * kernels::kRk4Stages + stage;
+        values_->prepare(global_stage);
         const double* const previous = stage == 0 ? x : values_->stage(stage - 1);
         double* const current = stage < 3 ? values_->stage(stage) : last_stage_.data();
         for (std::size_t equation = block_.first; equation < block_.last; ++equation)
@@ -88,7 +91,6 @@ class rank_step {
             next[equation] = kernels::rk4_update(coefficients_, x[equation], k0[equation], k1[equation], k2[equation],
                                                  current[equation]);
         }
-        const std::uint64_t global_stage = steps_taken_ * kernels::kRk4Stages + stage;
         if constexpr (Timed) {
           const std::int64_t arrival = platform::now_ns();
           values_->share(global_stage);

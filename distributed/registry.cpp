@@ -30,7 +30,7 @@ std::unique_ptr<exchange> make(const exchange_setup& setup) {
 
 constexpr std::array kExchanges{
     exchange_entry{"p2p", "", "p2p", "exchange:p2p",
-                   "dataflow: nonblocking sends to the ranks that read the block, receives from the ranks it reads",
+                   "dataflow: nonblocking sends to the ranks that read the block, receives (posted before the stage's arithmetic) from the ranks it reads",
                    always, make<p2p_exchange>},
     exchange_entry{"allgather", "", "allgather", "exchange:allgather", "one MPI_Allgatherv per stage: every block to every rank",
                    always, make<allgather_exchange>},
