@@ -44,11 +44,11 @@ void p2p_exchange::prepare(std::uint64_t global_stage) {
 void p2p_exchange::share(std::uint64_t global_stage) {
   if (posted_ != global_stage + 1) prepare(global_stage);
   posted_ = 0;
+  const double* const own = values_of(global_stage) + own_first_;
   const int tag = static_cast<int>(global_stage % 4);
   std::size_t request = producers_.size();
   for (int consumer : consumers_)
-    MPI_Isend(values_of(global_stage) + own_first_, own_count_, MPI_DOUBLE, consumer, tag, comm_,
-              &requests_[request++]);
+    MPI_Isend(own, own_count_, MPI_DOUBLE, consumer, tag, comm_, &requests_[request++]);
   MPI_Waitall(static_cast<int>(request), requests_.data(), MPI_STATUSES_IGNORE);
 }
 

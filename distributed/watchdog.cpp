@@ -37,6 +37,10 @@ void write_all(const char* text, std::size_t length) noexcept {
   }
 }
 
+// The loads are relaxed: they pair with the relaxed stores of beat() and
+// phase(), and the handler (on whichever thread of the process the signal
+// lands, Open MPI's own included) needs only to see the count change; the
+// phase is a string literal, which needs no publishing.
 void on_alarm(int /*signal*/) noexcept {
   const std::uint64_t now = progress.load(std::memory_order_relaxed);
   if (now != last_seen) {
@@ -94,6 +98,8 @@ watchdog::~watchdog() {
   armed.store(false);
 }
 
+// relaxed, both: read by on_alarm's relaxed loads (above). Seeing the new
+// count with the old phase costs nothing but a stale word in the message.
 void watchdog::phase(const char* what) noexcept {
   current_phase.store(what, std::memory_order_relaxed);
   progress.fetch_add(1, std::memory_order_relaxed);
