@@ -29,7 +29,7 @@
 // whose roots (about 5.1e3 rad/s) are not the ones the paper prints. The roots
 // it prints, ±51.47j and ±19.66j rad/s, fix C/m at 1012.5 s^-2 (to the paper's
 // rounding), so lockstep takes m = 0.02 kg and C = 20.25 N/m: the paper's
-// digits, with the ratio its own roots imply (DESIGN.md, The model).
+// digits, with the ratio its own roots imply (docs/design.md, The workload).
 //
 // Cost: the derivative is on the measured path of every benchmark. It is
 // allocation-free, reads only the stage inputs it depends on, and uses

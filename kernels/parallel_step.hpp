@@ -1,7 +1,7 @@
 #pragma once
 // The composed parallel RK4 step: any synchronisation primitive x any layout,
 // T persistent participants, each owning a contiguous block of equations
-// (DESIGN.md, The composed step; issue 4).
+// (docs/design.md, The composed step).
 //
 // What one participant does per step (kernels/rk4.hpp names the arithmetic):
 //

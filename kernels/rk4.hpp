@@ -14,7 +14,7 @@
 //                                                          (rk4_update)
 //
 // Bitwise determinism, the correctness oracle of every parallel combination
-// (DESIGN.md, Determinism): the three functions below are the ONLY arithmetic
+// (docs/design.md, The determinism oracle): the three functions below are the ONLY arithmetic
 // of a step besides the model's derivative. Each is a fixed sequence of IEEE
 // double operations in the order written above:
 //   * c_s h is computed once per step size (rk4_coefficients): h * 0.5 (exact)

@@ -16,7 +16,7 @@
 
 namespace lockstep::layouts {
 
-// kName: DESIGN.md's name, unique in the registry; benchmark names carry it.
+// kName: the name docs/design.md lists, unique in the registry; benchmark names carry it.
 template <class L>
 concept layout_declares_name = requires {
   { L::kName } -> std::convertible_to<std::string_view>;

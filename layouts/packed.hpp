@@ -1,6 +1,6 @@
 #pragma once
 // packed: the shared state and stage values in as few cache lines as
-// possible — the false-sharing case (DESIGN.md, Layouts).
+// possible — the false-sharing case (docs/design.md, Layouts).
 //
 // Slot-major: five arrays of n doubles one after the other, x_even, x_odd,
 // k_0, k_1, k_2 (shared_slots.hpp says who writes and reads each). For the

@@ -1,6 +1,6 @@
 #pragma once
 // padded64, padded128: what each thread writes sits in blocks of its own
-// (DESIGN.md, Layouts).
+// (docs/design.md, Layouts).
 //
 // Each participant owns one region that starts on a `Pad`-byte boundary and
 // fills whole `Pad`-byte blocks; inside it, its equations' five slots

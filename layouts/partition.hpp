@@ -1,6 +1,6 @@
 #pragma once
 // Which participant owns which equations: the contiguous equation blocks of
-// the composed RK4 step (DESIGN.md, The composed step).
+// the composed RK4 step (kernels/parallel_step.hpp).
 //
 // n equations over T participants: participant p owns the contiguous block
 // [first(p), last(p)). Blocks differ in size by at most one equation, the

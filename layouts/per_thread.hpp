@@ -2,7 +2,7 @@
 // per_thread: every participant keeps a private copy of the whole state and
 // copies in what the others published — the paper's native model, where each
 // worker first copies the shared values it reads into locals (`X1 = GX1`,
-// DESIGN.md, Layouts).
+// docs/design.md, Layouts).
 //
 // Two kinds of storage:
 //  * private copies, one per participant, each in its own allocation that

@@ -9,7 +9,7 @@
 // lacks one fails to compile here with the trait's name.
 //
 // For each layout L:
-//   info_of<L>()   name (DESIGN.md's), one-line description, kind (shared or
+//   info_of<L>()   name (docs/design.md's), one-line description, kind (shared or
 //                  private_copy), writer_isolation (bytes of the blocks in
 //                  which every value has one writer; 0 = writers share lines
 //                  on purpose).
@@ -30,7 +30,7 @@
 
 namespace lockstep::layouts {
 
-// DESIGN.md's table order. A std::tuple of the layout types (never
+// docs/design.md's table order. A std::tuple of the layout types (never
 // instantiated: only its element types are used).
 using all_layouts = std::tuple<packed, padded64, padded128, per_thread>;
 

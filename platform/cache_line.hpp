@@ -3,7 +3,7 @@
 //
 // Named constants, not std::hardware_destructive_interference_size: GCC 12
 // warns that its value may change with -mtune, and the suite measures 64 against
-// 128 bytes instead of trusting one value (DESIGN.md, Layouts).
+// 128 bytes instead of trusting one value (docs/design.md, Layouts).
 #include <cstddef>
 
 namespace lockstep::platform {

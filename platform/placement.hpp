@@ -1,5 +1,5 @@
 #pragma once
-// Where each thread of a run goes: the placements of DESIGN.md as plans
+// Where each thread of a run goes: the placements (docs/design.md) as plans
 // computed from a topology, and the call that pins a thread to its entry.
 //
 //   none     no affinity: every thread may run on any CPU of the affinity set,
@@ -42,7 +42,7 @@ struct placement_description {
   std::string_view description;  // one line, for `lockstep list`
 };
 
-// Every placement, in the order of DESIGN.md.
+// Every placement, in the order above (and of docs/design.md).
 std::span<const placement_description> placements() noexcept;
 std::string_view to_string(placement kind) noexcept;
 // "none, compact, scatter, migrate"

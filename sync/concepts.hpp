@@ -2,7 +2,7 @@
 // The contracts every synchronisation primitive in sync/ satisfies, and the
 // per-participant counters they keep.
 //
-// Two shapes of primitive compose the RK4 step (DESIGN.md, The composed step):
+// Two shapes of primitive compose the RK4 step (kernels/parallel_step.hpp):
 //
 //  * phase_barrier: every participant calls arrive_and_wait() once per phase;
 //    no participant returns from phase p before all participants have arrived
@@ -139,7 +139,7 @@ concept graph_channel = stage_channel<C> && std::constructible_from<C, const dep
 // ... the required expression 'P::kVisibleToTsan' is invalid" (and a trait of
 // the wrong type with "does not satisfy return-type-requirement").
 
-// kName: DESIGN.md's name, unique in the registry; benchmark names carry it.
+// kName: the name docs/design.md lists, unique in the registry; benchmark names carry it.
 template <class P>
 concept declares_name = requires {
   { P::kName } -> std::convertible_to<std::string_view>;

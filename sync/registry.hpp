@@ -9,7 +9,7 @@
 // that lacks one fails to compile here with the trait's name.
 //
 // For each primitive P:
-//   info_of<P>()       name (DESIGN.md's), one-line description, kind
+//   info_of<P>()       name (docs/design.md's), one-line description, kind
 //                      (barrier or dataflow channel), pure_spin (may stall
 //                      for a timeslice per phase when participants outnumber
 //                      CPUs: bound it in time), spins_long (a waiter may keep
@@ -69,7 +69,7 @@ struct type_list {
   static constexpr std::size_t size = sizeof...(Primitives);
 };
 
-// DESIGN.md's table order (mailbox after spsc_queue); futex_spin's other
+// docs/design.md's table order (mailbox after spsc_queue); futex_spin's other
 // phase layout right after it (futex_spin.hpp).
 using all_primitives = type_list<std_barrier, win_event_faithful, win_event, futex_spin, futex_spin_alternative,
                                  seqlock, spsc_queue, mailbox, pthread_barrier, omp_barrier, ck_centralized,

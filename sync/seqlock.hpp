@@ -23,7 +23,8 @@
 //    least that write's odd sequence (W1), so the torn read is detected.
 //  Payload words are relaxed atomics: a concurrent read of a word being
 //  written is not a data race, and nothing is copied with memcpy (which would
-//  be one; see STYLE.md on rigtorp's Seqlock).
+//  be one: rigtorp's Seqlock copies its payload that way, a data race outside
+//  x86 that ThreadSanitizer flags).
 //  ThreadSanitizer does not model standalone fences; under __SANITIZE_THREAD__
 //  the payload stores become release and the payload loads acquire, which
 //  give TSan the same edges as (W2)/(R3) (stronger and slower, TSan builds

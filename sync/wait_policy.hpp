@@ -46,13 +46,13 @@ namespace lockstep::sync {
 
 // Measured on the development VM (2-vCPU KVM guest, Intel Xeon) with a
 // two-thread probe, one thread pinned per vCPU, in its usual (slow) pace:
-//  * PAUSE: 14-19 ns per instruction over a loop of a million (issue 11 saw
-//    about 25 ns). kPauseNs takes the fast end, so that the spin below never
+//  * PAUSE: 14-19 ns per instruction over a loop of a million (an earlier
+//    probe saw about 25 ns). kPauseNs takes the fast end, so that the spin below never
 //    lasts less than the round trip it is meant to cover.
 //  * a futex round trip: FUTEX_WAKE to a sleeper on an idle vCPU keeps the
 //    waker in the syscall 14-15 us (the IPI exits to the hypervisor) and the
 //    sleeper runs 40-42 us after the call began (p50; p10 32-35, p90 45-50);
-//    issue 11 saw 20-25 us in a quieter pace. kFutexRoundTripNs is the slow
+//    an earlier probe saw 20-25 us in a quieter pace. kFutexRoundTripNs is the slow
 //    pace's p50 and p90 rounded up.
 // Why the whole round trip: with two participants, once one sleeps, its
 // partner pays the wake-up syscall and then waits for it; if its own spin is
@@ -77,7 +77,7 @@ inline constexpr std::uint32_t kDedicatedSpins = kFutexRoundTripNs / kPauseNs;
 // per step (the producer was preempted on the other CPU for longer than 8
 // yields) and took 3.4 us; with 64 it slept 0.000 times per step and took
 // 3.0-3.8 us, 0.92-1.06x seqlock's (which never sleeps) in the same run
-// (release, interleaved, one run each; issue 11's notes). futex_spin yields
+// (release build, interleaved, one run each). futex_spin yields
 // as many times before it sleeps.
 inline constexpr std::uint32_t kOversubscribedSpins = 0;
 inline constexpr std::uint32_t kOversubscribedYields = 64;

@@ -1,7 +1,8 @@
 #pragma once
 // How a lockstep subcommand plugs into the one binary.
 //
-// Each command lives in its own cmd_<name>.cpp and exposes one function,
+// Each command lives in a file of its own in bench/cli/, named for it
+// (bench/cli/run.cpp holds `lockstep run`), and exposes one function,
 // add_<name>(app, result), that adds its CLI11 subcommand and sets a callback.
 // The callback stores the command's exit status in `result`:
 //   0  success,

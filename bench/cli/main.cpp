@@ -1,4 +1,4 @@
-// lockstep: one binary, one subcommand per job (DESIGN.md, Commands).
+// lockstep: one binary, one subcommand per job (README.md, Commands).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 

@@ -1,8 +1,8 @@
 // lockstep mpi: the RK4 step across MPI ranks (distributed/). Run directly,
 // it checks every option, then launches mpirun for --ranks N on this host (or
 // the hosts of --hostfile) and says the command it ran; run under mpirun, each
-// rank measures, rank 0 prints and writes the result (DESIGN.md, Distributed
-// memory).
+// rank measures, rank 0 prints and writes the result (README.md says what it
+// prints, docs/result-files.md what the file holds).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 

@@ -1,5 +1,5 @@
 // lockstep compare, lockstep report: the result tools written in Python
-// (reports/, DESIGN.md "Reports"). These two subcommands only locate the
+// (reports/, reports/README.md). These two subcommands only locate the
 // Python entry point and exec Debian's interpreter on it with every argument
 // passed through untouched, so that the Python tool owns its own options,
 // its own --help, and its own exit status (0 ok, 1 regression beyond

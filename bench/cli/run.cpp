@@ -1,7 +1,9 @@
-// lockstep run: the benchmark matrix (DESIGN.md, Commands; issue 4).
+// lockstep run: the benchmark matrix (README.md, Commands; its entries and
+// counters: docs/names-and-counters.md).
 //
-// Registers the entries the filters select (harness.hpp explains the timing),
-// runs them with Google Benchmark, writes its JSON atomically, and prints the
+// Registers the entries the filters select (bench/harness/run_book.hpp
+// explains the timing), runs them with Google Benchmark, writes its JSON
+// atomically, and prints the
 // summary on stdout. Progress goes to stderr.
 #include <benchmark/benchmark.h>
 #include <CLI/CLI.hpp>
@@ -67,7 +69,7 @@ struct run_options {
   std::vector<std::string> benchmark_flags;
 };
 
-// The mode's defaults (harness.hpp, run_settings): how long each entry runs.
+// The mode's defaults (bench/harness/run_book.hpp, run_settings): how long each entry runs.
 constexpr int kDefaultRepetitions = 5;
 constexpr int kQuickRepetitions = 3;
 constexpr const char* kDefaultMinTime = "40ms";
@@ -261,7 +263,7 @@ int execute(const run_options& options) {
                         "': Google Benchmark's flags (--benchmark_...) go after --, lockstep's before it");
   }
 
-  // The mode: how long each entry runs (harness.hpp, run_settings).
+  // The mode: how long each entry runs (bench/harness/run_book.hpp, run_settings).
   bench::harness_state harness;
   bench::run_book book;
   harness.machine = &machine;
@@ -286,7 +288,7 @@ int execute(const run_options& options) {
   harness.settings.overhead_repetitions = 3 * (options.repetitions > 0 ? options.repetitions : repetitions);
   if (options.repetitions > 0) repetitions = options.repetitions;
   // What one clock reading costs here, taken off every timed sync span
-  // (rk4_benchmarks.cpp) and stated in the context.
+  // (bench/harness/rk4_entries.cpp) and stated in the context.
   book.clock_read_ns = platform::clock_read_cost_ns();
   // The pace trace (pace.hpp): a reading around every call of an entry and
   // every pair of blocks.

@@ -1,4 +1,4 @@
-// The bare barrier entries (barrier_benchmarks.hpp).
+// The bare barrier entries (barrier_entries.hpp).
 #include "bench/harness/barrier_entries.hpp"
 
 #include <benchmark/benchmark.h>

@@ -1,6 +1,6 @@
 #pragma once
-// The bare `barrier/sync:S/pin:P/threads:T` entries (issue 3, Bare
-// benchmarks): episodes of one primitive alone, no RK4 work, on a pinned team.
+// The bare `barrier/sync:S/pin:P/threads:T` entries: episodes of one
+// primitive alone, no RK4 work, on a pinned team.
 //
 // One unit is one episode: every participant calls arrive_and_wait once
 // (channels run as barriers through channel_barrier: every participant
@@ -24,7 +24,7 @@
 namespace lockstep::bench {
 
 // Registers one entry per selected (sync, pin, threads); returns their names.
-// Unknown names must have been rejected before (cmd_run validates them).
+// Unknown names must have been rejected before (bench/cli/run.cpp validates them).
 std::vector<std::string> register_barrier_benchmarks(const run_selection& selection, harness_state& harness);
 
 }  // namespace lockstep::bench

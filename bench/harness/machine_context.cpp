@@ -1,4 +1,4 @@
-// The result JSON's context (context.hpp).
+// The result JSON's context (machine_context.hpp).
 #include "bench/harness/machine_context.hpp"
 
 #include <sys/utsname.h>

@@ -1,6 +1,6 @@
 #pragma once
 // The result JSON's "context": what a comparison across machines needs
-// (DESIGN.md, Measurements). Every value is a string (num_cpus excepted, a
+// (docs/result-files.md). Every value is a string (num_cpus excepted, a
 // number as Google Benchmark writes it), as Google Benchmark's custom context requires.
 //
 // One producer for every command that writes a result (run, c2c, delay,

@@ -1,4 +1,4 @@
-// The RK4 entries and the in-run calibrations (rk4_benchmarks.hpp).
+// The RK4 entries and the in-run calibrations (rk4_entries.hpp).
 #include "bench/harness/rk4_entries.hpp"
 
 #include <benchmark/benchmark.h>
@@ -26,7 +26,7 @@ namespace {
 
 // One repetition of c2c: a few measure_pair calls (each starts and joins its
 // own two pinned threads), all samples pooled. Once a repetition failed, the
-// later ones fail too (harness_team.hpp, measure_entry, says why).
+// later ones fail too (team_driver.hpp, measure_entry, says why).
 void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, unsigned cpu_b) {
   const std::string name = entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name();
   if (const auto failed = harness.stalled.find(name); failed != harness.stalled.end()) {

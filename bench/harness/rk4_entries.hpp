@@ -13,7 +13,8 @@
 //   rk4/sync:S/layout:L/pin:P/threads:T
 //                               the composed step (kernels/parallel_step.hpp)
 //                               on a pinned team, batches of steps; counters
-//                               in DESIGN.md (see register_rk4_benchmarks).
+//                               at register_rk4_benchmarks below (and in
+//                               docs/names-and-counters.md).
 //   rk4/model:chainS/...        the same on an s-mass chain, the model of
 //                               more than 4 threads or of --masses
 //                               (kernels/model_choice.hpp); its vs_serial
@@ -21,7 +22,7 @@
 // Both calibrations are registered first (Google Benchmark runs entries in
 // registration order unless told to interleave), but no entry reads them while
 // it runs: vs_serial and vs_c2c are derived after the run from the whole run's
-// medians (run_book::derive_ratios, derive_ratios in harness_output.hpp).
+// medians (run_book::derive_ratios, derive_ratios in reporters.hpp).
 #include <string>
 #include <utility>
 #include <vector>

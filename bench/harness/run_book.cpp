@@ -1,4 +1,4 @@
-// The run book, entry names and batch sizing (harness.hpp).
+// The run book, entry names and batch sizing (run_book.hpp).
 #include "bench/harness/run_book.hpp"
 
 #include "bench/harness/derived_figures.hpp"

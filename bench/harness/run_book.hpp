@@ -82,7 +82,7 @@ struct run_settings {
   std::int64_t call_budget_ns = 3'000'000'000;
 };
 
-// The name segments of an entry (DESIGN.md, Measurements).
+// The name segments of an entry (docs/names-and-counters.md).
 enum class entry_kind { c2c, serial, barrier, rk4, overhead };
 
 struct entry_spec {

@@ -1,4 +1,4 @@
-// The end-of-run summary (harness_summary.hpp).
+// The end-of-run summary (summary.hpp).
 #include "bench/harness/scaling.hpp"
 #include "bench/harness/summary.hpp"
 
@@ -278,7 +278,7 @@ std::string render_summary(const run_book& book, const std::string& result_path)
     (entry.field("accounting") == "on" ? with_accounting : without_accounting) = entry.median("ns_per_step");
     overhead_name = entry.name.substr(entry.name.find("/sync:") + 1);
   }
-  // Paired in each repetition of the "on" side (rk4_benchmarks.cpp): the
+  // Paired in each repetition of the "on" side (rk4_entries.cpp): the
   // figure to read. The entries' own medians follow, for reference.
   bool paired_shown = false;
   for (const auto& entry : book.entries()) {

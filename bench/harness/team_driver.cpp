@@ -1,4 +1,4 @@
-// Stall reasons and accounting counters (harness_team.hpp).
+// Stall reasons and accounting counters (team_driver.hpp).
 #include "bench/harness/team_driver.hpp"
 
 #include "bench/harness/pace.hpp"

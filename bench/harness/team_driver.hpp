@@ -1,7 +1,7 @@
 #pragma once
 // One call of an entry on a pinned team: every participant pins itself by the
 // placement plan, snapshots its accounting, runs batches behind the harness
-// barrier (harness.hpp: batch_gate) and snapshots again. The barrier entries
+// barrier (run_book.hpp: batch_gate) and snapshots again. The barrier entries
 // and the RK4 entries share this; they differ only in the work a participant
 // does per unit (an episode of the primitive, or one RK4 step).
 #include <sched.h>

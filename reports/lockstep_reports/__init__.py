@@ -1,1 +1,1 @@
-"""lockstep's result tools: `lockstep compare` and `lockstep report` (DESIGN.md, Reports)."""
+"""lockstep's result tools: `lockstep compare` and `lockstep report` (reports/README.md)."""

@@ -19,7 +19,7 @@ counts say how many calls also pass q < alpha. Repetitions inside one run
 share that run's state of the machine; the band stands for the run-to-run
 drift they cannot see.
 
-Pace (issue 12): when both files carry a pace trace, their modes are matched
+Pace (docs/pace.md): when both files carry a pace trace, their modes are matched
 by c2c within MODE_TOLERANCE, compare says whether the runs ran in the same
 modes, and every entry also gets a pace-aware verdict: the raw one where all
 its repetitions ran in one matching mode; else within the matching modes

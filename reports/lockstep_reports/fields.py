@@ -41,7 +41,7 @@ TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 READ_AGGREGATES = ("median", "mean")
 
 # The per-unit time counters of lockstep's entries, in the order they are looked
-# for: ns_per_step (rk4 entries, DESIGN.md, Measurements) and ns_per_episode
+# for: ns_per_step (rk4 entries, docs/names-and-counters.md) and ns_per_episode
 # (the bare barrier entries). Both time a batch of units per Google Benchmark
 # iteration, and the batch size comes from each run's own probe, so only the
 # per-unit counter compares across runs; the iteration time does not.
@@ -73,7 +73,7 @@ SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_N
 AMOUNT_COUNTERS = tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
 
-# ---------------------------------------------------------------- the pace trace and the pairs (issue 12)
+# ---------------------------------------------------------------- the pace trace and the pairs (docs/pace.md)
 
 # A cloud VM changes pace for seconds at a time; `lockstep run` records a pace trace between blocks of
 # measurement, tags every repetition with the pace around it, and measures each ratio it prints as a pair.

@@ -1,4 +1,4 @@
-"""What Al-Oraiqat's paper reported, for the side-by-side tables (DESIGN.md, "What the paper did and reported"),
+"""What Al-Oraiqat's paper reported ("Parallel implementation of the coupled harmonic oscillator"), for the side-by-side tables,
 and the model's own values computed the same way lockstep's kernel defines them."""
 from __future__ import annotations
 

@@ -23,7 +23,7 @@ FIXTURES = os.path.join(HERE, "fixtures")
 CHROMIUM = "/usr/bin/chromium"
 INPUTS = [os.path.join(FIXTURES, name)
           for name in ("machine_a.json", "machine_b.json", "c2c_b.json", "delay_a.json", "verify_a.csv")]
-# issue 12's pace keys and issue 14's delay keys (per CPU, find-period)
+# the pace keys (docs/pace.md) and the delay keys of --per-cpu and --find-period
 PACED_INPUTS = [os.path.join(FIXTURES, name)
                 for name in ("paced_every_pair.json", "delay_per_cpu.json", "delay_find_period.json")]
 SAMPLES = [os.path.join(REPORTS_DIR, "samples", name) for name in ("run.json", "c2c.json", "delay.json", "verify.csv")]

@@ -451,7 +451,7 @@ class NoiseThreshold(ScratchFiles):
         self.assertEqual(run_tool("compare", a, b, "--fail-above", "0")[0], 0)
 
 
-# ---------------------------------------------------------------- power, pace, old files (issue 12)
+# ---------------------------------------------------------------- power, pace, old files
 
 def swapped_names(document, first="sync:std_barrier", second="sync:futex_spin"):
     """document with the entries of two primitives exchanging names: the same repetitions, the same context,
@@ -583,7 +583,7 @@ class PowerAndPace(ScratchFiles):
         self.assertIn("pace: unavailable in machine_a.json (no lockstep_pace", out)
 
 
-# ---------------------------------------------------------------- models (issue 13)
+# ---------------------------------------------------------------- models (two masses and s-mass chains)
 # Beyond four threads `lockstep run` integrates an s-mass chain and names it by a model segment
 # (kernels/model_choice.hpp): rk4/model:chain4/sync:.../threads:8, with the chain's own serial step
 # rk4/model:chain4/serial. The paper's two masses carry no model segment, so a file written before chains

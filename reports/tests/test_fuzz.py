@@ -71,7 +71,7 @@ RUN_BASES = (  # (base, partner): the partner is the unmutated file of the compa
     (FIXTURES / "aggregates_only.json", FIXTURES / "machine_b.json"),
     (SAMPLES / "pair-a.json", SAMPLES / "pair-b.json"),
     (SAMPLES / "run.json", SAMPLES / "pair-a.json"),
-    (FIXTURES / "paced_a.json", FIXTURES / "paced_b.json"),  # issue 12's pace trace and pairs
+    (FIXTURES / "paced_a.json", FIXTURES / "paced_b.json"),  # the pace trace and pairs
     (FIXTURES / "mpi-a.json", FIXTURES / "mpi-b.json"),  # `lockstep mpi` files: the contract by hand
     (FIXTURES / "mpi.json", FIXTURES / "mpi-b.json"),  # and as lockstep mpi writes it
 )

@@ -137,7 +137,7 @@ class UnusableFiles(unittest.TestCase):
 
 
 class PaceTraceAndPairs(unittest.TestCase):
-    """Issue 12's keys (briefs/pace-schema.md): lockstep_pace, lockstep_pairs and the per-repetition pace."""
+    """The pace keys (docs/pace.md): lockstep_pace, lockstep_pairs and the per-repetition pace."""
 
     @staticmethod
     def document(name="paced_a.json"):

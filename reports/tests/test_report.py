@@ -121,7 +121,7 @@ class Report(unittest.TestCase):
 
 
 class PaceAndDelayReport(unittest.TestCase):
-    """The report of a file with issue 12's pace keys and of delay files with issue 14's keys: the sections and
+    """The report of a file with the pace keys and of delay files with the per-CPU and period-search keys: the sections and
     figures they add, checked by structure (which figures, which table columns), never by pixels."""
 
     @classmethod

@@ -1,5 +1,5 @@
 // The harness's contract with Google Benchmark's repetitions (measure_entry,
-// bench/harness_team.hpp): once a call of an entry stopped, every later call
+// bench/harness/team_driver.hpp): once a call of an entry stopped, every later call
 // of it stops too.
 //
 // Why it matters: Google Benchmark 1.7.1 computes an entry's aggregates from

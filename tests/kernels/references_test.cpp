@@ -52,7 +52,7 @@ TEST(References, RootsMatchTheClosedFormAndThePaper) {
   const two_mass_frequencies formula = equal_two_mass_angular_frequencies(spring_over_mass);
   EXPECT_LE(relative(computed.fast, formula.fast), 1e-9);
   EXPECT_LE(relative(computed.slow, formula.slow), 1e-9);
-  // DESIGN.md's rounded values and the paper's printed ones (within 0.1%).
+  // The rounded values docs/design.md states, and the paper's printed ones (within 0.1%).
   EXPECT_NEAR(computed.fast, 51.49, 0.005);
   EXPECT_NEAR(computed.slow, 19.67, 0.005);
   EXPECT_LE(relative(computed.fast, kPaperFastRoot), 1e-3);

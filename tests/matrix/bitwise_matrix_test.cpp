@@ -1,9 +1,9 @@
-// The correctness oracle of the benchmark matrix (issue 4): every applicable
+// The correctness oracle of the benchmark matrix (docs/design.md): every applicable
 // sync x layout, on 1, 2 and 4 threads, unpinned and compact, reproduces the
 // serial staged RK4 trajectory bit for bit; and the s-mass chain (uneven
 // blocks, three-way dependencies) on several thread counts, with every
 // applicable layout, including the chains the harness integrates beyond four
-// threads (issue 13). A combination that is not applicable is a test too: it
+// threads (kernels/model_choice.hpp). A combination that is not applicable is a test too: it
 // must say why.
 #include "kernels/model_choice.hpp"
 #include "tests/matrix/matrix_cases.hpp"

@@ -186,7 +186,7 @@ const bool registered = [] {
   return true;
 }();
 
-// The registry holds DESIGN.md's layouts with the facts the design states.
+// The registry holds the layouts of docs/design.md with the facts it states.
 TEST(LayoutRegistry, ListsEveryLayoutOfTheDesignWithItsFacts) {
   struct design_facts {
     std::string_view name;
@@ -201,7 +201,7 @@ TEST(LayoutRegistry, ListsEveryLayoutOfTheDesignWithItsFacts) {
   };
   for (const design_facts& design : kDesign) {
     const layout_info* info = find_layout(design.name);
-    ASSERT_NE(info, nullptr) << design.name << " is in DESIGN.md but not in the registry";
+    ASSERT_NE(info, nullptr) << design.name << " is in docs/design.md but not in the registry";
     EXPECT_EQ(info->kind, design.kind) << design.name;
     EXPECT_EQ(info->writer_isolation, design.writer_isolation) << design.name;
   }

@@ -1,7 +1,7 @@
 // `lockstep mpi` as a user runs it: the binary launches mpirun for its ranks
 // (as root with the run-as-root variables, oversubscribed on this 2-CPU
 // machine), measures few steps, and writes its JSON; these tests check what
-// it did, never how fast (DESIGN.md, Distributed memory).
+// it did, never how fast (README.md and docs/result-files.md say what that is).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 

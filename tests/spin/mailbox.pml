@@ -1,4 +1,4 @@
-/* mailbox's waiter bit (sync/mailbox.hpp, issue 11), as the header states it.
+/* mailbox's waiter bit (sync/mailbox.hpp), as the header states it.
  *
  * Each producer owns a ring of RING slots (the header's kDepth: 4); slot k
  * holds a word, epoch << 1 | waiter bit, and a payload. Stage e lives in slot

@@ -1,4 +1,4 @@
-/* The paper's ThreadWaiter (DESIGN.md, "What the paper did"; emulated by
+/* The paper's ThreadWaiter (described and emulated by
  * sync/win_event_faithful.hpp on sync/win32_emulation.hpp), on which Spin
  * must find the lost wake-up.
  *

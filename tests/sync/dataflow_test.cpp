@@ -144,7 +144,7 @@ TYPED_TEST(Channel_, ProducerFarAheadIsHeldBackNotOverrun) {
               static_cast<unsigned long long>(producer.counters.yields));
 }
 
-// The RK4 graph (DESIGN.md): D1 <- x3, D2 <- x4, D3 <- x1, x2, D4 <- x1, x2,
+// The RK4 graph (kernels/oscillator.hpp): D1 <- x3, D2 <- x4, D3 <- x1, x2, D4 <- x1, x2,
 // participants 0..3 owning D1..D4. At stage s each participant receives its
 // producers' stage s - 1, checks them, and publishes its own stage s.
 // Participant 0 may run up to ~3 stages ahead of participant 3, which it does

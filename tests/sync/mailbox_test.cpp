@@ -43,7 +43,7 @@ constexpr std::uint64_t kStages = 20'000;
 constexpr std::uint64_t kPhases = 2'000;
 #endif
 
-// The RK4 graph of DESIGN.md: participants 0..3 own D1..D4;
+// The RK4 graph (kernels/oscillator.hpp): participants 0..3 own D1..D4;
 // D1 <- x3, D2 <- x4, D3 <- x1, x2, D4 <- x1, x2.
 dependency_graph rk4_graph() {
   dependency_graph graph;

@@ -1,6 +1,6 @@
-// The registry lists every primitive of DESIGN.md once, with the facts
-// DESIGN.md and sync/README.md state for it; and every primitive it lists
-// (DESIGN's or a new one) declares traits that are consistent with each other.
+// The registry lists every primitive of docs/design.md once, with the facts
+// docs/design.md and sync/README.md state for it; and every primitive it lists
+// (those or a new one) declares traits that are consistent with each other.
 #include <set>
 #include <string>
 #include <string_view>
@@ -48,7 +48,7 @@ constexpr design_facts kDesign[] = {
 TEST(Registry, ListsEveryPrimitiveOfTheDesignWithItsFacts) {
   for (const design_facts& design : kDesign) {
     const primitive_info* info = find_primitive(design.name);
-    ASSERT_NE(info, nullptr) << design.name << " is in DESIGN.md but not in the registry";
+    ASSERT_NE(info, nullptr) << design.name << " is in docs/design.md but not in the registry";
     EXPECT_EQ(info->kind, design.kind) << design.name;
     EXPECT_EQ(info->pure_spin, design.pure_spin) << design.name;
     EXPECT_EQ(info->spins_long, design.spins_long) << design.name;
