@@ -28,30 +28,49 @@ class result_path_error : public std::runtime_error {
 void check_result_path(const std::string& destination);
 
 // A result file being written. The constructor checks the destination
-// (check_result_path) and creates the temporary file; a tool that writes the
-// file itself (Google Benchmark) writes temporary_path(); commit() fsyncs it
-// and renames it over the destination. Until then the destination is
-// untouched. While one exists, SIGINT, SIGTERM, SIGHUP and SIGPIPE remove
-// the temporary file and end the process (status 128 + the signal) with one
-// line on stderr.
+// (check_result_path) and creates the temporary file beside it, exclusively
+// and without following a symbolic link (O_EXCL | O_NOFOLLOW), and keeps it
+// open: every later write and the fsync go through that descriptor, never
+// through the name, so a name replaced in a shared directory (a symlink
+// planted after the probe) redirects nothing. commit() fsyncs it and renames
+// it over the destination, after checking that the name still holds this
+// file. Until then the destination is untouched.
+//
+// Signals: while one exists, SIGINT, SIGTERM, SIGHUP and SIGPIPE end the
+// process (status 128 + the signal) with one line on stderr that says
+// whether the result file was written: before the rename, the temporary
+// file is removed ("no result file was written"); once the rename is done,
+// the file stays ("the result file F was written"). The line is true
+// whichever thread takes the signal (Google Benchmark's, Open MPI's): the
+// committing thread blocks the signals for itself across the rename, and a
+// handler on another thread waits for the rename's outcome before it
+// speaks. A signal the process inherited as ignored (SIGHUP under nohup,
+// SIGINT in a background job of a script) stays ignored.
 class atomic_result_file {
  public:
   explicit atomic_result_file(std::string destination);
   ~atomic_result_file();  // removes the temporary file unless committed
-  atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path
+  atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path and the descriptor
   atomic_result_file& operator=(const atomic_result_file&) = delete;
 
-  const std::string& temporary_path() const noexcept { return temporary_; }
+  // The path through which a tool that writes the file itself (Google
+  // Benchmark's --benchmark_out) reaches the temporary file:
+  // /proc/self/fd/N, the open file itself whatever happens to its name
+  // (the temporary file's name where /proc is not mounted).
+  const std::string& temporary_path() const noexcept { return through_descriptor_; }
   const std::string& destination() const noexcept { return destination_; }
   // Replaces the temporary file's content with `text`.
   void write(std::string_view text);
   // fsyncs the temporary file and renames it over the destination; throws
-  // std::runtime_error when that fails (the temporary file is then removed).
+  // std::runtime_error when that fails or when the temporary file's name no
+  // longer holds this file (the temporary file is then removed).
   void commit();
 
  private:
   std::string destination_;
   std::string temporary_;
+  std::string through_descriptor_;
+  int descriptor_ = -1;
   bool committed_ = false;
 };
 
