@@ -18,11 +18,18 @@
 // own atomic operations on the word (or elsewhere), never from these calls.
 // Spurious returns (EINTR, EAGAIN, a wake meant for an earlier phase) are
 // normal: callers re-check their condition in a loop.
+// Failures: any other error (EFAULT: the word is not readable; EINVAL: a
+// misaligned word or a bad operation; ENOSYS, EPERM) would come back on
+// every call, so a caller's wait loop would spin on it hot and for ever.
+// Both calls end the process instead, with one line naming the error.
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <climits>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
 #include <ctime>
 
 #include <linux/futex.h>
@@ -43,6 +50,19 @@ enum class futex_result { woken, value_changed, timed_out, interrupted };
 enum class futex_scope { process_private, process_shared };
 
 namespace detail {
+// A futex call failed in a way no retry can cure: one line, then abort.
+[[noreturn]] inline void futex_failed(const char* call, int error) noexcept {
+  char text[160];
+  const int length = std::snprintf(text, sizeof text, "lockstep: %s failed: %s (errno %d); a wait loop cannot go on\n",
+                                   call, std::strerror(error), error);
+  if (length > 0) {
+    const ssize_t ignored = ::write(STDERR_FILENO, text, static_cast<std::size_t>(length) < sizeof text
+                                                             ? static_cast<std::size_t>(length)
+                                                             : sizeof text - 1);
+    (void)ignored;
+  }
+  std::abort();
+}
 inline std::uint32_t* futex_address(std::atomic<std::uint32_t>& word) noexcept {
   // The atomic holds nothing but the integer (asserted above); the kernel reads
   // and compares it atomically.
@@ -68,18 +88,22 @@ inline futex_result futex_wait(std::atomic<std::uint32_t>& word, std::uint32_t e
   const long status = syscall(SYS_futex, detail::futex_address(word), detail::futex_operation(FUTEX_WAIT, Scope), expected,
                               relative_pointer, nullptr, 0);
   if (status == 0) return futex_result::woken;
-  switch (errno) {
+  const int error = errno;
+  switch (error) {
     case EAGAIN: return futex_result::value_changed;
     case ETIMEDOUT: return futex_result::timed_out;
-    default: return futex_result::interrupted;  // EINTR: the caller re-checks and waits again
+    case EINTR: return futex_result::interrupted;  // a signal: the caller re-checks and waits again
+    default: detail::futex_failed("FUTEX_WAIT", error);
   }
 }
 
 // Wakes up to `count` threads sleeping on `word`; returns how many it woke.
 template <futex_scope Scope = futex_scope::process_private>
 inline int futex_wake(std::atomic<std::uint32_t>& word, int count = INT_MAX) noexcept {
-  return static_cast<int>(syscall(SYS_futex, detail::futex_address(word), detail::futex_operation(FUTEX_WAKE, Scope), count, nullptr,
-                                  nullptr, 0));
+  const long woken = syscall(SYS_futex, detail::futex_address(word), detail::futex_operation(FUTEX_WAKE, Scope), count, nullptr,
+                             nullptr, 0);
+  if (woken < 0) detail::futex_failed("FUTEX_WAKE", errno);
+  return static_cast<int>(woken);
 }
 
 }  // namespace lockstep::sync
