@@ -73,20 +73,17 @@ SERIAL_ENTRY = "rk4/serial"
 C2C_ENTRY = "c2c/pin:compact/threads:2"
 
 
+# statistics.verdict's outcomes for a ratio B/A of times, in compare's words.
+VERDICT_WORDS = {statistics.PENALTY: "slower", statistics.GAIN: "faster", statistics.WITHIN_NOISE: "within noise",
+                 statistics.UNSURE: "unsure"}
+
+
 def verdict_of(interval: tuple[float, float] | None, noise_percent: float) -> str:
-    """The interval against the noise band: slower / faster (wholly beyond it), within noise (wholly inside
-    it), unsure (across an edge), untested (no interval)."""
+    """The interval against the noise band (statistics.verdict): slower / faster (wholly beyond it), within
+    noise (wholly inside it), unsure (across an edge); untested (no interval)."""
     if interval is None:
         return "untested"
-    upper_limit = 1.0 + noise_percent / 100.0
-    low, high = interval
-    if low > upper_limit:
-        return "slower"
-    if high < 1.0 / upper_limit:
-        return "faster"
-    if low >= 1.0 / upper_limit and high <= upper_limit:
-        return "within noise"
-    return "unsure"
+    return VERDICT_WORDS[statistics.verdict(interval[0], interval[1], noise_percent / 100.0)]
 
 
 @dataclass
@@ -493,21 +490,26 @@ def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     """(step time / serial step time of its model, stage sync time / one-way c2c latency) on that file's own
     machine.
 
-    Uses the in-run calibrations of the context (a chain's serial step: its rk4/model:<model>/serial entry);
-    falls back to the entry's own vs_serial / vs_c2c counters; None ("unavailable") when neither exists."""
+    The entry's own vs_serial / vs_c2c counters, the median over its repetitions, as `lockstep run` derived them
+    against its in-run calibrations (bench/harness/derived_figures.hpp). Computed here only where the file lacks
+    them (files written before the counters, or a run whose calibration was unavailable) or for CPU time (the
+    counters divide the real ns_per_step): the same division, by the context's in-run calibrations (a chain's
+    serial step: its rk4/model:<model>/serial entry). None ("unavailable") when neither exists."""
     run = run_file.runs.get(key)
     if run is None or run.errored:
         return None, None
-    step = run_median(run_file, key, time_kind)
-    serial = model_serial(run_file, key)
-    c2c = calibration(run_file, C2C_CONTEXT)
-    vs_serial = step / serial if (step is not None and serial) else None
-    if vs_serial is None and run.counter_values(VS_SERIAL_COUNTER):
-        vs_serial = statistics.median(run.counter_values(VS_SERIAL_COUNTER))
-    sync = run.counter_values(SYNC_COUNTER)
-    vs_c2c = statistics.median(sync) / c2c if (sync and c2c) else None
-    if vs_c2c is None and run.counter_values(VS_C2C_COUNTER):
-        vs_c2c = statistics.median(run.counter_values(VS_C2C_COUNTER))
+    in_file = time_kind == "real"
+    vs_serial = statistics.median(run.counter_values(VS_SERIAL_COUNTER)) if (
+        in_file and run.counter_values(VS_SERIAL_COUNTER)) else None
+    vs_c2c = statistics.median(run.counter_values(VS_C2C_COUNTER)) if run.counter_values(VS_C2C_COUNTER) else None
+    if vs_serial is None:
+        step = run_median(run_file, key, time_kind)
+        serial = model_serial(run_file, key)
+        vs_serial = step / serial if (step is not None and serial) else None
+    if vs_c2c is None:
+        sync = run.counter_values(SYNC_COUNTER)
+        c2c = calibration(run_file, C2C_CONTEXT)
+        vs_c2c = statistics.median(sync) / c2c if (sync and c2c) else None
     return vs_serial, vs_c2c
 
 
@@ -552,8 +554,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
                 step = run_median(run_file, key, time_kind)
                 if step is None:
                     continue
-                serial = model_serial(run_file, key)
-                entries.append((f"{key.get('sync')}/{key.get('layout')}", step, step / serial if serial else None))
+                entries.append((f"{key.get('sync')}/{key.get('layout')}", step, normalised(run_file, key, time_kind)[0]))
             entries.sort(key=lambda entry: (entry[1], entry[0]))
             per_file.append(entries[:top])
         tables[group] = per_file

@@ -6,6 +6,8 @@ holds. compare.py and report.py take their names and headings from here.
 """
 from __future__ import annotations
 
+from . import statistics
+
 # ---------------------------------------------------------------- ranges
 
 # A measured duration lies between these (ns): shorter than a picosecond or
@@ -92,9 +94,10 @@ PACE_COUNTERS = (PACE_C2C_COUNTER, PACE_SERIAL_COUNTER, PACE_MODE_COUNTER)
 OUTLIER_MODE = -1
 # Keys that hold a mode: -1 is a valid value of each (the fuzz test may turn a 0 into a valid -1).
 MODE_KEYS = ("mode", "modes", PACE_MODE_COUNTER)
-# What a pair compares (lockstep_pairs[].comparison) and what it concluded (verdict).
+# What a pair compares (lockstep_pairs[].comparison) and what it concluded (verdict: statistics.verdict's words;
+# files written before "unsure" call a straddling interval "within noise").
 PAIR_COMPARISONS = ("false_sharing", "migration", "against_best_other", "overhead")
-PAIR_VERDICTS = ("penalty", "gain", "within noise")
+PAIR_VERDICTS = statistics.VERDICTS
 
 # ---------------------------------------------------------------- the context of a run file
 

@@ -182,7 +182,7 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
                 continue
             x = row + (column - (len(layouts) - 1) / 2) * width
             center = statistics.median(times)
-            low, high = np.percentile(times, [25, 75])
+            low, high = statistics.quantile(times, 0.25), statistics.quantile(times, 0.75)
             drawn += list(times)
             axes.bar(x, center, width * 0.9, color=colors(column), label=layout if not any(
                 label == layout for label in axes.get_legend_handles_labels()[1]) else None)
@@ -245,9 +245,10 @@ def penalty_rows(run_file) -> list[PenaltyRow]:
     return rows
 
 
-# Where a verdict of a paired ratio is drawn: the bar's fill (hatched when the interval reaches into the noise band).
+# Where a verdict of a paired ratio is drawn (statistics.VERDICTS): the bar's fill, hatched and pale when the
+# interval reaches into the noise band (within noise: inside it; unsure: across its edge).
 VERDICT_STYLE = {"penalty": {"hatch": None, "alpha": 1.0}, "gain": {"hatch": None, "alpha": 1.0},
-                 "within noise": {"hatch": "////", "alpha": 0.35}}
+                 "within noise": {"hatch": "////", "alpha": 0.35}, "unsure": {"hatch": "xxxx", "alpha": 0.35}}
 
 
 def _ratio_axis(axes, values, noise: float | None) -> None:
@@ -304,9 +305,10 @@ def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
                        for index, threads in enumerate(threads_list)]
             if noise:
                 handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
-            if any(row.verdict == "within noise" for row in rows):
-                handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="gray", hatch="////",
-                                                        label="within noise"))
+            for verdict in ("within noise", "unsure"):
+                if any(row.verdict == verdict for row in rows):
+                    handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="gray",
+                                                            hatch=VERDICT_STYLE[verdict]["hatch"], label=verdict))
             axes_list[0][-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
                                     frameon=False)
     return to_svg(figure)
@@ -572,7 +574,7 @@ def paired_ratios(pairs, title: str) -> str:
     figure, axes = plt.subplots(figsize=(7.2, 0.26 * len(pairs) + 1.3))
     noise = max((p.noise for p in pairs if p.noise is not None), default=None)
     _ratio_axis(axes, [v for p in pairs for v in (p.median, p.ci_low, p.ci_high)], noise)
-    verdict_color = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c"}
+    verdict_color = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c", "unsure": "#dd8452"}
     for y, pair in enumerate(pairs):
         style = VERDICT_STYLE.get(pair.verdict, VERDICT_STYLE["penalty"])
         color = verdict_color.get(pair.verdict, "#4c72b0")

@@ -98,8 +98,8 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     noisy_cells = within_noise_cells(run_file)
     if noisy_cells:
         heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
-                               "padded layout was within noise (its confidence interval reaches into the noise "
-                               "band): the two cells do not differ measurably.")
+                               "padded layout was within noise or unsure (its confidence interval lies inside the "
+                               "noise band, or straddles its edge): the two cells do not differ measurably.")
     for pin, threads in groups:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
                                    figures.heatmap(run_file, pin, threads,
@@ -244,10 +244,11 @@ PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): packed / padded",
 
 
 def within_noise_cells(run_file: RunFile) -> dict[tuple[str, int], frozenset]:
-    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair was within noise."""
+    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair made no call: within
+    noise or unsure (statistics.verdict)."""
     cells: dict[tuple[str, int], set] = {}
     for pair in run_file.pairs:
-        if pair.comparison == "false_sharing" and pair.verdict == "within noise":
+        if pair.comparison == "false_sharing" and pair.verdict in (statistics.WITHIN_NOISE, statistics.UNSURE):
             key = pair.a_key
             cells.setdefault((key.get("pin"), key.threads), set()).add((key.get("sync"), key.get("layout")))
     return {group: frozenset(members) for group, members in cells.items()}
@@ -286,8 +287,8 @@ def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
         confidence = max(pair.confidence for pair in run_file.pairs)
         paragraphs.append(f"Measured as pairs: both sides in alternating short blocks, one ratio per adjacent pair; "
                           f"the bar is the median ratio, the whisker its {100 * confidence:g} % bootstrap interval, "
-                          f"[low, high] in the table. Hatched: within noise (the interval reaches into the "
-                          f"±{100 * noise:g} % band shaded grey).")
+                          f"[low, high] in the table. Hatched: within noise (the interval inside the "
+                          f"±{100 * noise:g} % band shaded grey) or unsure (the interval across its edge).")
     return Section(f"False-sharing and migration penalties: {run_file.label}", paragraphs=paragraphs,
                    figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows, noise))],
                    tables=[penalty_table(rows)])
@@ -315,13 +316,13 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
                          f"[{format_number(pair.ci_low, 3)}, {format_number(pair.ci_high, 3)}]", pair.verdict,
                          format_number(pair.block_ms, 1, " ms"),
                          ", ".join(str(mode) for mode in modes) if modes else UNAVAILABLE])
-    blocks = sorted(pair.block_ms for pair in run_file.pairs)
+    block = statistics.median([pair.block_ms for pair in run_file.pairs])
     return Section(f"Paired ratios: {run_file.label}",
                    paragraphs=["Each ratio the summary prints, measured as a pair: a and b run in alternating short "
-                               f"blocks (median block {format_number(blocks[len(blocks) // 2], 1, ' ms')}), one ratio "
+                               f"blocks (median block {format_number(block, 1, ' ms')}), one ratio "
                                "a / b per adjacent pair of blocks; the median ratio with its bootstrap interval, and "
-                               "the verdict: penalty (interval above the noise band), gain (below it) or within "
-                               "noise."],
+                               "the verdict: penalty (the interval above the noise band), gain (below it), within "
+                               "noise (inside it) or unsure (across an edge of it)."],
                    figures=section_figures,
                    tables=[Table(["comparison", "group", "a / b", "pairs", "median a/b", "interval", "verdict",
                                   "block", "pace modes"], rows)])
@@ -408,7 +409,7 @@ def c2c_section(item: C2cFile, counter: list[int]) -> Section:
         for relation in sorted(by_relation, key=figures.relation_order):
             values = sorted(by_relation[relation])
             rows.append([method, relation, str(len(values)), format_ns(values[0]),
-                         format_ns(values[len(values) // 2]), format_ns(values[-1])])
+                         format_ns(statistics.median(values)), format_ns(values[-1])])
         section_figures.append(Figure(f"c2c-{counter[0]}-{_slug(method)}", f"{item.label}, method {method}",
                                       figures.c2c_heatmap(item, method)))
     paragraphs = ["One-way latency of a cache line passed between two CPUs (median of its samples), CPUs "

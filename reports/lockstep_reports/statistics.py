@@ -1,4 +1,22 @@
-"""The statistics of a comparison, each chosen so the output is deterministic.
+"""The statistics of the report tools, each chosen so the output is deterministic.
+
+The shared vocabulary, defined in platform/statistics.hpp and here alike (tests/fixtures/statistics/golden.json
+holds both to the same answers: tests/platform/statistics_golden_test.cpp, reports/tests/test_statistics.py):
+
+- quantile: linear interpolation between closest ranks (Hyndman and Fan 7, numpy.quantile's default):
+  h = (n - 1) q, Q(q) = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h]) over the sorted values.
+- median: the middle value of an odd count, the mean of the two middle values of an even count (numpy.median;
+  Q(0.5) up to rounding).
+- bootstrap interval of a median (percentile bootstrap): the median of each resample (n indices drawn with
+  replacement), and [Q((1 - c) / 2), Q(1 - (1 - c) / 2)] of those medians at confidence c. bootstrap_interval
+  takes the resamples' indices; lockstep draws them with mt19937_64 (C++), bootstrap_median here with numpy's
+  generator: the same rule over other draws.
+- verdict of a ratio's interval [low, high] against the noise band [1 / (1 + noise), 1 + noise]: penalty (the
+  whole interval above the band), gain (wholly below it), within noise (wholly inside it, an end on an edge
+  counting as inside), unsure (anything else: it straddles an edge). compare.py says "slower" / "faster" for
+  penalty / gain of B/A.
+
+Besides, for comparing two runs:
 
 - The interval of B/A that decides a verdict: the exact distribution-free
   confidence interval of the scale shift between the two sides' repetitions
@@ -50,6 +68,84 @@ def median(values) -> float:
     return ordered[middle] if len(ordered) % 2 else (ordered[middle - 1] + ordered[middle]) / 2.0
 
 
+def quantile(values, q: float) -> float:
+    """Q(q) of the values, in any order, by the rule above; ValueError on no values or q outside [0, 1]."""
+    ordered = sorted(float(value) for value in values)
+    if not ordered:
+        raise ValueError("the quantile of no values")
+    return _quantile_of_sorted(ordered, q)
+
+
+def _quantile_of_sorted(ordered, q: float) -> float:
+    if not 0.0 <= q <= 1.0:
+        raise ValueError(f"quantile fraction {q!r} outside [0, 1]")
+    rank = q * (len(ordered) - 1)
+    below = math.floor(rank)
+    above = min(below + 1, len(ordered) - 1)
+    low, high = float(ordered[below]), float(ordered[above])
+    return low + (rank - below) * (high - low)
+
+
+def percentile_interval(estimates, confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """[Q((1 - c) / 2), Q(1 - (1 - c) / 2)] of a bootstrap's estimates: the percentile interval."""
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence {confidence!r} outside (0, 1)")
+    ordered = sorted(float(value) for value in estimates)
+    if not ordered:
+        raise ValueError("the interval of no estimates")
+    tail = (1.0 - confidence) / 2.0
+    return _quantile_of_sorted(ordered, tail), _quantile_of_sorted(ordered, 1.0 - tail)
+
+
+def bootstrap_interval(values, resamples, confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """The percentile bootstrap interval of the median of `values` over the given resamples, each a list of
+    len(values) indices into them; no resamples: (median, median). ValueError on bad indices."""
+    values = [float(value) for value in values]
+    whole = median(values)
+    resamples = [list(indices) for indices in resamples]
+    if not resamples:
+        return whole, whole
+    for indices in resamples:
+        if len(indices) != len(values):
+            raise ValueError("a resample of another length than the values")
+        if any(not 0 <= index < len(values) for index in indices):
+            raise ValueError("a resample index beyond the values")
+    return percentile_interval([median([values[index] for index in indices]) for indices in resamples],
+                               confidence)
+
+
+def bootstrap_median(values, confidence: float = CONFIDENCE, resamples: int = BOOTSTRAP_RESAMPLES,
+                     seed: int = BASE_SEED) -> tuple[float, float, float]:
+    """(median, low, high): the median and its bootstrap interval over `resamples` resamples drawn by numpy's
+    generator from `seed` (not lockstep's mt19937_64 draws: an interval close to, not equal to, a result
+    file's). One value: the interval is that value."""
+    values = [float(value) for value in values]
+    if len(values) < 2 or resamples == 0:
+        whole = median(values)
+        return whole, whole, whole
+    indices = np.random.default_rng(seed).integers(0, len(values), (resamples, len(values)))
+    low, high = bootstrap_interval(values, indices.tolist(), confidence)
+    return median(values), low, high
+
+
+PENALTY, GAIN, WITHIN_NOISE, UNSURE = "penalty", "gain", "within noise", "unsure"
+VERDICTS = (PENALTY, GAIN, WITHIN_NOISE, UNSURE)
+
+
+def verdict(low: float, high: float, noise: float) -> str:
+    """The interval [low, high] of a ratio against the noise band of half-width `noise` (a fraction: 0.05 is
+    5 %), by the rule above: penalty, gain, within noise or unsure."""
+    upper_edge = 1.0 + noise
+    lower_edge = 1.0 / upper_edge
+    if low > upper_edge:
+        return PENALTY
+    if high < lower_edge:
+        return GAIN
+    if low >= lower_edge and high <= upper_edge:
+        return WITHIN_NOISE
+    return UNSURE
+
+
 def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     """Percentile bootstrap interval of median(b)/median(a); None with fewer than 2 values a side.
     Each side is sorted first, so the interval does not depend on the order of the repetitions in a file."""
@@ -65,9 +161,7 @@ def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     ratios = ratios[np.isfinite(ratios)]
     if ratios.size == 0:
         return None
-    tail = (1.0 - CONFIDENCE) / 2.0 * 100.0
-    low, high = np.percentile(ratios, [tail, 100.0 - tail])
-    return float(low), float(high)
+    return percentile_interval(ratios.tolist())
 
 
 @functools.lru_cache(maxsize=None)

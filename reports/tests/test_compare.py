@@ -122,6 +122,15 @@ class SameMachine(unittest.TestCase):
         self.assertIn("errored (not compared): 2", out)
         self.assertIn("watchdog expired", out)
 
+    def test_cpu_time_of_files_before_schema_2_is_flagged(self):
+        # lockstep schema 1: a team entry's cpu_time was Google Benchmark's thread replaying the batch times.
+        warning = "predate lockstep schema 2"
+        cpu = compare_pair(load("machine_a.json"), load("machine_a_rerun.json"), "cpu")
+        self.assertTrue(any(warning in line and "machine_a.json and machine_a_rerun.json" in line
+                            for line in cpu.warnings), cpu.warnings)
+        real = compare_pair(load("machine_a.json"), load("machine_a_rerun.json"), "real")
+        self.assertFalse(any(warning in line for line in real.warnings), real.warnings)
+
     def test_later_schema_matches_the_older_file(self):
         comparison = compare_pair(load("machine_a.json"), load("later_schema.json"))
         self.assertEqual(len(comparison.rows), 36)
@@ -179,16 +188,35 @@ class AcrossMachines(unittest.TestCase):
         self.assertIn("Benjamini-Hochberg", out)
 
     def test_normalisation_uses_each_machines_own_calibration(self):
+        # The entry's own vs_serial / vs_c2c counters, as lockstep run derived them against its machine's in-run
+        # calibrations (the fixtures write them to 6 significant digits).
         a, b = load("machine_a.json"), load("machine_b.json")
         key = parse_name("rk4/sync:seqlock/layout:padded128/pin:compact/threads:2")
         vs_serial_a, vs_c2c_a = normalised(a, key)
         vs_serial_b, _ = normalised(b, key)
+        self.assertEqual(vs_serial_a, statistics.median(a.runs[key].counter_values("vs_serial")))
+        self.assertEqual(vs_c2c_a, statistics.median(a.runs[key].counter_values("vs_c2c")))
         median_a = statistics.median(a.runs[key].times_ns())
-        self.assertAlmostEqual(vs_serial_a, median_a / 182.0)
+        self.assertAlmostEqual(vs_serial_a, median_a / 182.0, places=4)
         sync_a = statistics.median(a.runs[key].counter_values("sync_ns_per_stage"))
-        self.assertAlmostEqual(vs_c2c_a, sync_a / 61.5)
+        self.assertAlmostEqual(vs_c2c_a, sync_a / 61.5, places=4)
         median_b = statistics.median(b.runs[key].times_ns())
-        self.assertAlmostEqual(vs_serial_b, median_b / 121.0)
+        self.assertAlmostEqual(vs_serial_b, median_b / 121.0, places=4)
+
+    def test_normalisation_without_the_counters_divides_by_the_calibrations(self):
+        # A file without vs_serial / vs_c2c (written before lockstep run derived them): the same division here.
+        run_file = load("machine_a.json")
+        key = parse_name("rk4/sync:seqlock/layout:padded128/pin:compact/threads:2")
+        for repetition in run_file.runs[key].repetitions:
+            repetition.counters.pop("vs_serial", None)
+            repetition.counters.pop("vs_c2c", None)
+        for aggregate in run_file.runs[key].aggregates.values():
+            aggregate.counters.pop("vs_serial", None)
+            aggregate.counters.pop("vs_c2c", None)
+        vs_serial, vs_c2c = normalised(run_file, key)
+        self.assertAlmostEqual(vs_serial, statistics.median(run_file.runs[key].times_ns()) / 182.0)
+        sync = statistics.median(run_file.runs[key].counter_values("sync_ns_per_stage"))
+        self.assertAlmostEqual(vs_c2c, sync / 61.5)
 
     def test_in_run_entries_stand_in_for_missing_context_calibrations(self):
         from lockstep_reports.compare import calibration

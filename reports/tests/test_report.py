@@ -153,7 +153,8 @@ class PaceAndDelayReport(unittest.TestCase):
                                         r"\| [0-9.]+ us \(3\) \| 2\.[0-9]+x \| 1 \|")
 
     def test_paired_penalties_carry_their_interval_and_verdict(self):
-        self.assertRegex(self.markdown, r"\| seqlock \| 2 \| 1\.0[0-9]x \[[0-9.]+, [0-9.]+\] within noise \|")
+        # Its interval straddles the band's upper edge: unsure (platform/statistics.hpp), not within noise.
+        self.assertRegex(self.markdown, r"\| seqlock \| 2 \| 1\.0[0-9]x \[0\.9[0-9]+, 1\.[0-9]+\] unsure \|")
         self.assertIn("false sharing (paired): packed / padded", self.markdown)
         self.assertIn("migration (paired): pin:migrate / pin:compact", self.markdown)
         for kind in ("false-sharing", "migration", "against-best-other", "overhead"):

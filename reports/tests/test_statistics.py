@@ -1,0 +1,94 @@
+"""statistics.py against the golden file it shares with platform/statistics.hpp
+(tests/fixtures/statistics/golden.json: numpy's answers and the verdict rule's;
+tests/platform/statistics_golden_test.cpp checks the C++ side against the same file)."""
+import json
+import math
+import os
+import unittest
+
+import numpy as np
+
+from support import REPORTS_DIR
+from lockstep_reports import compare, fields, statistics
+
+GOLDEN = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "statistics", "golden.json")
+with open(GOLDEN, encoding="utf-8") as golden_file:
+    GOLDEN_CASES = json.load(golden_file)
+
+
+class Golden(unittest.TestCase):
+    def assert_near(self, actual, expected):
+        # Within the file's relative tolerance: numpy's interpolation and the rule's differ by a few ulp.
+        self.assertTrue(math.isclose(actual, expected, rel_tol=GOLDEN_CASES["tolerance"], abs_tol=0.0),
+                        f"{actual!r} is not {expected!r}")
+
+    def test_medians_and_quantiles(self):
+        self.assertTrue(GOLDEN_CASES["samples"])
+        for sample in GOLDEN_CASES["samples"]:
+            with self.subTest(sample["name"]):
+                self.assert_near(statistics.median(sample["values"]), sample["median"])
+                for q, expected in sample["quantiles"]:
+                    self.assert_near(statistics.quantile(sample["values"], q), expected)
+
+    def test_bootstrap_intervals_over_the_files_resamples(self):
+        self.assertTrue(GOLDEN_CASES["bootstraps"])
+        for case in GOLDEN_CASES["bootstraps"]:
+            with self.subTest(case["name"]):
+                low, high = statistics.bootstrap_interval(case["values"], case["resamples"], case["confidence"])
+                self.assert_near(statistics.median(case["values"]), case["median"])
+                self.assert_near(low, case["low"])
+                self.assert_near(high, case["high"])
+
+    def test_verdicts(self):
+        self.assertTrue(GOLDEN_CASES["verdicts"])
+        for case in GOLDEN_CASES["verdicts"]:
+            with self.subTest(case["name"]):
+                self.assertEqual(statistics.verdict(case["low"], case["high"], case["noise"]), case["verdict"])
+
+    def test_compare_says_the_same_verdicts_in_its_words(self):
+        words = {"penalty": "slower", "gain": "faster", "within noise": "within noise", "unsure": "unsure"}
+        for case in GOLDEN_CASES["verdicts"]:
+            with self.subTest(case["name"]):
+                self.assertEqual(compare.verdict_of((case["low"], case["high"]), 100.0 * case["noise"]),
+                                 words[case["verdict"]])
+        self.assertEqual(compare.verdict_of(None, 5.0), "untested")
+
+
+class Statistics(unittest.TestCase):
+    def test_quantiles_agree_with_numpy_on_random_values(self):
+        rng = np.random.default_rng(11)
+        for count in (1, 2, 3, 10, 101):
+            values = rng.lognormal(5.0, 1.0, count)
+            for q in (0.0, 0.01, 0.5, 0.99, 0.999, 1.0):
+                self.assertTrue(math.isclose(statistics.quantile(values, q), float(np.quantile(values, q)),
+                                             rel_tol=1e-12))
+            self.assertEqual(statistics.median(values), float(np.median(values)))
+
+    def test_the_seeded_bootstrap_is_deterministic_and_brackets_the_median(self):
+        ratios = [1.02, 0.97, 1.10, 1.01, 0.99, 1.05, 1.03]
+        first = statistics.bootstrap_median(ratios, 0.95, 2000, 7)
+        self.assertEqual(first, statistics.bootstrap_median(ratios, 0.95, 2000, 7))
+        median, low, high = first
+        self.assertEqual(median, 1.02)
+        self.assertLessEqual(low, median)
+        self.assertGreaterEqual(high, median)
+        self.assertEqual(statistics.bootstrap_median([1.5]), (1.5, 1.5, 1.5))
+
+    def test_bad_input_is_refused(self):
+        with self.assertRaises(ValueError):
+            statistics.median([])
+        with self.assertRaises(ValueError):
+            statistics.quantile([1.0], 1.5)
+        with self.assertRaises(ValueError):
+            statistics.bootstrap_interval([1.0, 2.0], [[0, 2]])
+        with self.assertRaises(ValueError):
+            statistics.bootstrap_interval([1.0, 2.0], [[0]])
+        with self.assertRaises(ValueError):
+            statistics.bootstrap_interval([1.0, 2.0], [[0, 1]], 1.0)
+
+    def test_a_result_files_pair_verdict_is_one_of_the_rules(self):
+        self.assertEqual(fields.PAIR_VERDICTS, statistics.VERDICTS)
+
+
+if __name__ == "__main__":
+    unittest.main()
