@@ -44,7 +44,8 @@ from dataclasses import dataclass, field
 
 from . import statistics
 from .fields import (BACK_TO_BACK_ORDER, C2C_CONTEXT, C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS,
-                     SERIAL_CONTEXT, SYNC_COUNTER, UNAVAILABLE, VS_C2C_COUNTER, VS_SERIAL_COUNTER)
+                     PER_UNIT_TIMES_SCHEMA, SERIAL_CONTEXT, SYNC_COUNTER, UNAVAILABLE, VS_C2C_COUNTER,
+                     VS_SERIAL_COUNTER)
 from .formatting import format_ns, format_number
 from .inputs import RunFile
 from .names import BenchmarkKey, parse_name
@@ -416,6 +417,13 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                         f"(context lockstep_order): a drift of the machine during the run shifts the entries that "
                         f"ran at that moment, with a tiny p; `lockstep run` without --no-interleave (its default) "
                         f"spreads it over every entry")
+    if time_kind == "cpu":
+        batch_cpu = [run_file.label for run_file in (baseline, contender) if run_file.mpi is None
+                     and int(run_file.context.get("lockstep_schema", PER_UNIT_TIMES_SCHEMA)) < PER_UNIT_TIMES_SCHEMA]
+        if batch_cpu:
+            warnings.append(f"{' and '.join(batch_cpu)} predate lockstep schema {PER_UNIT_TIMES_SCHEMA}: the "
+                            f"cpu_time of their team entries is Google Benchmark's own thread, which only replayed "
+                            f"the batch times, not the CPU time of a step (rk4/serial's is)")
     if untested:
         enough = max(statistics.MIN_REPETITIONS, 10)
         # A `lockstep mpi` file's repetitions are its rounds.

@@ -35,7 +35,11 @@ UNAVAILABLE = "unavailable"
 # writes none, 1.8 and later write "json_schema_version": 1; lockstep's own in
 # CMakeLists.txt, LOCKSTEP_RESULT_SCHEMA).
 KNOWN_GB_JSON_SCHEMA = 1
-KNOWN_LOCKSTEP_SCHEMA = 1
+KNOWN_LOCKSTEP_SCHEMA = 2
+# From this lockstep schema on, a `lockstep run` entry's real_time and cpu_time are per unit (the RK4 step,
+# the barrier episode): real_time equals its UNIT_COUNTERS value, cpu_time is participant 0's thread CPU
+# time per unit (bench/harness/team_driver.hpp, before measure_entry). Before it, both were per batch of units.
+PER_UNIT_TIMES_SCHEMA = 2
 
 TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
 
@@ -45,8 +49,9 @@ READ_AGGREGATES = ("median", "mean")
 # The per-unit time counters of lockstep's entries, in the order they are looked
 # for: ns_per_step (rk4 entries, docs/names-and-counters.md) and ns_per_episode
 # (the bare barrier entries). Both time a batch of units per Google Benchmark
-# iteration, and the batch size comes from each run's own probe, so only the
-# per-unit counter compares across runs; the iteration time does not.
+# iteration, and the batch size comes from each run's own probe; real_time is the
+# counter from PER_UNIT_TIMES_SCHEMA on, the batch's time before, so the reader
+# takes the counter, which means the same in every file.
 UNIT_COUNTERS = ("ns_per_step", "ns_per_episode")
 # The counter that is a c2c entry's measurement (its iteration time includes thread start-up).
 C2C_COUNTER = "one_way_ns"

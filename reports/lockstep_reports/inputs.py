@@ -416,9 +416,13 @@ def _read_context(path: str, label: str, raw) -> tuple[dict, list[str]]:
     return values, warnings
 
 
-def _measured_values(entry: _Object, run: Run, scale: float, least: float) -> Repetition | None:
+def _measured_values(entry: _Object, run: Run, scale: float, least: float,
+                     batch_times: bool = False) -> Repetition | None:
     """An entry's times (in ns: scale is its time unit's size) and read counters, checked; None when its
-    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold."""
+    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold.
+    `batch_times`: a file written before lockstep schema fields.PER_UNIT_TIMES_SCHEMA, whose real_time and
+    cpu_time of an entry with a per-unit counter are per batch; its cpu_time is then rescaled per unit by the
+    batch size the two say (real_time / the counter). From that schema on both are per unit already."""
     times = {key: _checked_number(entry, key, entry._get(key, required=True), least, fields.LONGEST_NS, " ns",
                                   non_finite=True, scale=scale)
              for key in ("real_time", "cpu_time")}
@@ -435,6 +439,8 @@ def _measured_values(entry: _Object, run: Run, scale: float, least: float) -> Re
         counters[name] = entry.number(name, low, high, non_finite=True)
     unit_counter = next((name for name in fields.UNIT_COUNTERS if name in counters), None)
     real = counters[unit_counter] if unit_counter else times["real_time"]
+    if batch_times and unit_counter and math.isfinite(times["real_time"]):
+        times["cpu_time"] *= real / times["real_time"]
     if not (math.isfinite(real) and math.isfinite(times["cpu_time"])):
         run.unavailable["repetition time"] += 1
         return None
@@ -688,6 +694,8 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
     if not benchmarks:
         raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
     context_values, warnings = _read_context(path, label, context)
+    lockstep_schema = context_values.get("lockstep_schema")
+    batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
     pace = _read_pace(path, document)
     pairs = _read_pairs(path, document, pace)
 
@@ -747,7 +755,7 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
         _same_counters(entry, units, first_read.setdefault(key, (index, units)))
         # An aggregate's pace counters (a median of mode indices) mean nothing: only repetitions carry a pace.
         repetition_pace = _repetition_pace(entry, run, pace) if aggregate is None else None
-        values = _measured_values(entry, run, scale, fields.SHORTEST_NS)
+        values = _measured_values(entry, run, scale, fields.SHORTEST_NS, batch_times)
         if values is None:
             continue
         if aggregate is not None:

@@ -36,11 +36,14 @@ class RunFiles(unittest.TestCase):
         self.assertEqual(run_file.context_number("c2c_one_way_ns"), 61.5)
 
     def test_step_time_comes_from_ns_per_step_when_iterations_are_batches(self):
+        # Before lockstep schema 2 (the fixtures' "1"), real_time and cpu_time were per batch of steps.
         import json, os, tempfile
         with open(fixture("machine_a.json"), encoding="utf-8") as stream:
             document = json.load(stream)
+        self.assertEqual(document["context"]["lockstep_schema"], "1")
         for entry in document["benchmarks"]:
             entry["real_time"] *= 64  # one Google Benchmark iteration = a batch of 64 steps
+            entry["cpu_time"] *= 64
         with tempfile.TemporaryDirectory() as directory:
             path = os.path.join(directory, "batched.json")
             with open(path, "w", encoding="utf-8") as stream:
@@ -49,7 +52,30 @@ class RunFiles(unittest.TestCase):
         plain = load_run_file(fixture("machine_a.json"))
         key = parse_name("rk4/sync:seqlock/layout:padded128/pin:compact/threads:2")
         self.assertEqual(batched.runs[key].times_ns(), plain.runs[key].times_ns())
-        self.assertEqual(batched.runs[key].times_ns("cpu"), plain.runs[key].times_ns("cpu"))
+        for got, want in zip(batched.runs[key].times_ns("cpu"), plain.runs[key].times_ns("cpu"), strict=True):
+            self.assertAlmostEqual(got, want, delta=want * 1e-12)
+
+    def test_from_schema_2_real_time_and_cpu_time_are_per_step(self):
+        # lockstep schema 2 (bench/harness/team_driver.hpp): real_time is ns_per_step, cpu_time is per step too,
+        # and neither is rescaled, whatever real_time / ns_per_step would say.
+        import json, os, tempfile
+        with open(fixture("machine_a.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        document["context"]["lockstep_schema"] = "2"
+        key = parse_name("rk4/sync:seqlock/layout:padded128/pin:compact/threads:2")
+        rows = [e for e in document["benchmarks"]
+                if parse_name(e.get("run_name", e["name"])) == key and e["run_type"] == "iteration"]
+        for entry in rows:
+            entry["cpu_time"] = entry["real_time"] * 0.5
+            entry["real_time"] *= 1.001  # written from the batch times, within rounding of ns_per_step
+        with tempfile.TemporaryDirectory() as directory:
+            path = os.path.join(directory, "per_step.json")
+            with open(path, "w", encoding="utf-8") as stream:
+                json.dump(document, stream)
+            per_step = load_run_file(path)
+        self.assertEqual(per_step.warnings, [])  # schema 2 is known
+        self.assertEqual(per_step.runs[key].times_ns(), [e["ns_per_step"] for e in rows])
+        self.assertEqual(per_step.runs[key].times_ns("cpu"), [e["cpu_time"] for e in rows])
 
     def test_later_schema_with_new_fields_nan_and_infinity_is_read(self):
         later = load_run_file(fixture("later_schema.json"))
