@@ -15,7 +15,7 @@ build_packages=(
   libbenchmark-dev libgtest-dev libgmock-dev
   libhwloc-dev hwloc
   libboost-dev libck-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
-  python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2
+  python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2 python3-jsonschema
   openmpi-bin libopenmpi-dev
 )
 test_packages=(rt-tests chromium libbenchmark-tools spin)

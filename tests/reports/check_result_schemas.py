@@ -1,0 +1,85 @@
+"""What each lockstep command writes against its kind's schema (docs/schemas/<kind>.schema.json).
+
+Runs one kind's commands with the smallest settings that still write every shape of the file (delay: plain,
+--compare-pinning, --per-cpu, --find-period; run: plain and --scaling; verify: two masses and a chain;
+topology: this machine and a synthetic one), and checks each file as a writer's test does: strictly, so a key
+a writer adds or misspells without its schema fails here (reports/lockstep_reports/schemas.py, strict=True).
+The reader checks the same schemas when it reads a file (reports/lockstep_reports/inputs.py, read_document).
+
+    check_result_schemas.py --lockstep BIN KIND [--keep DIR]
+
+Exit 0: every file fits; 1: a command failed or a file does not fit (one line each on stdout).
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "reports"))
+from lockstep_reports import schemas  # noqa: E402
+
+# kind -> [(shape, arguments before --out, arguments after it, extra environment)]
+SHAPES = {
+    "run": [
+        ("quick", ["run", "--quick", "--repetitions", "1", "--threads", "2", "--pin", "compact", "--pairs", "2"],
+         ["--", "--benchmark_min_time=0.01"], {}),
+        ("scaling", ["run", "--quick", "--scaling", "--repetitions", "1", "--sync", "std_barrier",
+                     "--layout", "padded64", "--pairs", "0"], ["--", "--benchmark_min_time=0.01"], {}),
+    ],
+    "c2c": [("plain", ["c2c", "--samples", "20", "--rounds", "5", "--max-pairs", "4"], [], {})],
+    "delay": [
+        ("plain", ["delay", "--period", "1ms", "--duration", "50ms"], [], {}),
+        ("compare-pinning", ["delay", "--period", "1ms", "--duration", "50ms", "--compare-pinning"], [], {}),
+        ("per-cpu", ["delay", "--period", "1ms", "--duration", "50ms", "--per-cpu"], [], {}),
+        ("find-period", ["delay", "--period", "1ms", "--find-period", "--miss-rate", "0.1",
+                         "--search-budget", "2s"], [], {}),
+    ],
+    "falseshare": [("plain", ["falseshare", "--strides", "8,64", "--window", "5ms", "--repeats", "2"], [], {})],
+    "migrate": [("plain", ["migrate", "--repeats", "5", "--bytes", "4096"], [], {})],
+    "mpi": [("two ranks", ["mpi", "--ranks", "2", "--steps", "50", "--warmup", "5", "--rounds", "1",
+                           "--pingpong", "100"], [], {})],
+    "verify": [("two masses", ["verify"], [], {}), ("chain", ["verify", "--masses", "3"], [], {})],
+    "topology": [
+        ("this machine", ["topology"], [], {}),
+        ("synthetic", ["topology"], [], {"HWLOC_SYNTHETIC": "pack:2 l3:2 l2:1 core:2 pu:2"}),
+    ],
+}
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lockstep", required=True)
+    parser.add_argument("kind", choices=sorted(SHAPES))
+    parser.add_argument("--keep", help="keep the written files in this directory")
+    options = parser.parse_args()
+
+    failures = 0
+    with tempfile.TemporaryDirectory(prefix="lockstep-schema-") as scratch:
+        directory = options.keep or scratch
+        for index, (shape, before, after, environment) in enumerate(SHAPES[options.kind]):
+            out = os.path.join(directory, f"{options.kind}-{index}.json")
+            command = [options.lockstep] + before + ["--out", out] + after
+            done = subprocess.run(command, env={**os.environ, **environment}, stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.PIPE, text=True, timeout=300)
+            if done.returncode != 0:
+                last = (done.stderr.strip().splitlines() or ["(nothing on stderr)"])[-1]
+                print(f"FAIL {options.kind} ({shape}): `{' '.join(command[1:])}` exited {done.returncode}: {last}")
+                failures += 1
+                continue
+            with open(out, encoding="utf-8") as stream:
+                document = json.load(stream)
+            problem = schemas.problem(document, options.kind, strict=True)
+            if problem is None:
+                print(f"ok   {options.kind} ({shape}): fits {schemas.schema_path(options.kind).name}")
+            else:
+                print(f"FAIL {options.kind} ({shape}): {out}: {problem} "
+                      f"(docs/schemas/{options.kind}.schema.json)")
+                failures += 1
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
