@@ -1,16 +1,18 @@
-"""Reading lockstep's result files: every field the tools use is checked here, once.
+"""Reading lockstep's result files: every JSON file through read_document, once.
 
-Four kinds of file reach the tools:
-  run      Google Benchmark JSON (1.7 and later) written by `lockstep run --json`
+The kinds of file that reach the tools:
+  run      Google Benchmark JSON (1.7 and later) written by `lockstep run`
+  mpi      `lockstep mpi --out`   {"kind": "mpi", ...}: benchmark entries in the same shape
   c2c      `lockstep c2c --out`   {"kind": "c2c", ...}
   delay    `lockstep delay --out` {"kind": "delay", ...}
   verify   `lockstep verify --csv` (header t,x1,x2)
+and, for compare's machine fingerprint only, the context of `lockstep falseshare`, `migrate` and `verify --out`.
 
-Each field the tools read (fields.py) is checked for its type and its range
-as it is read: a time is a positive number of ns below about eleven days, a
-count is a whole number of 0 or more, a name is text, an entry appears once,
-the repetitions of one benchmark carry the same counters. The tools read
-nothing else, and a field they do not read is ignored whatever it holds.
+read_document checks a JSON file against its kind's schema (docs/schemas/<kind>.schema.json, through
+schemas.py) before anything reads it: the types, what is required, the ranges that need no other field. What
+a schema cannot express is checked here as the file is read: an entry appears once, the repetitions of one
+benchmark carry the same counters, a histogram adds up to its wake-ups, a mode names one of the trace's, a
+time in a unit lies within fields.SHORTEST_NS..LONGEST_NS. A key no schema names is ignored, whatever it holds.
 
 NaN and Infinity: Google Benchmark writes them for a value it could not
 compute, so in a benchmark entry's time or counter they make that one value
@@ -32,8 +34,9 @@ import os
 from collections import Counter
 from dataclasses import dataclass, field
 
-from . import fields
+from . import fields, schemas
 from .names import BenchmarkKey, parse_name
+from .schemas import json_kind, shown as _shown  # noqa: F401 (json_kind: the fuzz test names kinds by it)
 
 
 class InputError(Exception):
@@ -45,44 +48,14 @@ class InputError(Exception):
         self.problem = problem
 
 
-# ---------------------------------------------------------------- one JSON object, field by field
-
-def json_kind(value) -> str:
-    """A JSON value's type, as an error message names it."""
-    if value is None:
-        return "null"
-    if isinstance(value, bool):
-        return "true/false"
-    if isinstance(value, (int, float)):
-        return "a number"
-    if isinstance(value, str):
-        return "text"
-    if isinstance(value, list):
-        return "a list"
-    return "an object"
-
-
-def _shown(value) -> str:
-    """A value as an error message quotes it: short, one line, numbers as JSON spells them."""
-    if isinstance(value, float):
-        if math.isnan(value):
-            return "NaN"
-        if math.isinf(value):
-            return "Infinity" if value > 0 else "-Infinity"
-        return f"{value:g}"
-    if isinstance(value, int) and not isinstance(value, bool):
-        return str(value) if abs(value) < 10 ** 30 else "a number of more than 30 digits"
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
-
+# ---------------------------------------------------------------- what the schema cannot say
 
 class _Object:
-    """One JSON object of a file, read field by field. `where` names it in an error ("benchmark entry 3
-    ('rk4/serial')"); every reader checks the type and the range of what it returns."""
+    """One JSON object of a file that its kind's schema has checked (read_document): what is left to check is
+    what a schema cannot express (a range that depends on the unit, NaN in a benchmark entry). `where` names
+    it in an error ("benchmark entry 3 ('rk4/serial')")."""
 
-    def __init__(self, path: str, value, where: str):
-        if not isinstance(value, dict):
-            raise InputError(path, f"{where} is {json_kind(value)}, not an object")
+    def __init__(self, path: str, value: dict, where: str):
         self.path, self.value, self.where = path, value, where
 
     def fail(self, key: str, problem: str):
@@ -98,43 +71,6 @@ class _Object:
             self.fail(key, "is null")
         return value
 
-    def text(self, key: str, required: bool = True, empty: bool = True) -> str | None:
-        value = self._get(key, required)
-        if value is None:
-            return None
-        if not isinstance(value, str):
-            self.fail(key, f"is {json_kind(value)}, not text")
-        if not empty and not value.strip():
-            self.fail(key, "is empty")
-        return value
-
-    def choice(self, key: str, choices) -> str:
-        value = self.text(key)
-        if value not in choices:
-            self.fail(key, f"is {_shown(value)}, not one of {', '.join(choices)}")
-        return value
-
-    def flag(self, key: str) -> bool:
-        """true/false; absent is false."""
-        value = self._get(key, required=False)
-        if value is not None and not isinstance(value, bool):
-            self.fail(key, f"is {json_kind(value)}, not true/false")
-        return bool(value)
-
-    def integer(self, key: str, required: bool = True, nullable: bool = False, low: int = 0,
-                high: float = fields.LARGEST_AMOUNT) -> int | None:
-        value = self._get(key, required, nullable)
-        if value is None:
-            return None
-        if isinstance(value, bool) or not isinstance(value, int):
-            if isinstance(value, float) and value.is_integer() and low <= value <= high:
-                return int(value)  # a writer that prints 3.0 for 3
-            self.fail(key, f"is {_shown(value) if isinstance(value, float) else json_kind(value)}, "
-                           f"not a whole number")
-        if not low <= value <= high:
-            self.fail(key, f"is {_shown(value)}, outside {low}..{_shown(high)}")
-        return value
-
     def number(self, key: str, low: float, high: float, required: bool = True, nullable: bool = False,
                unit: str = "", non_finite: bool = False) -> float | None:
         """A number in [low, high]; NaN or an infinity is returned as it is when `non_finite` (the caller
@@ -144,28 +80,10 @@ class _Object:
             return None
         return _checked_number(self, key, value, low, high, unit, non_finite)
 
-    def object(self, key: str, required: bool = True, nullable: bool = False) -> "_Object | None":
-        value = self._get(key, required, nullable)
-        if value is None:
-            return None
-        return _Object(self.path, value, f"{self.where}: {key}" if self.where else key)
-
-    def array(self, key: str, required: bool = True, nonempty: bool = True) -> list | None:
-        value = self._get(key, required)
-        if value is None:
-            return None
-        if not isinstance(value, list):
-            self.fail(key, f"is {json_kind(value)}, not a list")
-        if nonempty and not value:
-            self.fail(key, "is an empty list")
-        return value
-
 
 def _checked_number(owner: _Object, key: str, value, low: float, high: float, unit: str = "",
                     non_finite: bool = False, scale: float = 1.0) -> float:
     """value * scale, checked to lie in [low, high] (given in the unit of the product)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        owner.fail(key, f"is {json_kind(value)}, not a number")
     if isinstance(value, int) and abs(value) > high / scale:  # before float(): an int may exceed the floats
         owner.fail(key, f"is {_shown(value)}, beyond any measured value (above {high:g}{unit})")
     if not math.isfinite(value):
@@ -379,37 +297,35 @@ class RunFile:
         return number if math.isfinite(number) and number > 0 else None
 
 
-def _read_context(path: str, label: str, raw) -> tuple[dict, list[str]]:
-    context = _Object(path, raw, "the context")
+def _read_context(path: str, label: str, raw: dict) -> tuple[dict, list[str]]:
+    """The fingerprint keys of a context the schema has checked. A key of another kind's context (date in a
+    c2c file) is read when it holds what it holds in its own kind, else ignored as any unknown key."""
     values = {}
     for key in fields.FINGERPRINT_KEYS:
-        if key in fields.CONTEXT_INTEGERS:
-            value = context.integer(key, required=False)
-        else:
-            value = context.text(key, required=False)
-        if value is not None:
+        value = raw.get(key)
+        if key in fields.CONTEXT_INTEGERS and isinstance(value, (int, float)) and not isinstance(value, bool):
+            values[key] = int(value)
+        elif key not in fields.CONTEXT_INTEGERS and isinstance(value, str):
             values[key] = value
     for key in fields.CALIBRATION_CONTEXT:
         if key in values and values[key] != fields.UNAVAILABLE:
             try:
                 number = float(values[key])
             except ValueError:
-                context.fail(key, f"is {_shown(values[key])}: neither a number of ns nor "
-                                  f"{fields.UNAVAILABLE!r}")
+                raise InputError(path, f"context.{key}: is {_shown(values[key])}: neither a number of ns nor "
+                                       f"{fields.UNAVAILABLE!r}") from None
             if not fields.SHORTEST_NS <= number <= fields.LONGEST_NS:  # NaN fails this too
-                context.fail(key, f"is {_shown(values[key])}: not a measured time in ns")
+                raise InputError(path, f"context.{key}: is {_shown(values[key])}: not a measured time in ns")
 
     warnings = []
-    schema = context.integer("json_schema_version", required=False)
-    if schema is not None and schema > fields.KNOWN_GB_JSON_SCHEMA:
+    schema = raw.get("json_schema_version")
+    if isinstance(schema, int) and schema > fields.KNOWN_GB_JSON_SCHEMA:
         warnings.append(f"{label}: Google Benchmark JSON schema {schema} is newer than this tool knows "
                         f"({fields.KNOWN_GB_JSON_SCHEMA}); reading the fields it knows")
     lockstep_schema = values.get("lockstep_schema")
     if lockstep_schema is None:
         warnings.append(f"{label}: no lockstep keys in the context (not written by `lockstep run`?): "
                         "no machine fingerprint or normalisation for it")
-    elif not lockstep_schema.isdigit():
-        context.fail("lockstep_schema", f"is {_shown(lockstep_schema)}, not a whole number")
     elif int(lockstep_schema) > fields.KNOWN_LOCKSTEP_SCHEMA:
         warnings.append(f"{label}: lockstep result schema {lockstep_schema} is newer than this tool knows "
                         f"({fields.KNOWN_LOCKSTEP_SCHEMA}); reading the fields it knows")
@@ -484,133 +400,107 @@ def _repetition_pace(entry: _Object, run: Run, trace: "PaceTrace | None") -> Rep
                           None if mode is None else int(mode))
 
 
+def _fail(path: str, place: tuple, problem: str):
+    """A problem the schema cannot express, at a place given as JSON path parts."""
+    raise InputError(path, f"{schemas.json_path(place)}: {problem}")
+
+
 def _read_pace(path: str, document: dict) -> PaceTrace | None:
-    """The top-level "lockstep_pace", checked field by field; None when the file has none (an older file)."""
+    """The top-level "lockstep_pace" (its fields checked by the schema, what ties them together here); None
+    when the file has none (an older file)."""
     if fields.PACE_KEY not in document:
         return None
-    trace = _Object(path, document[fields.PACE_KEY], fields.PACE_KEY)
-    reference = trace.text("reference", empty=False)
-    cpus = []
-    for index, cpu in enumerate(trace.array("cpus", nonempty=False)):
-        if isinstance(cpu, bool) or not isinstance(cpu, int) or not 0 <= cpu < fields.CPU_LIMIT:
-            trace.fail("cpus", f"holds {_shown(cpu)} at {index}: a CPU number is a whole number of 0 or more")
-        cpus.append(cpu)
-    if len(cpus) not in (0, 2) or len(set(cpus)) != len(cpus):
-        trace.fail("cpus", f"is {_shown(cpus)}: the pinned pair of two different CPUs, or [] on a machine of one")
+    trace, at = document[fields.PACE_KEY], (fields.PACE_KEY,)
+    cpus = trace["cpus"]
+    if len(cpus) not in (0, 2) or len(set(cpus)) != len(cpus) or max(cpus, default=0) >= fields.CPU_LIMIT:
+        _fail(path, at + ("cpus",), f"is {cpus}: the pinned pair of two different CPUs, or [] on a machine of one")
 
-    raw_modes = trace.array("modes")
     modes = []
-    for index, raw in enumerate(raw_modes):
-        mode = _Object(path, raw, f"{fields.PACE_KEY}: mode {index}")
-        number = mode.integer("mode", high=fields.CPU_LIMIT)
-        if number != index:
-            mode.fail("mode", f"is {number}, not {index}: the modes are listed in the order of their index")
-        c2c = mode.number("c2c_ns", fields.SHORTEST_NS, fields.LONGEST_NS, nullable=True, unit=" ns")
+    for index, raw in enumerate(trace["modes"]):
+        here = at + ("modes", index)
+        if raw["mode"] != index:
+            _fail(path, here + ("mode",), f"is {_shown(raw['mode'])}, not {index}: the modes are listed in the order "
+                                          "of their index")
+        c2c = raw["c2c_ns"]
         if modes and (c2c is None) != (modes[0].c2c_ns is None):
-            mode.fail("c2c_ns", "is null in some modes and a number in others: either the machine has a pair of "
-                                "CPUs to measure or it has not")
+            _fail(path, here + ("c2c_ns",), "is null in some modes and a number in others: either the machine has a "
+                                            "pair of CPUs to measure or it has not")
         if modes and c2c is not None and c2c < modes[-1].c2c_ns:
-            mode.fail("c2c_ns", f"is {c2c:g} ns, below the {modes[-1].c2c_ns:g} ns of the mode before: the modes "
-                                "are sorted fastest first")
-        modes.append(PaceMode(index, c2c,
-                              mode.number("serial_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns"),
-                              mode.number("share", 0.0, 1.0), mode.integer("readings")))
+            _fail(path, here + ("c2c_ns",), f"is {c2c:g} ns, below the {modes[-1].c2c_ns:g} ns of the mode before: "
+                                            "the modes are sorted fastest first")
+        modes.append(PaceMode(index, c2c, raw["serial_ns"], raw["share"], int(raw["readings"])))
     if sum(mode.share for mode in modes) > 1.0 + fields.SHARE_SLACK:
-        trace.fail("modes", f"have shares adding up to {sum(mode.share for mode in modes):g}, more than the whole "
-                            "run")
+        _fail(path, at + ("modes",), f"have shares adding up to {sum(mode.share for mode in modes):g}, more than "
+                                     "the whole run")
 
     readings = []
-    for index, raw in enumerate(trace.array("readings")):
-        reading = _Object(path, raw, f"{fields.PACE_KEY}: reading {index}")
-        t_s = reading.number("t_s", 0.0, fields.LONGEST_NS / 1e9, unit=" s")
-        if readings and t_s < readings[-1].t_s:
-            reading.fail("t_s", f"is {t_s:g} s, before the {readings[-1].t_s:g} s of the reading before: the "
-                                "readings are in time order")
-        readings.append(PaceReading(
-            t_s, reading.number("c2c_ns", fields.SHORTEST_NS, fields.LONGEST_NS, nullable=True, unit=" ns"),
-            reading.number("serial_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns"),
-            reading.integer("mode", low=fields.OUTLIER_MODE, high=len(modes) - 1)))
-    changes = trace.integer("changes", high=len(readings) - 1)
-    return PaceTrace(reference, tuple(cpus), tuple(readings), tuple(modes), changes, trace.text("summary"))
+    for index, raw in enumerate(trace["readings"]):
+        here = at + ("readings", index)
+        if readings and raw["t_s"] < readings[-1].t_s:
+            _fail(path, here + ("t_s",), f"is {raw['t_s']:g} s, before the {readings[-1].t_s:g} s of the reading "
+                                         "before: the readings are in time order")
+        if raw["mode"] >= len(modes):
+            _fail(path, here + ("mode",), f"is {_shown(raw['mode'])}, not one of the {len(modes)} modes (0.."
+                                          f"{len(modes) - 1}) or -1")
+        readings.append(PaceReading(raw["t_s"], raw["c2c_ns"], raw["serial_ns"], int(raw["mode"])))
+    if trace["changes"] > len(readings) - 1:
+        _fail(path, at + ("changes",), f"is {_shown(trace['changes'])}, more than the {len(readings)} readings "
+                                       "can change")
+    return PaceTrace(trace["reference"], tuple(cpus), tuple(readings), tuple(modes), int(trace["changes"]),
+                     trace["summary"])
 
 
 def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[PacePair]:
-    """The top-level "lockstep_pairs", checked field by field; [] when the file has none (an older file)."""
-    if fields.PAIRS_KEY not in document:
-        return []
-    raw_pairs = document[fields.PAIRS_KEY]
-    if not isinstance(raw_pairs, list):
-        raise InputError(path, f"{fields.PAIRS_KEY} is {json_kind(raw_pairs)}, not a list")
+    """The top-level "lockstep_pairs" (checked by the schema but for what ties them to the entries and the
+    trace); [] when the file has none (an older file)."""
     pairs, seen = [], {}
     highest_mode = len(trace.modes) - 1 if trace else fields.OUTLIER_MODE
-    for index, raw in enumerate(raw_pairs):
-        pair = _Object(path, raw, f"{fields.PAIRS_KEY} entry {index}")
-        comparison = pair.choice("comparison", fields.PAIR_COMPARISONS)
+    for index, pair in enumerate(document.get(fields.PAIRS_KEY, [])):
+        at = (fields.PAIRS_KEY, index)
+        comparison = pair["comparison"]
         names = {}
         for side in ("a", "b"):
-            name = pair.text(side, empty=False)
-            key = parse_name(name)
+            key = parse_name(pair[side])
             if not key.family:
-                pair.fail(side, f"is {_shown(name)}: no benchmark family")
-            names[side] = (name, key)
+                _fail(path, at + (side,), f"is {_shown(pair[side])}: no benchmark family")
+            names[side] = (pair[side], key)
         identity = (comparison, names["a"][1], names["b"][1])
         if identity in seen:
-            raise InputError(path, f"{pair.where} repeats entry {seen[identity]} (the same {comparison} pair of "
-                                   f"{names['a'][0]} and {names['b'][0]}): a damaged or concatenated file")
+            _fail(path, at, f"repeats entry {seen[identity]} (the same {comparison} pair of {names['a'][0]} and "
+                            f"{names['b'][0]}): a damaged or concatenated file")
         seen[identity] = index
-        ratios = tuple(_checked_number(pair, f"ratios[{at}]", value, fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
-                       for at, value in enumerate(pair.array("ratios")))
-        raw_modes = pair.array("modes")
-        if len(raw_modes) != len(ratios):
-            pair.fail("modes", f"has {len(raw_modes)} values for {len(ratios)} ratios: one mode per pair")
-        modes = []
-        for at, value in enumerate(raw_modes):
-            if isinstance(value, bool) or not isinstance(value, int) or not fields.OUTLIER_MODE <= value <= highest_mode:
+        ratios, modes = tuple(pair["ratios"]), tuple(pair["modes"])
+        if len(modes) != len(ratios):
+            _fail(path, at + ("modes",), f"has {len(modes)} values for {len(ratios)} ratios: one mode per pair")
+        for place, mode in enumerate(modes):
+            if mode > highest_mode:
                 where = (f"one of the {highest_mode + 1} modes of {fields.PACE_KEY} or -1" if trace
                          else f"-1: the file has no {fields.PACE_KEY}")
-                pair.fail("modes", f"holds {_shown(value)} at {at}, not {where}")
-            modes.append(value)
-        median = pair.number("median", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
-        ci_low = pair.number("ci_low", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
-        ci_high = pair.number("ci_high", fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
-        if ci_low > ci_high:
-            pair.fail("ci_low", f"is {ci_low:g}, above ci_high {ci_high:g}")
-        confidence = pair.number("confidence", 0.0, 1.0)
-        if not 0.0 < confidence < 1.0:
-            pair.fail("confidence", f"is {confidence:g}: a confidence lies strictly between 0 and 1")
-        pairs.append(PacePair(comparison, pair.text("group"), names["a"][0], names["b"][0], names["a"][1],
-                              names["b"][1], ratios, tuple(modes), median, ci_low, ci_high, confidence,
-                              pair.number("noise", 0.0, fields.LARGEST_NOISE), pair.choice("verdict", fields.PAIR_VERDICTS),
-                              pair.number("block_ms", fields.SHORTEST_NS / 1e6, fields.LONGEST_NS / 1e6, unit=" ms")))
+                _fail(path, at + ("modes", place), f"is {_shown(mode)}, not {where}")
+        if pair["ci_low"] > pair["ci_high"]:
+            _fail(path, at + ("ci_low",), f"is {pair['ci_low']:g}, above ci_high {pair['ci_high']:g}")
+        pairs.append(PacePair(comparison, pair["group"], names["a"][0], names["b"][0], names["a"][1], names["b"][1],
+                              ratios, tuple(int(mode) for mode in modes), pair["median"], pair["ci_low"],
+                              pair["ci_high"], pair["confidence"], pair["noise"], pair["verdict"], pair["block_ms"]))
     return pairs
 
 
-def _scaling_range(point: "_Object") -> tuple[float, float] | None:
-    """A scaling point's min..max of the counter over repetitions, when the file carries it."""
-    low = point.number("repetitions_min", -fields.LONGEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
-    high = point.number("repetitions_max", -fields.LONGEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
-    return (low, high) if low is not None and high is not None else None
-
-
 def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
-    """The top-level "lockstep_scaling", checked field by field; None when the file has none."""
+    """The top-level "lockstep_scaling"; None when the file has none. Each point holds the curve's counter."""
     if fields.SCALING_KEY not in document:
         return None
-    curve = _Object(path, document[fields.SCALING_KEY], fields.SCALING_KEY)
-    counter = curve.choice("counter", fields.SCALING_COUNTERS)
-    threads = tuple(_checked_number(curve, f"threads[{at}]", value, 1, fields.LARGEST_AMOUNT)
-                    for at, value in enumerate(curve.array("threads", nonempty=False)))
+    curve = document[fields.SCALING_KEY]
+    counter = curve["counter"]
     points = []
-    for index, raw in enumerate(curve.array("points", nonempty=False)):
-        point = _Object(path, raw, f"{fields.SCALING_KEY} point {index}")
-        points.append(ScalingPoint(point.text("sync", empty=False), point.integer("threads", low=1),
-                                   point.text("layout", empty=False), point.text("model", empty=False),
-                                   point.number(counter, -fields.LONGEST_NS, fields.LONGEST_NS, unit=" ns"),
-                                   point.flag("oversubscribed"), _scaling_range(point)))
-    best = curve.text("best", required=False, empty=False) if curve.value.get("best") is not None else None
-    return ScalingCurve(curve.text("pin", empty=False), counter, tuple(int(t) for t in threads), tuple(points), best,
-                        curve.number("c2c_one_way_ns", fields.SHORTEST_NS, fields.LONGEST_NS, required=False,
-                                     nullable=True, unit=" ns"))
+    for index, point in enumerate(curve["points"]):
+        if counter not in point:
+            _fail(path, (fields.SCALING_KEY, "points", index, counter), "is missing: the curve's counter")
+        low, high = point.get("repetitions_min"), point.get("repetitions_max")
+        points.append(ScalingPoint(point["sync"], int(point["threads"]), point["layout"], point["model"],
+                                   point[counter], bool(point.get("oversubscribed")),
+                                   (low, high) if low is not None and high is not None else None))
+    return ScalingCurve(curve["pin"], counter, tuple(int(t) for t in curve["threads"]), tuple(points),
+                        curve.get("best"), curve.get("c2c_one_way_ns"))
 
 
 # ---------------------------------------------------------------- mpi files
@@ -639,61 +529,38 @@ class MpiDetails:
 MPI_DISTRIBUTION_KEYS = ("min", "p50", "p99", "p999", "max")
 
 
-def _mpi_distribution(owner: _Object, key: str, required: bool = True) -> dict:
-    values = owner.object(key, required=required)
-    if values is None:
-        return {}
-    return {name: values.number(name, 0.0, fields.LONGEST_NS, unit=" ns") for name in MPI_DISTRIBUTION_KEYS}
-
-
 def _read_mpi(path: str, document: dict) -> MpiDetails:
-    top = _Object(path, document, "the file")
-    settings = top.object("settings")
-    ranks, hosts = settings.integer("ranks", low=1), settings.integer("hosts", low=1)
+    settings = document["settings"]
+    ranks, hosts = int(settings["ranks"]), int(settings["hosts"])
     exchanges, labels = [], {}
-    for index, raw in enumerate(top.array("exchanges")):
-        entry = _Object(path, raw, f"exchanges entry {index}")
-        exchange = entry.text("exchange", empty=False)
-        sync = entry.text("sync", required=False) or ""
+    for index, entry in enumerate(document["exchanges"]):
+        exchange, sync = entry["exchange"], entry.get("sync") or ""
         # label and name: what `lockstep mpi` writes; a file that holds only exchange (and sync) gets them
         # as the writer makes them (bench/cli/mpi.cpp, exchange_name).
-        label = entry.text("label", required=False, empty=False) or (f"{exchange}/{sync}" if sync else exchange)
-        name = entry.text("name", required=False, empty=False) or (
+        label = entry.get("label") or (f"{exchange}/{sync}" if sync else exchange)
+        name = entry.get("name") or (
             f"mpi/exchange:{exchange}" + (f"/sync:{sync}" if sync else "") + f"/ranks:{ranks}/hosts:{hosts}")
         if label in labels:
-            entry.fail("label", f"{_shown(label)} is also exchanges entry {labels[label]}'s: an exchange appears once")
+            _fail(path, ("exchanges", index, "label"), f"{_shown(label)} is also exchanges[{labels[label]}]'s: an "
+                                                       "exchange appears once")
         labels[label] = index
-        counts = entry.array("slowest_rank_counts")
-        if not all(isinstance(count, int) and not isinstance(count, bool) and count >= 0 for count in counts):
-            entry.fail("slowest_rank_counts", "holds something that is not a count")
+        counts = entry["slowest_rank_counts"]
         if len(counts) != ranks:
-            entry.fail("slowest_rank_counts", f"holds {len(counts)} counts for {ranks} ranks (settings): one per rank")
-        exchanges.append(MpiExchange(label, name,
-                                     _mpi_distribution(entry, "stage_latency_ns"), _mpi_distribution(entry, "skew_ns"),
-                                     _mpi_distribution(entry, "transfer_ns", required=False), tuple(counts)))
-    not_applicable = top.object("not_applicable", required=False)
-    reasons = tuple(sorted((key, not_applicable.text(key)) for key in (not_applicable.value if not_applicable else {})))
-    return MpiDetails(ranks, hosts, settings.text("transport", empty=False), settings.text("model", empty=False),
-                      tuple(exchanges), reasons)
+            _fail(path, ("exchanges", index, "slowest_rank_counts"), f"holds {len(counts)} counts for {ranks} ranks "
+                                                                     "(settings): one per rank")
+        exchanges.append(MpiExchange(label, name, *(
+            {statistic: entry[key][statistic] for statistic in MPI_DISTRIBUTION_KEYS} if key in entry else {}
+            for key in ("stage_latency_ns", "skew_ns", "transfer_ns")), tuple(int(count) for count in counts)))
+    reasons = tuple(sorted(document.get("not_applicable", {}).items()))
+    return MpiDetails(ranks, hosts, settings["transport"], settings["model"], tuple(exchanges), reasons)
 
 
-def run_file_from_document(path: str, label: str, document) -> RunFile:
-    if not isinstance(document, dict):
-        raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
-                               "not an object with \"context\" and \"benchmarks\"")
-    kind = document.get("kind")
-    if kind in ("c2c", "delay"):
-        raise InputError(path, f"is `lockstep {kind}` output, not benchmark results: compare takes the JSON "
-                               "of `lockstep run`")
-    benchmarks = document.get("benchmarks")
-    context = document.get("context")
-    if not isinstance(benchmarks, list) or not isinstance(context, dict):
-        missing = "\"benchmarks\" list" if not isinstance(benchmarks, list) else "\"context\" object"
-        tool = "lockstep mpi" if document.get("kind") == "mpi" else "lockstep run"
-        raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `{tool}` result file")
-    if not benchmarks:
-        raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
-    context_values, warnings = _read_context(path, label, context)
+def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
+    """A `lockstep run` or `lockstep mpi` document that read_document has checked against its schema."""
+    if document.get("kind") not in (None, "mpi"):
+        raise InputError(path, f"is `lockstep {document['kind']}` output, not benchmark results: compare takes "
+                               "the JSON of `lockstep run`")
+    context_values, warnings = _read_context(path, label, document["context"])
     lockstep_schema = context_values.get("lockstep_schema")
     batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
     pace = _read_pace(path, document)
@@ -703,19 +570,17 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
     seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
     first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
     first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
-    for index, raw in enumerate(benchmarks):
-        entry = _Object(path, raw, f"benchmark entry {index}")
-        name = entry.text("name", empty=False)
-        entry.where = f"benchmark entry {index} ({_shown(name)})"
-        run_name = entry.text("run_name", required=False, empty=False)
-        run_type = entry.choice("run_type", ("iteration", "aggregate"))
-        aggregate = entry.text("aggregate_name", empty=False) if run_type == "aggregate" else None
-        base = run_name or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate) else name)
+    for index, raw in enumerate(document["benchmarks"]):
+        name = raw["name"]
+        entry = _Object(path, raw, f"benchmarks[{index}] ({_shown(name)})")
+        aggregate = raw["aggregate_name"] if raw["run_type"] == "aggregate" else None
+        base = raw.get("run_name") or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate)
+                                       else name)
         key = parse_name(base)
         if not key.family:
             entry.fail("name", "has no benchmark family")
         if aggregate is None:
-            repetition_index = entry.integer("repetition_index", required=False)
+            repetition_index = raw.get("repetition_index")
             identity = (key, "repetition", repetition_index if repetition_index is not None
                         else json.dumps(raw, sort_keys=True))
         else:
@@ -731,17 +596,14 @@ def run_file_from_document(path: str, label: str, document) -> RunFile:
             run.names.append(base)
         failure = None  # Google Benchmark 1.8 writes error_occurred + error_message, or skipped + skip_message
         for flag, message_key in (("error_occurred", "error_message"), ("skipped", "skip_message")):
-            on, message = entry.flag(flag), entry.text(message_key, required=False)
-            if message is not None and not on:
-                entry.fail(message_key, f"is there but {flag} is not true")
-            if on and failure is None:
-                failure = message or f"{flag.replace('_', ' ')} (message {fields.UNAVAILABLE})"
+            if raw.get(flag) and failure is None:
+                failure = raw.get(message_key) or f"{flag.replace('_', ' ')} (message {fields.UNAVAILABLE})"
         if failure is not None:
             if failure not in run.errors:
                 run.errors.append(failure)
                 run.errors.sort()  # the file's order of entries is not part of the result
             continue
-        scale = fields.TIME_UNIT_NS[entry.choice("time_unit", tuple(fields.TIME_UNIT_NS))]
+        scale = fields.TIME_UNIT_NS[raw["time_unit"]]
         if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
             continue  # stddev, cv and other statistics: not read
         # The repetitions of one benchmark carry the same read counters, and every entry read (repetitions,
@@ -784,9 +646,35 @@ def _same_counters(entry: _Object, counters: frozenset, first: tuple[int, frozen
                                      "counters")
 
 
+# ---------------------------------------------------------------- one reading function for every kind
+
+def read_document(path: str, text: str | None = None) -> tuple[str, object]:
+    """(kind, document) of a lockstep JSON result file, checked against its kind's schema
+    (docs/schemas/<kind>.schema.json, schemas.py) before anything reads it. A file without "kind" is a
+    `lockstep run` file (Google Benchmark JSON). Every tool reads JSON results through this."""
+    document = parse_json(path, read_text(path) if text is None else text)
+    if not isinstance(document, dict):
+        raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
+                               "not an object with \"context\" and \"benchmarks\"")
+    kind = "run" if document.get("kind") is None else document["kind"]
+    if kind not in schemas.KINDS or kind == "run" and document.get("kind") is not None:
+        raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
+    if kind in ("run", "mpi"):
+        benchmarks, context = document.get("benchmarks"), document.get("context")
+        if not isinstance(benchmarks, list) or not isinstance(context, dict):
+            missing = "\"benchmarks\" list" if not isinstance(benchmarks, list) else "\"context\" object"
+            raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `lockstep {kind}` result file")
+        if not benchmarks:
+            raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
+    problem = schemas.problem(document, kind)
+    if problem is not None:
+        raise InputError(path, problem)
+    return kind, document
+
+
 def load_run_file(path: str, label: str | None = None) -> RunFile:
     label = label or os.path.basename(path)
-    return run_file_from_document(path, label, parse_json(path, read_text(path)))
+    return run_file_from_document(path, label, read_document(path)[1])
 
 
 # The kinds of lockstep result that carry the machine context but no benchmark entries.
@@ -808,15 +696,12 @@ class ContextFile:
 def load_for_compare(path: str, label: str | None = None) -> "RunFile | ContextFile":
     """A `lockstep run` or `lockstep mpi` file, or the context of another kind of lockstep result."""
     label = label or os.path.basename(path)
-    document = parse_json(path, read_text(path))
-    kind = document.get("kind") if isinstance(document, dict) else None
+    kind, document = read_document(path)
     if kind in CONTEXT_ONLY_KINDS:
-        if not isinstance(document.get("context"), dict):
-            raise InputError(path, f"is `lockstep {kind}` output without a \"context\" object")
         context, warnings = _read_context(path, label, document["context"])
         return ContextFile(path=path, label=label, kind=kind, context=context, warnings=warnings)
-    if kind is not None and kind != "mpi":  # as load_any: a kind this reader does not know is not a run file
-        raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
+    if kind not in ("run", "mpi"):
+        raise InputError(path, f"is `lockstep {kind}` output: neither results nor a machine context to compare")
     return run_file_from_document(path, label, document)
 
 
@@ -875,130 +760,226 @@ class PacedRun:
     figure5: list[Figure5Row]
 
 
+@dataclass(frozen=True)
+class HistogramColumn:
+    name: str
+    cpu: int | None
+    counts: list[int]  # counts[i]: wake-ups in [i, i + 1) buckets of bucket_us
+    overflow: int  # wake-ups at bound_us or later
+
+
+@dataclass(frozen=True)
+class LatencyHistograms:
+    """cyclictest's histogram (`latency_histogram`): 1 us buckets up to bound_us, a column per thread."""
+    bucket_us: float
+    bound_us: float
+    columns: list[HistogramColumn]
+
+
+@dataclass(frozen=True)
+class CpuLatency:
+    cpu: int | None
+    wakeup: Distribution
+    deadline_misses: int | None
+
+
+@dataclass(frozen=True)
+class PeriodTrial:
+    period_ns: float
+    periods: int
+    misses: int
+    miss_rate: float
+    upper_bound: float | None
+    holds: bool
+
+
+@dataclass(frozen=True)
+class PeriodSearch:
+    """`lockstep delay --find-period`: the trials, the confirming run, and what the search found."""
+    miss_rate: float
+    confidence: float | None
+    trials: list[PeriodTrial]
+    confirm: PeriodTrial | None
+    found_period_ns: float | None
+    failed_period_ns: float | None
+    budget_cut: bool
+    stopped_because: str | None
+    rule: str | None
+
+
+@dataclass(frozen=True)
+class DelayExtras:
+    """What a delay file holds beside the paced runs: `latency_histogram`, `per_cpu` (--per-cpu),
+    `find_period` (--find-period), `idle`, and the settings fields.DELAY_SETTINGS does not name."""
+    histograms: LatencyHistograms | None = None
+    per_cpu: list[CpuLatency] = field(default_factory=list)
+    noisiest: tuple[int, str] | None = None  # (cpu, the rule that named it)
+    search: PeriodSearch | None = None
+    idle: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+
+
 @dataclass
 class DelayFile:
     path: str
     label: str
-    settings: dict  # fields.DELAY_SETTINGS present in the file, checked
+    settings: dict  # fields.DELAY_SETTINGS present in the file
     pinned: PacedRun
     unpinned: PacedRun | None
     histogram: Histogram  # of the pinned run's wake-ups
+    extras: DelayExtras = field(default_factory=DelayExtras)
 
 
-def _distribution(owner: _Object, key: str, required: bool, statistics=fields.DISTRIBUTION_STATISTICS,
-                  counted: bool = True) -> Distribution | None:
-    """{min, p50, ..., count}: every statistic a number, or all null with count 0. `counted`: count is
-    required (the delay files; older c2c files have none)."""
-    summary = owner.object(key, required=required)
-    if summary is None:
-        return None
-    count = summary.integer("count", required=counted)
+def _distribution(path: str, place: tuple, summary: dict, statistics=fields.DISTRIBUTION_STATISTICS,
+                  time: bool = True) -> Distribution:
+    """{min, p50, ..., count}: every statistic a number, or all null with count 0 (a file without count has
+    samples). `time`: the statistics are durations, within fields.LONGEST_NS."""
+    count = summary.get("count")
     values = {}
     for name in statistics:
-        value = summary.number(name, 0.0, fields.LONGEST_NS, required=False, nullable=True, unit=" ns")
+        value = summary.get(name)
         if value is not None and count == 0:
-            summary.fail(name, "is a number though count is 0")
+            _fail(path, place + (name,), "is a number though count is 0")
         if value is None and count != 0:
-            summary.fail(name, "is missing or null" + (f" though count is {count}" if count else ""))
+            _fail(path, place + (name,), "is missing or null" + (f" though count is {count}" if count else ""))
+        if value is not None and time and not 0.0 <= value <= fields.LONGEST_NS:
+            _fail(path, place + (name,), f"is {_shown(value)} ns, not a measured time")
         values[name] = value
     known = [(name, values[name]) for name in statistics if values[name] is not None]
     for (low_name, low), (high_name, high) in zip(known, known[1:]):
         if low > high:
-            summary.fail(high_name, f"is {high:g} ns, below {low_name} {low:g} ns: the statistics are out of order")
-    return Distribution(count, values)
+            _fail(path, place + (high_name,), f"is {high:g} ns, below {low_name} {low:g} ns: the statistics are out "
+                                              "of order")
+    return Distribution(None if count is None else int(count), values)
 
 
-def _read_c2c(path: str, label: str, document: _Object) -> C2cFile:
+def _read_c2c(path: str, label: str, document: dict) -> C2cFile:
     pairs, seen = [], {}
-    for index, raw in enumerate(document.array("pairs")):
-        pair = _Object(path, raw, f"c2c pair {index}")
-        a = pair.integer("a", high=fields.CPU_LIMIT - 1)
-        b = pair.integer("b", high=fields.CPU_LIMIT - 1)
+    for index, pair in enumerate(document["pairs"]):
+        a, b, method = pair["a"], pair["b"], pair["method"]
         if a == b:
-            pair.fail("b", f"is {b}, the same CPU as a")
-        method = pair.text("method", empty=False)
+            _fail(path, ("pairs", index, "b"), f"is {b}, the same CPU as a")
         identity = (min(a, b), max(a, b), method)
         if identity in seen:
-            raise InputError(path, f"c2c pair {index} repeats pair {seen[identity]} (CPUs {a} and {b}, method "
-                                   f"{method})")
+            _fail(path, ("pairs", index), f"repeats pairs[{seen[identity]}] (CPUs {a} and {b}, method {method})")
         seen[identity] = index
-        p50 = _distribution(pair, "one_way_ns", required=True, statistics=("p50",), counted=False).statistics["p50"]
+        p50 = _distribution(path, ("pairs", index, "one_way_ns"), pair["one_way_ns"], ("p50",)).statistics["p50"]
         if p50 is not None and p50 < fields.SHORTEST_NS:
-            pair.fail("one_way_ns", f"p50 is {p50:g} ns: a time is positive")
-        pairs.append(C2cPair(a, b, method, pair.text("relation", empty=False), p50))
-    return C2cFile(path=path, label=label, pairs=pairs, sampled=document.flag("sampled"))
+            _fail(path, ("pairs", index, "one_way_ns", "p50"), f"is {p50:g} ns: a time is positive")
+        pairs.append(C2cPair(int(a), int(b), method, pair["relation"], p50))
+    return C2cFile(path=path, label=label, pairs=pairs, sampled=bool(document.get("sampled")))
 
 
-def _figure5(owner: _Object, key: str) -> list[Figure5Row]:
+def _figure5(path: str, document: dict, key: str) -> list[Figure5Row]:
     rows, threads = [], {}
-    raw_rows = owner.array(key)
-    for index, raw in enumerate(raw_rows):
-        row = _Object(owner.path, raw, f"{key} row {index}")
-        thread = row.text("thread", empty=False)
+    for index, row in enumerate(document[key]):
+        thread = row["thread"]
         if thread in threads:
-            raise InputError(owner.path, f"{key} row {index} repeats the thread {thread!r} of row {threads[thread]}")
+            _fail(path, (key, index, "thread"), f"repeats the thread {thread!r} of {key}[{threads[thread]}]")
         threads[thread] = index
-        total = row.integer("total_csw")
-        cross = row.integer("cross_core_csw", nullable=True, high=total)
-        rows.append(Figure5Row(thread, row.text("role"), cross, total,
-                               row.number("pct", 0.0, 100.0, nullable=True, unit=" %")))
+        cross, total = row["cross_core_csw"], row["total_csw"]
+        if cross is not None and cross > total:
+            _fail(path, (key, index, "cross_core_csw"), f"is {_shown(cross)}, more than total_csw {_shown(total)}")
+        rows.append(Figure5Row(thread, row["role"], None if cross is None else int(cross), int(total), row["pct"]))
     return rows
 
 
-def _settings(document: _Object) -> dict:
-    settings = document.object("settings", required=False)
+def _settings(document: dict) -> dict:
+    """The settings fields.DELAY_SETTINGS names that the file holds (null only where it means something:
+    fifo_priority null is SCHED_OTHER; duration_s null a run of no fixed length, not shown)."""
+    settings = document.get("settings", {})
     values = {}
-    if settings is None:
-        return values
     for key, kind in fields.DELAY_SETTINGS:
-        if kind == "duration":
-            value = settings.number(key, fields.SHORTEST_NS, fields.LONGEST_NS, required=False, unit=" ns")
-            value = int(value) if value is not None and value.is_integer() else value
-        elif kind == "seconds":
-            # null: the run had no fixed length (`lockstep delay --find-period` writes duration_s null)
-            value = settings.number(key, 0.0, fields.LONGEST_NS / 1e9, required=False, nullable=True, unit=" s")
-        elif kind == "count":
-            value = settings.integer(key, required=False)
-        elif kind == "priority":
-            value = settings.integer(key, required=False, nullable=True, low=1, high=99)
-            if key in settings.value and value is None:
-                values[key] = None  # SCHED_OTHER
-                continue
-        elif kind == "flag":
-            value = settings.flag(key) if key in settings.value else None  # absent: not said, not false
-        else:
-            value = settings.text(key, required=False)
-        if value is not None:
+        value = settings.get(key)
+        if kind == "duration" and isinstance(value, float) and value.is_integer():
+            value = int(value)
+        if value is not None or (kind == "priority" and key in settings):
             values[key] = value
     return values
 
 
-def _paced_run(summaries: _Object, document: _Object, figure5_key: str) -> PacedRun:
-    return PacedRun(wakeup=_distribution(summaries, "wakeup_latency_ns", required=True),
-                    completion=_distribution(summaries, "completion_ns", required=False),
-                    deadline_misses=summaries.integer("deadline_misses", required=False),
-                    figure5=_figure5(document, figure5_key))
+def _paced_run(path: str, summaries: dict, document: dict, figure5_key: str, place: tuple) -> PacedRun:
+    completion = summaries.get("completion_ns")
+    return PacedRun(wakeup=_distribution(path, place + ("wakeup_latency_ns",), summaries["wakeup_latency_ns"]),
+                    completion=(_distribution(path, place + ("completion_ns",), completion)
+                                if completion is not None else None),
+                    deadline_misses=summaries.get("deadline_misses"),
+                    figure5=_figure5(path, document, figure5_key))
 
 
-def _read_delay(path: str, label: str, document: _Object) -> DelayFile:
-    pinned = _paced_run(document, document, "figure5")
-    # `lockstep delay --compare-pinning` writes both, without it neither: one alone is a damaged file.
-    unpinned = document.object("unpinned", required=False)
-    if (unpinned is None) != ("figure5_unpinned" not in document.value):
-        document.fail("unpinned", "and figure5_unpinned come together (`lockstep delay --compare-pinning` writes "
-                                  "both), but the file has one of them only")
+def _trial(raw: dict) -> PeriodTrial:
+    return PeriodTrial(period_ns=raw["period_ns"], periods=int(raw["periods"]), misses=int(raw["misses"]),
+                       miss_rate=raw["miss_rate"], upper_bound=raw.get("upper_bound"), holds=bool(raw.get("holds")))
+
+
+def _delay_extras(path: str, document: dict) -> DelayExtras:
+    histograms = None
+    raw = document.get("latency_histogram")
+    if raw is not None:
+        bucket, bound = raw["bucket_us"], raw["bound_us"]
+        columns = []
+        for index, column in enumerate(raw["columns"]):
+            counts = column["counts"]
+            if abs(len(counts) * bucket - bound) > bucket:
+                _fail(path, ("latency_histogram", "columns", index, "counts"),
+                      f"has {len(counts)} buckets of {bucket:g} us, not the {bound:g} us of bound_us")
+            columns.append(HistogramColumn(column["name"], column.get("cpu"), counts, column.get("overflow") or 0))
+        histograms = LatencyHistograms(bucket, bound, columns)
+    per_cpu, noisiest = [], None
+    raw = document.get("per_cpu")
+    if raw is not None:
+        for index, row in enumerate(raw["cpus"]):
+            per_cpu.append(CpuLatency(row["cpu"], _distribution(path, ("per_cpu", "cpus", index, "wakeup_latency_ns"),
+                                                                row["wakeup_latency_ns"]),
+                                      row.get("deadline_misses")))
+        worst = raw.get("noisiest")
+        if worst is not None:
+            noisiest = (worst["cpu"], worst.get("rule") or "")
+    search = None
+    raw = document.get("find_period")
+    if raw is not None:
+        for index, trial in enumerate(raw["trials"] + ([raw["confirm"]] if raw.get("confirm") else [])):
+            if trial["misses"] > trial["periods"]:
+                place = ("find_period", "trials", index) if index < len(raw["trials"]) else ("find_period", "confirm")
+                _fail(path, place + ("misses",), f"is {_shown(trial['misses'])}, more than its "
+                                                 f"{_shown(trial['periods'])} periods")
+        search = PeriodSearch(
+            miss_rate=raw["miss_rate"], confidence=raw.get("confidence"),
+            trials=[_trial(trial) for trial in raw["trials"]],
+            confirm=_trial(raw["confirm"]) if raw.get("confirm") is not None else None,
+            found_period_ns=raw.get("found_period_ns"), failed_period_ns=raw.get("failed_period_ns"),
+            budget_cut=bool(raw.get("budget_cut")), stopped_because=raw.get("stopped_because"), rule=raw.get("rule"))
+    idle = {}
+    raw = document.get("idle")
+    if raw is not None:
+        idle = {"requested_us": raw.get("requested_us"), "held": bool(raw.get("held")),
+                "in_force_us": raw.get("in_force_us")}
+        for key in ("path", "problem", "cpuidle_driver", "cpuidle_governor", "clocksource"):
+            if raw.get(key) is not None:
+                idle[key] = raw[key]
+    settings = {}
+    raw = document.get("settings", {})
+    if "per_cpu" in raw:
+        settings["per_cpu"] = raw["per_cpu"]
+    for key in ("dma_latency_us", "histogram_bound_us", "stop_above_ns"):
+        if raw.get(key) is not None:
+            settings[key] = raw[key]
+    if raw.get("view"):
+        settings["view"] = raw["view"]
+    return DelayExtras(histograms, per_cpu, noisiest, search, idle, settings)
+
+
+def _read_delay(path: str, label: str, document: dict) -> DelayFile:
+    pinned = _paced_run(path, document, document, "figure5", ())
     wakeup = pinned.wakeup
-    histogram = document.object("histogram")
-    counts = histogram.array("counts")
-    for index, count in enumerate(counts):
-        if isinstance(count, bool) or not isinstance(count, int) or not 0 <= count <= fields.LARGEST_AMOUNT:
-            histogram.fail("counts", f"holds {_shown(count)} at {index}: a count is a whole number of 0 or more")
-    below, above = (histogram.integer(key, required=False) or 0 for key in ("below", "above"))
+    histogram = document["histogram"]
+    counts = histogram["counts"]
+    below, above = (histogram.get(key) or 0 for key in ("below", "above"))
     if sum(counts) + below + above != wakeup.count:
-        histogram.fail("counts", f"add up to {sum(counts) + below + above} (with below and above), not to the "
-                                 f"{wakeup.count} wake-ups of wakeup_latency_ns: a damaged file")
-    bucket = histogram.number("bucket_ns", fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns")
-    first = histogram.number("first_ns", 0.0, fields.LONGEST_NS, required=False, unit=" ns") or 0.0
+        _fail(path, ("histogram", "counts"), f"add up to {sum(counts) + below + above} (with below and above), not "
+                                             f"to the {wakeup.count} wake-ups of wakeup_latency_ns: a damaged file")
+    bucket = histogram["bucket_ns"]
+    first = histogram.get("first_ns") or 0.0
     # `lockstep delay` sizes the histogram to its samples (platform/stats.hpp, histogram::covering): when it
     # holds every wake-up, the shortest falls in the first bucket and the longest in the last, so a bucket
     # too many or too few (an empty one included) is a damaged file, not another histogram.
@@ -1006,12 +987,14 @@ def _read_delay(path: str, label: str, document: _Object) -> DelayFile:
         shortest, longest = (math.floor(wakeup.statistics[name]) for name in ("min", "max"))
         if not (first <= shortest < first + bucket and first + bucket * (len(counts) - 1) <= longest
                 < first + bucket * len(counts)):
-            histogram.fail("counts", f"has {len(counts)} buckets of {bucket:g} ns from {first:g} ns, which do not "
-                                     f"span the wake-ups from {shortest} to {longest} ns bucket for bucket: a "
-                                     "damaged file")
+            _fail(path, ("histogram", "counts"), f"has {len(counts)} buckets of {bucket:g} ns from {first:g} ns, "
+                                                 f"which do not span the wake-ups from {shortest} to {longest} ns "
+                                                 "bucket for bucket: a damaged file")
+    unpinned = document.get("unpinned")
     return DelayFile(path=path, label=label, settings=_settings(document), pinned=pinned,
-                     unpinned=_paced_run(unpinned, document, "figure5_unpinned") if unpinned else None,
-                     histogram=Histogram(bucket, first, counts))
+                     unpinned=(_paced_run(path, unpinned, document, "figure5_unpinned", ("unpinned",))
+                               if unpinned is not None else None),
+                     histogram=Histogram(bucket, first, counts), extras=_delay_extras(path, document))
 
 
 # ---------------------------------------------------------------- verify trajectories
@@ -1074,17 +1057,15 @@ def load_any(path: str, label: str | None = None):
         if text.lstrip().startswith("t,"):
             return load_verify_csv(path, text, label)
         raise InputError(path, "neither JSON nor a `lockstep verify --csv` trajectory")
-    document = parse_json(path, text)
-    kind = document.get("kind") if isinstance(document, dict) else None
+    kind, document = read_document(path, text)
     if kind == "c2c":
-        return _read_c2c(path, label, _Object(path, document, ""))
+        return _read_c2c(path, label, document)
     if kind == "delay":
-        return _read_delay(path, label, _Object(path, document, ""))
-    if kind == "mpi":
+        return _read_delay(path, label, document)
+    if kind in ("run", "mpi"):
         return run_file_from_document(path, label, document)
-    if kind is not None:
-        raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")
-    return run_file_from_document(path, label, document)
+    raise InputError(path, f"is `lockstep {kind}` output, which the report does not show (it takes run, mpi, c2c "
+                           "and delay results, and verify --csv trajectories)")
 
 
 def unique_labels(paths: list[str]) -> list[str]:

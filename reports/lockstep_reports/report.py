@@ -23,11 +23,10 @@ import markupsafe
 
 from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, rank_tables, run_median
-from .fields import (CPU_LIMIT, DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LARGEST_AMOUNT, LONGEST_NS,
-                     PINGPONG_P50_COUNTER, SERIAL_CONTEXT, SHORTEST_NS, UNAVAILABLE)
+from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER, SERIAL_CONTEXT,
+                     UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
-from .inputs import C2cFile, DelayFile, RunFile, VerifyFile, _Object, load_any, parse_json, read_text, unique_labels
-from .inputs import _distribution as inputs_distribution
+from .inputs import C2cFile, DelayExtras, DelayFile, RunFile, VerifyFile, load_any, unique_labels
 from .names import parse_name
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
@@ -512,156 +511,9 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
         rows.append(["not in the file", ", ".join(f"{word}: {UNAVAILABLE}" for word in missing)])
     return rows
 
-# ---------------------------------------------------------------- delay keys that inputs.py does not read yet
-# `lockstep delay --out` writes latency_histogram, per_cpu, find_period and idle (bench/cli/delay.cpp);
-# inputs.DelayFile does not carry them yet. Until it does, the report reads them here from the same file,
-# with inputs.py's own checks (a wrong value is InputError: one line, exit 2), and only what it draws.
-# The place for this is inputs.read_delay (the report's final note lists what it needs).
-
-@dataclass(frozen=True)
-class HistogramColumn:
-    name: str
-    cpu: int | None
-    counts: list[int]  # counts[i]: wake-ups in [i, i + 1) buckets of bucket_us
-    overflow: int  # wake-ups at bound_us or later
-
-
-@dataclass(frozen=True)
-class LatencyHistograms:
-    bucket_us: float
-    bound_us: float
-    columns: list[HistogramColumn]
-
-
-@dataclass(frozen=True)
-class CpuLatency:
-    cpu: int | None
-    wakeup: object  # inputs.Distribution
-    deadline_misses: int | None
-
-
-@dataclass(frozen=True)
-class PeriodTrial:
-    period_ns: float
-    periods: int
-    misses: int
-    miss_rate: float
-    upper_bound: float | None
-    holds: bool
-
-
-@dataclass(frozen=True)
-class PeriodSearch:
-    miss_rate: float
-    confidence: float | None
-    trials: list[PeriodTrial]
-    confirm: PeriodTrial | None
-    found_period_ns: float | None
-    failed_period_ns: float | None
-    budget_cut: bool
-    stopped_because: str | None
-    rule: str | None
-
-
-@dataclass(frozen=True)
-class DelayExtras:
-    histograms: LatencyHistograms | None = None
-    per_cpu: list[CpuLatency] = field(default_factory=list)
-    noisiest: tuple[int, str] | None = None  # (cpu, the rule that named it)
-    search: PeriodSearch | None = None
-    idle: dict = field(default_factory=dict)
-    settings: dict = field(default_factory=dict)  # the settings fields.DELAY_SETTINGS does not name
-
-
-def _counts(owner: _Object, key: str) -> list[int]:
-    counts = owner.array(key, nonempty=False)
-    for index, count in enumerate(counts):
-        if isinstance(count, bool) or not isinstance(count, int) or not 0 <= count <= LARGEST_AMOUNT:
-            owner.fail(key, f"holds {count!r:.40} at {index}: a count is a whole number of 0 or more")
-    return counts
-
-
-def _trial(raw, where: str, path: str) -> PeriodTrial:
-    trial = _Object(path, raw, where)
-    periods = trial.integer("periods")
-    misses = trial.integer("misses", high=periods)
-    return PeriodTrial(period_ns=trial.number("period_ns", SHORTEST_NS, LONGEST_NS, unit=" ns"), periods=periods,
-                       misses=misses, miss_rate=trial.number("miss_rate", 0.0, 1.0),
-                       upper_bound=trial.number("upper_bound", 0.0, 1.0, required=False, nullable=True),
-                       holds=trial.flag("holds"))
-
-
-def read_delay_extras(item: DelayFile) -> DelayExtras:
-    document = _Object(item.path, parse_json(item.path, read_text(item.path)), "")
-    histograms = None
-    raw = document.object("latency_histogram", required=False)
-    if raw is not None:
-        bucket = raw.number("bucket_us", 1e-3, 1e9, unit=" us")
-        bound = raw.number("bound_us", 1e-3, 1e9, unit=" us")
-        columns = []
-        for index, value in enumerate(raw.array("columns", nonempty=False)):
-            column = _Object(item.path, value, f"latency_histogram column {index}")
-            counts = _counts(column, "counts")
-            if abs(len(counts) * bucket - bound) > bucket:
-                column.fail("counts", f"has {len(counts)} buckets of {bucket:g} us, not the {bound:g} us of bound_us")
-            columns.append(HistogramColumn(column.text("name"), column.integer("cpu", required=False, nullable=True,
-                                                                              high=CPU_LIMIT - 1),
-                                           counts, column.integer("overflow", required=False) or 0))
-        histograms = LatencyHistograms(bucket, bound, columns)
-    per_cpu, noisiest = [], None
-    raw = document.object("per_cpu", required=False, nullable=True)
-    if raw is not None:
-        for index, value in enumerate(raw.array("cpus", nonempty=False)):
-            row = _Object(item.path, value, f"per_cpu row {index}")
-            per_cpu.append(CpuLatency(row.integer("cpu", nullable=True, high=CPU_LIMIT - 1),
-                                      inputs_distribution(row, "wakeup_latency_ns", required=True),
-                                      row.integer("deadline_misses", required=False)))
-        worst = raw.object("noisiest", required=False, nullable=True)
-        if worst is not None:
-            noisiest = (worst.integer("cpu", high=CPU_LIMIT - 1), worst.text("rule", required=False) or "")
-    search = None
-    raw = document.object("find_period", required=False, nullable=True)
-    if raw is not None:
-        confirm = raw.value.get("confirm")
-        search = PeriodSearch(
-            miss_rate=raw.number("miss_rate", 0.0, 1.0), confidence=raw.number("confidence", 0.0, 1.0, required=False),
-            trials=[_trial(value, f"find_period trial {index}", item.path)
-                    for index, value in enumerate(raw.array("trials", nonempty=False))],
-            confirm=_trial(confirm, "find_period confirm", item.path) if confirm is not None else None,
-            found_period_ns=raw.number("found_period_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True),
-            failed_period_ns=raw.number("failed_period_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True),
-            budget_cut=raw.flag("budget_cut"), stopped_because=raw.text("stopped_because", required=False),
-            rule=raw.text("rule", required=False))
-    idle = {}
-    raw = document.object("idle", required=False, nullable=True)
-    if raw is not None:
-        idle = {"requested_us": raw.integer("requested_us", required=False, nullable=True, high=10 ** 9),
-                "held": raw.flag("held"),
-                "in_force_us": raw.integer("in_force_us", required=False, nullable=True, high=10 ** 9)}
-        for key in ("path", "problem", "cpuidle_driver", "cpuidle_governor", "clocksource"):
-            value = raw._get(key, required=False, nullable=True)
-            if value is not None:
-                idle[key] = raw.text(key)
-    settings = {}
-    raw = document.object("settings", required=False)
-    if raw is not None:
-        if "per_cpu" in raw.value:
-            settings["per_cpu"] = raw.flag("per_cpu")
-        for key in ("dma_latency_us", "histogram_bound_us"):
-            value = raw.integer(key, required=False, nullable=True, high=10 ** 9)
-            if value is not None:
-                settings[key] = value
-        stop = raw.number("stop_above_ns", SHORTEST_NS, LONGEST_NS, required=False, nullable=True)
-        if stop is not None:
-            settings["stop_above_ns"] = stop
-        view = raw.text("view", required=False)
-        if view:
-            settings["view"] = view
-    return DelayExtras(histograms, per_cpu, noisiest, search, idle, settings)
-
 
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
-    extras = read_delay_extras(item)
+    extras = item.extras
     runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
     summary_rows = []
     for which, run in runs:

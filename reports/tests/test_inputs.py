@@ -137,7 +137,7 @@ class UnusableFiles(unittest.TestCase):
             path = os.path.join(directory, "c2c.json")
             with open(path, "w") as file:
                 file.write('{"kind": "c2c", "pairs": []}')
-            self.assert_one_line_error(path, "lockstep c2c", "context")
+            self.assert_one_line_error(path, "context: is missing")
 
     def test_missing_file(self):
         self.assert_one_line_error(os.path.join(tempfile.gettempdir(), "lockstep-no-such-file.json"), "cannot read")
@@ -238,28 +238,28 @@ class PaceTraceAndPairs(unittest.TestCase):
             return [e for e in document["benchmarks"] if e["run_type"] == "iteration"][index]
 
         cases = [
-            (lambda d: d.__setitem__("lockstep_pace", []), "lockstep_pace is a list"),
-            (lambda d: d["lockstep_pace"]["modes"].reverse(), "mode 0: mode is 1"),
+            (lambda d: d.__setitem__("lockstep_pace", []), "lockstep_pace: expected an object, not a list"),
+            (lambda d: d["lockstep_pace"]["modes"].reverse(), "lockstep_pace.modes[0].mode: is 1"),
             (lambda d: d["lockstep_pace"]["modes"][1].__setitem__("c2c_ns", 10.0), "sorted fastest first"),
-            (lambda d: d["lockstep_pace"]["modes"][0].__setitem__("share", 1.5), "share is 1.5"),
+            (lambda d: d["lockstep_pace"]["modes"][0].__setitem__("share", 1.5), "modes[0].share: is 1.5"),
             (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("t_s", 0.0), "in time order"),
-            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("mode", 2), "reading 3: mode is 2"),
-            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("c2c_ns", -4.0), "c2c_ns is -4"),
-            (lambda d: d["lockstep_pace"].__setitem__("changes", 400), "changes is 400"),
+            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("mode", 2), "readings[3].mode: is 2"),
+            (lambda d: d["lockstep_pace"]["readings"][3].__setitem__("c2c_ns", -4.0), "readings[3].c2c_ns: is -4"),
+            (lambda d: d["lockstep_pace"].__setitem__("changes", 400), "lockstep_pace.changes: is 400"),
             (lambda d: d["lockstep_pace"].__setitem__("cpus", [1, 1]), "cpus"),
-            (lambda d: d["lockstep_pace"].pop("summary"), "summary is missing"),
+            (lambda d: d["lockstep_pace"].pop("summary"), "lockstep_pace.summary: is missing"),
             (lambda d: iteration(d).__setitem__("pace_mode", 2), "pace_mode is 2"),
             (lambda d: iteration(d).__setitem__("pace_mode", 0.5), "pace_mode is 0.5"),
-            (lambda d: iteration(d).__setitem__("pace_mode", "fast"), "pace_mode is text"),
+            (lambda d: iteration(d).__setitem__("pace_mode", "fast"), "pace_mode: expected a number, not text"),
             (lambda d: iteration(d).pop("pace_serial_ns"), "pace_serial_ns"),
             (lambda d: d.pop("lockstep_pace"), "no lockstep_pace"),
-            (lambda d: d.__setitem__("lockstep_pairs", {}), "lockstep_pairs is an object"),
-            (lambda d: d["lockstep_pairs"][0].__setitem__("comparison", "speed"), "comparison is 'speed'"),
-            (lambda d: d["lockstep_pairs"][0]["ratios"].__setitem__(2, -1.3), "ratios[2] is -1.3"),
+            (lambda d: d.__setitem__("lockstep_pairs", {}), "lockstep_pairs: expected a list, not an object"),
+            (lambda d: d["lockstep_pairs"][0].__setitem__("comparison", "speed"), "lockstep_pairs[0].comparison: is 'speed'"),
+            (lambda d: d["lockstep_pairs"][0]["ratios"].__setitem__(2, -1.3), "lockstep_pairs[0].ratios[2]: is -1.3"),
             (lambda d: d["lockstep_pairs"][0]["modes"].pop(), "one mode per pair"),
-            (lambda d: d["lockstep_pairs"][0]["modes"].__setitem__(0, 7), "holds 7 at 0"),
+            (lambda d: d["lockstep_pairs"][0]["modes"].__setitem__(0, 7), "lockstep_pairs[0].modes[0]: is 7"),
             (lambda d: d["lockstep_pairs"][0].__setitem__("ci_low", 9.0), "above ci_high"),
-            (lambda d: d["lockstep_pairs"][0].__setitem__("verdict", "faster"), "verdict is 'faster'"),
+            (lambda d: d["lockstep_pairs"][0].__setitem__("verdict", "faster"), "lockstep_pairs[0].verdict: is 'faster'"),
             (lambda d: d["lockstep_pairs"].append(d["lockstep_pairs"][0]), "repeats entry 0"),
         ]
         for change, words in cases:
