@@ -65,7 +65,7 @@ endif()
 #                 halves pan's time but costs gcc a second more than -O0,
 #                 which is more than the smaller searches take in all;
 #  MEMLIM=1024    pan stops at 1 GB instead of swamping a machine shared by
-#                 several engineers (the largest model here needs ~0.2 GB);
+#                 several engineers (the largest model here needs ~0.3 GB);
 #  VECTORSZ=512   the largest state vector here is under 100 bytes;
 #  SAFETY/NOCLAIM a safety search without the LTL claim (CHECK=safety);
 #  REACH          needed by -i (shortest trail), which SHORTEST asks for.
