@@ -331,8 +331,10 @@ int execute(const run_options& options) {
   benchmark::AddCustomContext("clock_read_ns", fmt::format("{:.1f}", book.clock_read_ns));
   benchmark::AddCustomContext(
       "lockstep_timing",
-      "manual time per batch of steps (episodes) on a persistent pinned team; team start-up outside the timed "
-      "region; medians over repetitions");
+      "manual time per step (episode): one iteration is a batch of steps (episodes) on a persistent pinned "
+      "team, timed as a whole and reported divided by its steps (steps_per_batch), so real_time is ns_per_step "
+      "(ns_per_episode) and cpu_time is participant 0's thread CPU time per step (episode); team start-up "
+      "outside the timed region; medians over repetitions");
 
   std::vector<std::string> names = bench::register_calibration_benchmarks(selection, harness);
   for (auto& name : bench::register_overhead_pair(selection, harness)) names.push_back(std::move(name));

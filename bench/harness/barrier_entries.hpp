@@ -5,8 +5,13 @@
 // One unit is one episode: every participant calls arrive_and_wait once
 // (channels run as barriers through channel_barrier: every participant
 // publishes and receives from all others). Counters, per episode unless
-// named otherwise:
+// named otherwise (Google Benchmark's real_time is ns_per_episode, its
+// cpu_time cpu_ns_per_episode: team_driver.hpp, before measure_entry):
 //   ns_per_episode                 time of one episode (batch time / episodes)
+//   cpu_ns_per_episode             participant 0's thread CPU time over the
+//                                  timed batches / their episodes
+//   episodes_per_batch             the episodes of one batch (one Google
+//                                  Benchmark iteration), from the probe
 //   futex_waits_per_episode, futex_wakes_per_episode, yields_per_episode,
 //   spins_exhausted_per_episode    the primitive's own counters, summed over
 //                                  the team; absent for the primitives

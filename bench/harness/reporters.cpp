@@ -74,6 +74,18 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
     run.run_name.iterations.clear();
     run.run_name.repetitions.clear();
     run.run_name.time_type.clear();
+    // The CPU time per unit in place of the benchmark thread's own (which
+    // only replayed the batch times). JSONReporter writes a time as
+    // cpu_accumulated_time * multiplier / iterations, and a percentage
+    // aggregate (cv) as it is.
+    for (const char* counter_name : {"cpu_ns_per_step", "cpu_ns_per_episode"}) {
+      const auto cpu = run.counters.find(counter_name);
+      if (cpu == run.counters.end() || !std::isfinite(cpu->second.value)) continue;
+      const bool percentage = run.run_type == Run::RT_Aggregate && run.aggregate_unit == benchmark::kPercentage;
+      run.cpu_accumulated_time =
+          percentage ? cpu->second.value : cpu->second.value * 1e-9 * static_cast<double>(run.iterations);
+      break;
+    }
     // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
     // Google Benchmark would write it as NaN, which is not JSON. Omitted.
     for (auto counter = run.counters.begin(); counter != run.counters.end();) {

@@ -42,6 +42,11 @@ class progress_reporter : public benchmark::BenchmarkReporter {
 // segments (the timing is stated once, in the context's lockstep_timing).
 // Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
 // Google Benchmark would write NaN, which no JSON parser accepts.
+// A row with a cpu_ns_per_step or cpu_ns_per_episode counter (the team entries
+// and rk4/serial: team_driver.hpp, before measure_entry) gets that counter as
+// its cpu_time: a repetition's own value, an aggregate row the counter's
+// aggregate (Google Benchmark computes both with the same statistic, so the
+// cpu_time aggregates are those of the repetitions' cpu_time).
 class result_json_reporter : public benchmark::JSONReporter {
  public:
   void ReportRuns(const std::vector<Run>& runs) override;

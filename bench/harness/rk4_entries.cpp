@@ -78,7 +78,10 @@ decltype(auto) with_model(const kernels::model_choice& choice, Register&& regist
 }
 
 // rk4/serial (rk4/model:chainS/serial): batches of steps on the benchmark
-// thread, timed by hand so that the batch loop matches the parallel entries'.
+// thread, timed by hand so that the batch loop matches the parallel entries',
+// and reported as they are (team_driver.hpp, before measure_entry): an
+// iteration's manual time is its batch's time per step, cpu_ns_per_step the
+// benchmark thread's CPU time per step over the timed batches.
 template <class Model>
 void serial_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
   const Model model = model_of<Model>(spec);
@@ -96,17 +99,22 @@ void serial_entry(benchmark::State& state, harness_state& harness, const entry_s
   rk4.run(steps);  // warm-up batch, as the parallel entries have
   std::int64_t total_ns = 0;
   std::uint64_t batches = 0;
+  const std::int64_t cpu_start = thread_cpu_ns();
   for (auto _ : state) {
     const std::int64_t start = platform::now_ns();
     rk4.run(steps);
     const std::int64_t batch_ns = platform::now_ns() - start;
-    state.SetIterationTime(static_cast<double>(batch_ns) * 1e-9);
+    state.SetIterationTime(static_cast<double>(batch_ns) / static_cast<double>(steps) * 1e-9);
     total_ns += batch_ns;
     ++batches;
   }
+  const std::int64_t cpu_end = thread_cpu_ns();
   benchmark::DoNotOptimize(rk4.state().data());
-  state.counters["ns_per_step"] =
-      static_cast<double>(total_ns) / (static_cast<double>(batches) * static_cast<double>(steps));
+  const double steps_timed = static_cast<double>(batches) * static_cast<double>(steps);
+  state.counters["ns_per_step"] = static_cast<double>(total_ns) / steps_timed;
+  state.counters["steps_per_batch"] = static_cast<double>(steps);
+  if (cpu_start >= 0 && cpu_end >= cpu_start)
+    state.counters["cpu_ns_per_step"] = static_cast<double>(cpu_end - cpu_start) / steps_timed;
 }
 
 // Two pinned participants on two CPUs (the vs_c2c goal's case): the one-way

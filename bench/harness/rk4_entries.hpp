@@ -8,7 +8,9 @@
 //                               The median over repetitions is the run's
 //                               c2c_one_way_ns, which vs_c2c divides by.
 //   rk4/serial                  the serial staged RK4 (kernels/rk4.hpp) on the
-//                               benchmark thread: ns_per_step. Its median is
+//                               benchmark thread: ns_per_step (real_time),
+//                               cpu_ns_per_step (cpu_time), steps_per_batch
+//                               as the team entries have them. Its median is
 //                               the run's serial_step_ns (vs_serial).
 //   rk4/sync:S/layout:L/pin:P/threads:T
 //                               the composed step (kernels/parallel_step.hpp)
@@ -45,8 +47,14 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
 // rk4/sync:S/layout:L/pin:P/threads:T for every selected combination that
 // applies; the others go into the run book's not_applicable list with the
 // reason (kernels/parallel_step.hpp: applicable, not_applicable_reason).
+// Google Benchmark's real_time and cpu_time are per step (team_driver.hpp,
+// before measure_entry): real_time = ns_per_step, cpu_time = cpu_ns_per_step.
 // Counters, per step unless named otherwise (summed over the team):
 //   ns_per_step          batch time / steps
+//   cpu_ns_per_step      participant 0's thread CPU time over the timed
+//                        batches / their steps (not summed over the team)
+//   steps_per_batch      the steps of one batch (one Google Benchmark
+//                        iteration), from the entry's probe
 //   sync_ns_per_stage    mean time a participant spent in one stage sync
 //                        (the step's sampled instrumentation: the syncs of one
 //                        step in kSyncTimingSampleSteps; absent with accounting

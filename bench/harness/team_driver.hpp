@@ -5,6 +5,7 @@
 // and the RK4 entries share this; they differ only in the work a participant
 // does per unit (an episode of the primitive, or one RK4 step).
 #include <sched.h>
+#include <time.h>
 
 #include <benchmark/benchmark.h>
 
@@ -27,12 +28,24 @@
 
 namespace lockstep::bench {
 
+// The calling thread's CPU time (user and system), ns. CLOCK_THREAD_CPUTIME_ID
+// is a system call, not a vDSO read: a participant takes two per call.
+inline std::int64_t thread_cpu_ns() noexcept {
+  timespec now{};
+  if (::clock_gettime(CLOCK_THREAD_CPUTIME_ID, &now) != 0) return -1;
+  return static_cast<std::int64_t>(now.tv_sec) * 1'000'000'000 + now.tv_nsec;
+}
+
 // What one call measured, summed over the team.
 struct call_result {
   batch_record batches;
   sync::sync_counters sync_totals;                  // the primitive's counters, deltas summed
   std::optional<platform::thread_counters> accounting;  // deltas summed; empty when off
   std::string failure;                              // a participant could not be pinned
+  // Participant 0's thread CPU time over the timed batches: from the start of
+  // its first timed batch to its return from the barrier that ends the last
+  // one. -1 when no timed batch ran or the clock could not be read.
+  std::int64_t lead_cpu_ns = -1;
 };
 
 // Per-participant slots, written only by the participant's own thread and
@@ -42,6 +55,8 @@ struct alignas(platform::kCacheLine) participant_slot {
   platform::thread_counters accounting_before{};
   platform::thread_counters accounting_after{};
   sync::sync_counters counters_before{};
+  std::int64_t timed_cpu_start_ns = -1;  // thread_cpu_ns() as its first timed batch starts
+  std::int64_t timed_cpu_end_ns = -1;    // and after the last batch's barrier
   std::string failure;
 };
 
@@ -70,8 +85,12 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
     }
     if (accounting) slot.accounting_before = platform::snapshot_current_thread();
     slot.counters_before = slot.self.counters;
+    slot.timed_cpu_start_ns = -1;
     std::uint64_t done = 0;
+    unsigned batches_started = 0;
     gate.run_batches([&](std::uint64_t units) {
+      // The first batch is the warm-up (batch_clock): the CPU clock starts with the second.
+      if (++batches_started == 2) slot.timed_cpu_start_ns = thread_cpu_ns();
       if (plan.kind != platform::placement::migrate || plan.migrate_every_steps == 0) {
         work(slot.self, units);
         done += units;
@@ -92,6 +111,7 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
         }
       }
     });
+    slot.timed_cpu_end_ns = thread_cpu_ns();
     if (accounting) slot.accounting_after = platform::snapshot_current_thread();
   });
 
@@ -109,6 +129,10 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
     if (accounting) *result.accounting += slot.accounting_after - slot.accounting_before;
     if (result.failure.empty() && !slot.failure.empty()) result.failure = slot.failure;
   }
+  const participant_slot& lead = slots.front();
+  if (!result.batches.batch_ns.empty() && lead.timed_cpu_start_ns >= 0 &&
+      lead.timed_cpu_end_ns >= lead.timed_cpu_start_ns)
+    result.lead_cpu_ns = lead.timed_cpu_end_ns - lead.timed_cpu_start_ns;
   return result;
 }
 
@@ -213,15 +237,37 @@ std::string stall_reason(const call_result& result, const char* unit, bool pure_
 // re-size).
 double median_unit_ns(const batch_record& record);
 
+// What a team entry (rk4/, overhead/, barrier/) gives Google Benchmark, so
+// that its JSON reads as any Google Benchmark file does and Google Benchmark's
+// own tools/compare.py compares what `lockstep compare` compares:
+// - one iteration is one timed batch of units (RK4 steps, or episodes of a
+//   bare barrier), and its manual time (SetIterationTime) is the batch's time
+//   divided by its units; so a repetition's real_time, Google Benchmark's
+//   sum of iteration times over the iterations, is exactly that repetition's
+//   time per unit, the ns_per_step (ns_per_episode) counter;
+// - Google Benchmark's median aggregate of real_time is then the median of
+//   the repetitions' ns_per_<unit>, the figure `lockstep compare` builds each
+//   side of its ratio from (reports/lockstep_reports/compare.py); so the two
+//   tools' ratios of the medians agree by construction;
+// - cpu_time is participant 0's thread CPU time per unit over the timed
+//   batches (call_result::lead_cpu_ns), written as the counter
+//   cpu_ns_per_<unit> and put in place of Google Benchmark's own cpu_time by
+//   result_json_reporter (reporters.hpp): Google Benchmark's thread only
+//   replays the batch times here, so its own CPU time measures nothing;
+// - the batch size stays a counter: <unit>s_per_batch.
+// The result file's context says so (lockstep_timing) from lockstep_schema 2
+// on; in files of schema 1, real_time and cpu_time were per batch.
+//
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
 // first call (8 batches of one unit); run the timed call, calling warmed_up()
 // between its warm-up batch and its first timed batch (the team waiting: a
 // baseline for what the timed batches accumulate); feed Google Benchmark the
-// batch times. Returns the call's result, or nothing when the entry was
-// skipped (SkipWithError, with the reason). `primitive`: the registry's facts
-// about the entry's primitive (sync/registry.hpp), for the stall reasons and
-// the per-primitive stall count; nullptr for an entry of no primitive.
+// timed batches as its iterations (per unit, as above). Returns the call's
+// result, or nothing when the entry was skipped (SkipWithError, with the
+// reason). `primitive`: the registry's facts about the entry's primitive
+// (sync/registry.hpp), for the stall reasons and the per-primitive stall
+// count; nullptr for an entry of no primitive.
 template <class Team, class Work>
 std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
                                          const sync::primitive_info* primitive, const platform::placement_plan& plan,
@@ -254,9 +300,10 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
       std::sort(sorted.begin(), sorted.end());
       filler = sorted[sorted.size() / 2];
     }
+    const double units = static_cast<double>(std::max<std::uint64_t>(result.batches.units_per_batch, 1));
     std::size_t batch = 0;
     for (auto _ : state) {
-      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) * 1e-9);
+      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) / units * 1e-9);
       ++batch;
     }
     const std::string message = reason + " (this repetition stopped after " + std::to_string(times.size()) + " of " +
@@ -368,11 +415,18 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   set_pace_counters(state, harness, pace_before, pace_after);
   if (harness.short_batches.count(name) > 0) state.counters["short_batches"] = 1.0;
 
+  // Per unit (see above): a batch's time over its units.
+  const double units = static_cast<double>(result.batches.units_per_batch);
   std::size_t batch = 0;
   for (auto _ : state) {
-    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) * 1e-9);
+    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) / units * 1e-9);
     ++batch;
   }
+  const std::string unit_name(unit);
+  state.counters[unit_name + "s_per_batch"] = units;
+  if (result.lead_cpu_ns >= 0)
+    state.counters["cpu_ns_per_" + unit_name] =
+        static_cast<double>(result.lead_cpu_ns) / (static_cast<double>(result.batches.batch_ns.size()) * units);
   return result;
 }
 

@@ -77,7 +77,7 @@ TEST(C2cCommand, WritesTheAgreedJson) {
   EXPECT_NE(result.out.find("median one-way latency"), std::string::npos);
   const auto document = read_json(path);
   EXPECT_EQ(document["kind"], "c2c");
-  EXPECT_EQ(document["lockstep_schema"], 1);
+  EXPECT_EQ(document["lockstep_schema"], 2);
   EXPECT_EQ(document["sampled"], false);
   EXPECT_TRUE(document["context"]["topology"].is_string());
   ASSERT_EQ(document["pairs"].size(), 2u);  // one pair, two methods
@@ -217,7 +217,7 @@ TEST(DelayCommand, BadInputExitsTwoWithOneLine) {
 
 void expect_delay_json(const nlohmann::json& document, int periods, int threads) {
   EXPECT_EQ(document["kind"], "delay");
-  EXPECT_EQ(document["lockstep_schema"], 1);
+  EXPECT_EQ(document["lockstep_schema"], 2);
   EXPECT_TRUE(document["context"]["kernel"].is_string());
   const auto& settings = document["settings"];
   EXPECT_EQ(settings["period_ns"], 1'000'000);

@@ -128,7 +128,7 @@ TEST(VerifyCli, JsonHoldsTheFigures) {
   ASSERT_EQ(result.exit_status, 0) << result.out << result.err;
   const nlohmann::json json = nlohmann::json::parse(slurp(path));
   EXPECT_EQ(json.at("kind"), "verify");
-  EXPECT_EQ(json.at("lockstep_schema"), 1);
+  EXPECT_EQ(json.at("lockstep_schema"), 2);
   EXPECT_TRUE(json.at("passed").get<bool>());
   EXPECT_TRUE(json.at("parameters").at("papers_case").get<bool>());
   EXPECT_DOUBLE_EQ(json.at("parameters").at("m1").get<double>(), 0.02);
