@@ -16,8 +16,11 @@
 namespace lockstep::distributed {
 namespace {
 
+// A word that sh reads as itself is shown bare; anything else in single
+// quotes. '=' is not in the bare set: a leading NAME=value word is an
+// assignment to sh, not the command (--mpirun A=b/mpirun).
 std::string quoted(const std::string& word) {
-  if (!word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_=./,:@+") ==
+  if (!word.empty() && word.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789-_./,:@+") ==
                            std::string::npos)
     return word;
   std::string result = "'";

@@ -2,7 +2,11 @@
 // and the hostfile reader: pure functions, no MPI job started.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <algorithm>
+#include <array>
+#include <cstdio>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -89,6 +93,30 @@ TEST(MpiLauncher, ShownCommandQuotesWhatTheShellWouldSplit) {
   launch_request request = open_mpi_request();
   request.arguments = {"mpi", "--out", "my results.json"};
   EXPECT_NE(plan_launch(request).shown().find("'my results.json'"), std::string::npos);
+}
+
+// A first word that looks like an assignment (NAME=...) would be read by sh
+// as one, and the next word run as the command: the shown command quotes it,
+// and sh runs it as the program it names.
+TEST(MpiLauncher, ShownCommandQuotesAWordShWouldTakeForAnAssignment) {
+  lockstep::testing::scratch_directory scratch("lockstep-mpi-launcher");
+  const std::string directory = scratch.file("A=b");
+  ASSERT_EQ(::mkdir(directory.c_str(), 0755), 0);
+  const std::string program = directory + "/mpirun";
+  std::ofstream(program) << "#!/bin/sh\necho \"ran with $#\"\n";
+  ASSERT_EQ(::chmod(program.c_str(), 0755), 0);
+  launch_request request = open_mpi_request();
+  request.mpirun = "A=b/mpirun";  // relative, as a user may name it with --mpirun
+  const std::string shown = plan_launch(request).shown();
+  EXPECT_EQ(shown.rfind("'A=b/mpirun' ", 0), 0U) << shown;
+  const std::string command = "cd '" + scratch.path().string() + "' && " + shown + " 2>&1";
+  FILE* pipe = ::popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::array<char, 256> line{};
+  std::string output;
+  while (std::fgets(line.data(), static_cast<int>(line.size()), pipe) != nullptr) output += line.data();
+  ::pclose(pipe);
+  EXPECT_EQ(output.rfind("ran with ", 0), 0U) << "sh did not run A=b/mpirun: " << output;
 }
 
 TEST(MpiLauncher, HostfileNamesItsHosts) {
