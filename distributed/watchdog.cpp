@@ -1,7 +1,7 @@
 #include "distributed/watchdog.hpp"
 
 #include <signal.h>
-#include <sys/time.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -23,10 +23,12 @@ std::atomic<bool> armed{false};
 std::array<char, 512> prefix{};  // "lockstep mpi: rank R on HOST made no progress for 10 s (in "
 std::size_t prefix_length = 0;
 constexpr unsigned kChecksPerLimit = 16;
-// Touched only by the handler (SIGALRM is not re-entered: it is blocked while its handler runs).
+// Touched only by the handler, which runs on one thread only (the timer's
+// signal is aimed at the thread that armed it) and is not re-entered
+// (SIGALRM is blocked while its handler runs).
 std::uint64_t last_seen = 0;
 unsigned unchanged_checks = 0;
-struct sigaction previous_action {};
+timer_t timer{};
 
 void write_all(const char* text, std::size_t length) noexcept {
   while (length > 0) {
@@ -38,9 +40,9 @@ void write_all(const char* text, std::size_t length) noexcept {
 }
 
 // The loads are relaxed: they pair with the relaxed stores of beat() and
-// phase(), and the handler (on whichever thread of the process the signal
-// lands, Open MPI's own included) needs only to see the count change; the
-// phase is a string literal, which needs no publishing.
+// phase(), and the handler (on the arming thread, where beat() is called)
+// needs only to see the count change; the phase is a string literal, which
+// needs no publishing.
 void on_alarm(int /*signal*/) noexcept {
   const std::uint64_t now = progress.load(std::memory_order_relaxed);
   if (now != last_seen) {
@@ -67,6 +69,14 @@ void on_alarm(int /*signal*/) noexcept {
   ::_exit(kExitStalled);
 }
 
+void disarm_signal() noexcept {
+  struct sigaction ignore {};
+  ignore.sa_handler = SIG_IGN;
+  sigemptyset(&ignore.sa_mask);
+  sigaction(SIGALRM, &ignore, nullptr);
+  armed.store(false);
+}
+
 }  // namespace
 
 watchdog::watchdog(std::chrono::nanoseconds limit, const std::string& who) {
@@ -82,20 +92,43 @@ watchdog::watchdog(std::chrono::nanoseconds limit, const std::string& who) {
   action.sa_handler = on_alarm;
   sigemptyset(&action.sa_mask);
   action.sa_flags = SA_RESTART;  // interrupted system calls resume; MPI's polls see EINTR and poll again
-  if (sigaction(SIGALRM, &action, &previous_action) != 0) throw std::runtime_error("cannot install SIGALRM");
-  const auto interval_us = std::chrono::duration_cast<std::chrono::microseconds>(limit / kChecksPerLimit).count();
-  itimerval timer{};
-  timer.it_interval.tv_sec = static_cast<time_t>(interval_us / 1'000'000);
-  timer.it_interval.tv_usec = static_cast<suseconds_t>(interval_us % 1'000'000);
-  timer.it_value = timer.it_interval;
-  if (setitimer(ITIMER_REAL, &timer, nullptr) != 0) throw std::runtime_error("cannot start the watchdog's timer");
+  if (sigaction(SIGALRM, &action, nullptr) != 0) {
+    armed.store(false);
+    throw std::runtime_error("cannot install SIGALRM");
+  }
+  // The timer's signal goes to this thread only (SIGEV_THREAD_ID), never to
+  // another thread of the process (Open MPI's progress threads take
+  // process-directed signals as readily as the main thread): the handler
+  // never runs on two threads at once, and a signal pending when the
+  // destructor runs is this thread's, which the destructor discards.
+  sigevent event{};
+  event.sigev_notify = SIGEV_THREAD_ID;
+  event.sigev_signo = SIGALRM;
+  event._sigev_un._tid = gettid();  // sigev_notify_thread_id in timer_create(2); glibc 2.36 names it only so
+  if (timer_create(CLOCK_MONOTONIC, &event, &timer) != 0) {
+    disarm_signal();
+    throw std::runtime_error("cannot create the watchdog's timer");
+  }
+  const auto interval_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(limit / kChecksPerLimit).count();
+  itimerspec period{};
+  period.it_interval.tv_sec = static_cast<time_t>(interval_ns / 1'000'000'000);
+  period.it_interval.tv_nsec = static_cast<long>(interval_ns % 1'000'000'000);
+  period.it_value = period.it_interval;
+  if (timer_settime(timer, 0, &period, nullptr) != 0) {
+    timer_delete(timer);
+    disarm_signal();
+    throw std::runtime_error("cannot start the watchdog's timer");
+  }
 }
 
+// The timer is deleted first (no signal is generated after timer_delete
+// returns), then SIGALRM is ignored, which also discards one already pending
+// for this thread. It stays ignored: restoring the default action instead
+// would let a signal generated just before the timer went take it ("Alarm
+// clock": the end of a rank that had succeeded).
 watchdog::~watchdog() {
-  itimerval off{};
-  setitimer(ITIMER_REAL, &off, nullptr);
-  sigaction(SIGALRM, &previous_action, nullptr);
-  armed.store(false);
+  timer_delete(timer);
+  disarm_signal();
 }
 
 // relaxed, both: read by on_alarm's relaxed loads (above). Seeing the new

@@ -4,9 +4,10 @@
 // ends its process, so that mpirun ends the job: never a silent hang.
 //
 // The rank calls beat() whenever it makes progress (every step, every phase
-// of the benchmark). A POSIX interval timer (SIGALRM every limit / 16, its
-// handler async-signal-safe: relaxed atomic loads, write(2), _exit) finds
-// the beat unchanged for `limit`, prints
+// of the benchmark). A POSIX interval timer (SIGALRM every limit / 16, aimed
+// at the thread that constructs the watchdog and at no other, its handler
+// async-signal-safe: relaxed atomic loads, write(2), _exit) finds the beat
+// unchanged for `limit`, prints
 //     lockstep mpi: rank R on HOST made no progress for 10 s (in <what>, at S): ...
 // and calls _exit(kExitStalled). No thread: the rank stays the single thread
 // MPI_Init promised (a thread of its own would need MPI_THREAD_FUNNELED, and
@@ -24,8 +25,11 @@ inline constexpr int kExitStalled = 3;
 class watchdog {
  public:
   // Throws std::runtime_error when the timer cannot be set, or when another
-  // watchdog is armed in this process.
+  // watchdog is armed in this process. The constructing thread is the one
+  // that beats and the one the signal goes to.
   watchdog(std::chrono::nanoseconds limit, const std::string& who);
+  // Deletes the timer, and leaves SIGALRM ignored (a signal still pending is
+  // discarded, never taken by its default action).
   ~watchdog();
   watchdog(const watchdog&) = delete;
   watchdog& operator=(const watchdog&) = delete;
