@@ -26,6 +26,8 @@
 #include <string>
 #include <vector>
 
+#include "platform/statistics.hpp"
+
 namespace lockstep::platform {
 
 // Nanoseconds on CLOCK_MONOTONIC (since boot; only differences mean anything).
@@ -47,17 +49,16 @@ inline timespec to_timespec(std::int64_t ns) noexcept {
 // The median cost of one now_ns() call on this machine, from `rounds`
 // back-to-back pairs of readings (median: robust against an interrupt).
 inline double clock_read_cost_ns(int rounds = 1001) {
-  std::vector<std::int64_t> gaps;
+  std::vector<double> gaps;
   gaps.reserve(static_cast<std::size_t>(rounds));
   constexpr int kReadsPerRound = 16;  // amortises the loop and the final store
   for (int round = 0; round < rounds; ++round) {
     const std::int64_t start = now_ns();
     std::int64_t last = start;
     for (int read = 0; read < kReadsPerRound; ++read) last = now_ns();
-    gaps.push_back(last - start);
+    gaps.push_back(static_cast<double>(last - start));
   }
-  std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2), gaps.end());
-  return static_cast<double>(gaps[gaps.size() / 2]) / kReadsPerRound;
+  return median(gaps) / kReadsPerRound;
 }
 
 // The kernel's current clocksource ("tsc", "kvm-clock", "hpet", ...), or

@@ -2,12 +2,9 @@
 // Distributions of nanosecond samples: percentiles and a fixed-bucket
 // histogram, shared by `lockstep c2c`, `lockstep delay` and the matrix.
 //
-// Percentile rule: linear interpolation between closest ranks (Hyndman and
-// Fan's definition 7, the default of numpy.percentile and of R's quantile).
-// For n sorted samples x[0] <= ... <= x[n-1] and a fraction q in [0, 1]:
-//     h = (n - 1) q,   P(q) = x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h])
-// so P(0) is the minimum, P(1) the maximum, P(0.5) the usual median (the mean
-// of the two middle samples when n is even), and every percentile lies
+// Percentiles: platform/statistics.hpp's quantile (linear interpolation
+// between closest ranks, numpy's default), so p50 is the usual median (the
+// mean of the two middle samples when n is even) and every percentile lies
 // between two observed samples. The report tool (numpy) computes the same
 // values from the same samples.
 //
@@ -23,22 +20,9 @@
 #include <string>
 #include <vector>
 
-namespace lockstep::platform {
+#include "platform/statistics.hpp"
 
-// The percentile of sorted samples (ascending), fraction in [0, 1], by the
-// rule above. Throws std::invalid_argument on no samples or a bad fraction.
-template <class Sample>
-double percentile_of_sorted(std::span<const Sample> sorted, double fraction) {
-  if (sorted.empty()) throw std::invalid_argument("percentile of no samples");
-  if (!(fraction >= 0.0 && fraction <= 1.0)) throw std::invalid_argument("percentile fraction outside [0, 1]");
-  const double rank = fraction * static_cast<double>(sorted.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(rank));
-  const std::size_t above = std::min(below + 1, sorted.size() - 1);
-  const double weight = rank - static_cast<double>(below);
-  const auto low = static_cast<double>(sorted[below]);
-  const auto high = static_cast<double>(sorted[above]);
-  return low + weight * (high - low);
-}
+namespace lockstep::platform {
 
 // What every distribution in lockstep reports (the keys of the result JSON:
 // min, p50, p99, p999, max, count; mean for convenience).
@@ -59,9 +43,9 @@ distribution summarize_sorted(std::span<const Sample> sorted) {
   result.count = sorted.size();
   result.min = static_cast<double>(sorted.front());
   result.max = static_cast<double>(sorted.back());
-  result.p50 = percentile_of_sorted(sorted, 0.50);
-  result.p99 = percentile_of_sorted(sorted, 0.99);
-  result.p999 = percentile_of_sorted(sorted, 0.999);
+  result.p50 = quantile_of_sorted(sorted, 0.50);
+  result.p99 = quantile_of_sorted(sorted, 0.99);
+  result.p999 = quantile_of_sorted(sorted, 0.999);
   long double sum = 0;
   for (const Sample& sample : sorted) sum += static_cast<long double>(sample);
   result.mean = static_cast<double>(sum / static_cast<long double>(sorted.size()));

@@ -23,7 +23,9 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/harness/machine_context.hpp"
+#include "bench/harness/derived_figures.hpp"
 #include "bench/harness/result_file.hpp"
+#include "bench/harness/result_json.hpp"
 #include "bench/harness/rk4_entries.hpp"
 #include "distributed/benchmark.hpp"
 #include "distributed/launcher.hpp"
@@ -31,6 +33,7 @@
 #include "distributed/watchdog.hpp"
 #include "distributed/world.hpp"
 #include "platform/placement.hpp"
+#include "platform/statistics.hpp"
 #include "platform/topology.hpp"
 #endif
 
@@ -218,22 +221,8 @@ std::string exchange_name(const dist::exchange_entry& entry, const dist::world& 
 }
 std::string pingpong_name(const dist::world& job) { return fmt::format("mpi/pingpong/ranks:2/hosts:{}", job.hosts); }
 
-nlohmann::json distribution_json(const platform::distribution& d) {
-  return {{"min", d.min}, {"p50", d.p50}, {"p99", d.p99}, {"p999", d.p999}, {"max", d.max}, {"mean", d.mean},
-          {"count", d.count}};
-}
-
-std::string ns_text(double ns) {
-  if (ns >= 1e6) return fmt::format("{:.2f} ms", ns / 1e6);
-  if (ns >= 1e3) return fmt::format("{:.2f} us", ns / 1e3);
-  return fmt::format("{:.0f} ns", ns);
-}
-
-template <class Value>
-Value median_of(std::vector<Value> values) {
-  std::sort(values.begin(), values.end());
-  return values[values.size() / 2];
-}
+using bench::distribution_json;
+using bench::format_ns;
 
 void report(const mpi_options& options, const checked_options& checked, const dist::world& job,
             const dist::benchmark_settings& settings, const dist::benchmark_result& measured,
@@ -249,10 +238,10 @@ void report(const mpi_options& options, const checked_options& checked, const di
   const auto& last_pingpong = measured.pingpongs.back();
   fmt::print("ping-pong, ranks 0 and 1, 0 bytes: one-way {} (OSU style: mean of {} round trips / 2; median of {} rounds, "
              "range {}..{}); per round trip, last round: min {}, p50 {}, p99 {}\n",
-             ns_text(median_of(pingpong_means)), settings.pingpong_round_trips, measured.pingpongs.size(),
-             ns_text(*std::min_element(pingpong_means.begin(), pingpong_means.end())),
-             ns_text(*std::max_element(pingpong_means.begin(), pingpong_means.end())), ns_text(last_pingpong.one_way.min),
-             ns_text(last_pingpong.one_way.p50), ns_text(last_pingpong.one_way.p99));
+             format_ns(platform::median(pingpong_means)), settings.pingpong_round_trips, measured.pingpongs.size(),
+             format_ns(*std::min_element(pingpong_means.begin(), pingpong_means.end())),
+             format_ns(*std::max_element(pingpong_means.begin(), pingpong_means.end())), format_ns(last_pingpong.one_way.min),
+             format_ns(last_pingpong.one_way.p50), format_ns(last_pingpong.one_way.p99));
   // Each round's ping-pong, for the ratio measured side by side with it.
   std::map<unsigned, double> pingpong_of_round;
   for (const auto& p : measured.pingpongs) pingpong_of_round[p.round] = p.one_way_mean_ns;
@@ -286,13 +275,13 @@ void report(const mpi_options& options, const checked_options& checked, const di
     std::uint64_t total = 0;
     for (std::uint64_t count : slowest) total += count;
     fmt::print("{:<21} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", entry->label,
-               fmt::format("{} ({}..{})", ns_text(median_of(steps)), ns_text(*std::min_element(steps.begin(), steps.end())),
-                           ns_text(*std::max_element(steps.begin(), steps.end()))),
-               ns_text(median_of(p50)), ns_text(median_of(p99)), ns_text(median_of(p999)), ns_text(median_of(max)),
-               ns_text(median_of(skew50)), ns_text(median_of(skew99)),
+               fmt::format("{} ({}..{})", format_ns(platform::median(steps)), format_ns(*std::min_element(steps.begin(), steps.end())),
+                           format_ns(*std::max_element(steps.begin(), steps.end()))),
+               format_ns(platform::median(p50)), format_ns(platform::median(p99)), format_ns(platform::median(p999)), format_ns(platform::median(max)),
+               format_ns(platform::median(skew50)), format_ns(platform::median(skew99)),
                fmt::format("{} ({:.0f}%)", most - slowest.begin(),
                            total ? 100.0 * static_cast<double>(*most) / static_cast<double>(total) : 0.0),
-               fmt::format("{} {:.2f}x ({:.2f}..{:.2f})", ns_text(median_of(transfer50)), median_of(over_pingpong),
+               fmt::format("{} {:.2f}x ({:.2f}..{:.2f})", format_ns(platform::median(transfer50)), platform::median(over_pingpong),
                            *std::min_element(over_pingpong.begin(), over_pingpong.end()),
                            *std::max_element(over_pingpong.begin(), over_pingpong.end())),
                bitwise ? "yes" : "NO");

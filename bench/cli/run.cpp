@@ -461,8 +461,8 @@ void add_run(CLI::App& app, int& result) {
                               kDefaultPairs, kQuickPairs))
       ->check(CLI::Range(0, 1000));
   run->add_option("--noise", options->noise_pct,
-                  "The noise band in percent: a paired ratio whose interval reaches within it of 1 is "
-                  "\"within noise\" (default 5)")
+                  "The noise band in percent: a paired ratio whose interval lies inside it is \"within noise\", "
+                  "one whose interval straddles its edge \"unsure\" (default 5)")
       ->check(CLI::Range(0.0, 100.0));
   run->add_flag("--no-accounting", options->no_accounting,
                 "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");

@@ -14,18 +14,12 @@
 #include "kernels/rk4.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"
+#include "platform/statistics.hpp"
 #include "platform/stats.hpp"
 
 namespace lockstep::bench {
 
 namespace {
-
-double median_of(std::vector<double> values) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t middle = values.size() / 2;
-  return values.size() % 2 == 1 ? values[middle] : (values[middle - 1] + values[middle]) / 2.0;
-}
 
 // A reading's c2c part: 15 samples of 40 round trips after 100 warm-up
 // rounds, the median sample. About 1300 round trips: 65 us at 25 ns one-way,
@@ -60,7 +54,7 @@ double read_serial() {
     rk4.run(kSteps);
     chunks.push_back(static_cast<double>(platform::now_ns() - start) / kSteps);
   }
-  return median_of(std::move(chunks));
+  return platform::median(chunks);
 }
 
 }  // namespace
@@ -94,7 +88,7 @@ pace_modes find_modes(const std::vector<pace_reading>& trace) {
       if (trace[index].c2c_ns) c2c.push_back(*trace[index].c2c_ns);
       serial.push_back(trace[index].serial_ns);
     }
-    found.modes.push_back({median_of(std::move(c2c)), median_of(std::move(serial)), 0.0, cluster.size()});
+    found.modes.push_back({c2c.empty() ? 0.0 : platform::median(c2c), platform::median(serial), 0.0, cluster.size()});
   }
 
   // Time: each reading stands for the span to the next one (the last for
@@ -103,7 +97,7 @@ pace_modes find_modes(const std::vector<pace_reading>& trace) {
   std::vector<double> spans(trace.size(), 0.0);
   for (std::size_t index = 0; index + 1 < trace.size(); ++index)
     spans[index] = std::max(0.0, trace[index + 1].t_s - trace[index].t_s);
-  if (trace.size() >= 2) spans.back() = median_of(std::vector<double>(spans.begin(), spans.end() - 1));
+  if (trace.size() >= 2) spans.back() = platform::median(std::span<const double>(spans.data(), spans.size() - 1));
   double total = 0.0;
   int current = -1;
   for (std::size_t index = 0; index < trace.size(); ++index) {

@@ -177,8 +177,7 @@ void take_pair(harness_state& harness, comparison_in_progress& progress, unsigne
 
 paired_result finish_comparison(comparison_in_progress& progress, const pairing_settings& settings) {
   paired_result result = std::move(progress.result);
-  std::sort(progress.block_ms.begin(), progress.block_ms.end());
-  if (!progress.block_ms.empty()) result.block_ms = progress.block_ms[progress.block_ms.size() / 2];
+  if (!progress.block_ms.empty()) result.block_ms = platform::median(progress.block_ms);
   if (result.failure.empty()) {
     result.estimate = bootstrap_median(result.ratios);
     result.verdict = verdict_of(result.estimate, settings.noise);

@@ -20,16 +20,16 @@
 #include <string_view>
 #include <vector>
 
+#include "platform/statistics.hpp"
+
 namespace lockstep::bench {
 
-struct ratio_estimate {
-  double median = 0.0;
-  double low = 0.0;   // the interval's ends
-  double high = 0.0;
-};
-
-enum class ratio_verdict { penalty, gain, within_noise };
-std::string_view to_string(ratio_verdict verdict) noexcept;
+// The median ratio and its interval, and the verdict: platform/statistics.hpp
+// defines both (the verdict's four outcomes, penalty, gain, within noise and
+// unsure, are written down there).
+using ratio_estimate = platform::median_estimate;
+using ratio_verdict = platform::verdict;
+using platform::to_string;
 
 // The default half-width of the noise band: a ratio within 5 % of 1 is no
 // effect (the harness's own cost and a quiet machine's repeatability are a
@@ -37,16 +37,20 @@ std::string_view to_string(ratio_verdict verdict) noexcept;
 inline constexpr double kDefaultNoise = 0.05;
 inline constexpr double kConfidence = 0.95;
 inline constexpr unsigned kBootstrapResamples = 4000;
+inline constexpr std::uint64_t kBootstrapSeed = 0x5eed'1234;
 
 // The median of `ratios` and its percentile-bootstrap interval at
-// `confidence` (deterministic for a given seed). One ratio: the interval is
-// that ratio. Empty input: all zero.
-ratio_estimate bootstrap_median(const std::vector<double>& ratios, double confidence = kConfidence,
-                                unsigned resamples = kBootstrapResamples, std::uint64_t seed = 0x5eed'1234);
+// `confidence` (platform::bootstrap_median: deterministic for a given seed).
+// One ratio: the interval is that ratio. Empty input: all zero.
+inline ratio_estimate bootstrap_median(const std::vector<double>& ratios, double confidence = kConfidence,
+                                       unsigned resamples = kBootstrapResamples, std::uint64_t seed = kBootstrapSeed) {
+  return platform::bootstrap_median(ratios, confidence, resamples, seed);
+}
 
-// penalty: the whole interval above 1 + noise; gain: the whole interval
-// below 1 / (1 + noise); else within noise (the interval reaches the band).
-ratio_verdict verdict_of(const ratio_estimate& estimate, double noise = kDefaultNoise);
+// The estimate's interval against the noise band (platform::verdict_of).
+inline ratio_verdict verdict_of(const ratio_estimate& estimate, double noise = kDefaultNoise) {
+  return platform::verdict_of(estimate.low, estimate.high, noise);
+}
 
 // What a comparison sets side by side (the summary's sections).
 // against_best_other compares RK4 steps (rk4/...) or bare episodes (barrier/...): the names say which.
@@ -68,7 +72,7 @@ struct paired_result {
   std::vector<std::size_t> readings;
   std::vector<int> modes;  // per pair: the pace mode both readings agree on, or -1 (set after the run)
   ratio_estimate estimate;
-  ratio_verdict verdict = ratio_verdict::within_noise;
+  ratio_verdict verdict = ratio_verdict::unsure;
   double block_ms = 0.0;   // the median timed block, both sides
   bool budget_cut = false; // fewer pairs than asked: the comparison's time budget ran out
   std::string failure;     // non-empty: not measured, and why

@@ -7,9 +7,14 @@ namespace lockstep::bench {
 
 nlohmann::json distribution_json(const std::vector<double>& samples) {
   if (samples.empty())
-    return {{"min", nullptr}, {"p50", nullptr}, {"p99", nullptr}, {"p999", nullptr}, {"max", nullptr}, {"count", 0}};
-  const platform::distribution d = platform::summarize(samples);
-  return {{"min", d.min}, {"p50", d.p50}, {"p99", d.p99}, {"p999", d.p999}, {"max", d.max}, {"count", d.count}};
+    return {{"min", nullptr}, {"p50", nullptr},  {"p99", nullptr}, {"p999", nullptr},
+            {"max", nullptr}, {"mean", nullptr}, {"count", 0}};
+  return distribution_json(platform::summarize(samples));
+}
+
+nlohmann::json distribution_json(const platform::distribution& summary) {
+  return {{"min", summary.min}, {"p50", summary.p50},   {"p99", summary.p99},    {"p999", summary.p999},
+          {"max", summary.max}, {"mean", summary.mean}, {"count", summary.count}};
 }
 
 platform::histogram histogram_of(const std::vector<double>& samples, std::size_t max_buckets) {

@@ -1,5 +1,5 @@
 #pragma once
-// The shapes every result JSON shares (c2c, delay, falseshare, migrate): a
+// The shapes every result JSON shares (c2c, delay, falseshare, migrate, mpi): a
 // distribution and a histogram, written the same way by every command and
 // read by reports/lockstep_reports/inputs.py.
 #include <nlohmann/json.hpp>
@@ -11,9 +11,10 @@
 
 namespace lockstep::bench {
 
-// {min, p50, p99, p999, max, count}; no samples: every statistic null and
-// count 0 (a missing number is said, never faked).
+// {min, p50, p99, p999, max, mean, count} (platform/stats.hpp); no samples:
+// every statistic null and count 0 (a missing number is said, never faked).
 nlohmann::json distribution_json(const std::vector<double>& samples);
+nlohmann::json distribution_json(const platform::distribution& summary);
 
 // The histogram of these samples (round bucket widths covering min..max, see
 // platform/stats.hpp), every sample added.

@@ -3,6 +3,7 @@
 
 #include "bench/harness/derived_figures.hpp"
 #include "kernels/model_choice.hpp"
+#include "platform/statistics.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -43,11 +44,9 @@ std::vector<double> values_of(const captured_entry& entry, const std::string& co
 }  // namespace
 
 std::optional<double> captured_entry::median(const std::string& counter) const {
-  std::vector<double> values = values_of(*this, counter);
+  const std::vector<double> values = values_of(*this, counter);
   if (values.empty()) return std::nullopt;
-  std::sort(values.begin(), values.end());
-  const std::size_t middle = values.size() / 2;
-  return values.size() % 2 == 1 ? values[middle] : (values[middle - 1] + values[middle]) / 2.0;
+  return platform::median(values);
 }
 
 std::optional<std::pair<double, double>> captured_entry::range(const std::string& counter) const {

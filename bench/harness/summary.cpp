@@ -4,6 +4,7 @@
 
 #include "bench/harness/derived_figures.hpp"
 #include "bench/harness/paired_blocks.hpp"
+#include "platform/statistics.hpp"
 
 #include <fmt/core.h>
 
@@ -59,12 +60,6 @@ std::string entry_flags(const captured_entry& entry) {
   return flags;
 }
 
-double middle_of(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t middle = values.size() / 2;
-  return values.size() % 2 == 1 ? values[middle] : (values[middle - 1] + values[middle]) / 2.0;
-}
-
 // Entries whose repetitions ran in more than one pace mode: their median in each.
 void per_mode_medians(std::string& out, const run_book& book) {
   if (!book.pace || book.pace->modes.size() < 2) return;
@@ -85,7 +80,7 @@ void per_mode_medians(std::string& out, const run_book& book) {
       if (mode < 0) continue;
       const pace_mode& pace = book.pace->modes[static_cast<std::size_t>(mode)];
       cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", book.pace->has_c2c ? "c2c" : "serial",
-                           format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(middle_of(values)),
+                           format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(platform::median(values)),
                            values.size());
     }
     lines += fmt::format("  {:<62} {}\n", entry.name, cells);
@@ -257,8 +252,9 @@ std::string render_summary(const run_book& book, const std::string& result_path)
   out += fmt::format(
       "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), one pair per round "
       "of all comparisons (so its pairs spread over the pairing phase), the median ratio "
-      "over pairs with its {:.0f} % bootstrap interval; \"penalty\" / \"gain\" only when the whole interval lies "
-      "beyond the noise band of {:.0f} %, else \"within noise\".\n",
+      "over pairs with its {:.0f} % bootstrap interval, against the noise band of {:.0f} % "
+      "(platform/statistics.hpp): \"penalty\" / \"gain\" when the whole interval lies above / below the band, "
+      "\"within noise\" when it lies wholly inside, \"unsure\" when it straddles an edge of the band.\n",
       100.0 * kConfidence, 100.0 * book.noise);
   out += "\nFalse-sharing penalty per primitive (a layout whose writers share lines / the best one that isolates "
          "them):\n";

@@ -2,6 +2,7 @@
 #include "bench/harness/team_driver.hpp"
 
 #include "bench/harness/pace.hpp"
+#include "platform/statistics.hpp"
 
 #include <fmt/core.h>
 
@@ -65,9 +66,8 @@ void set_pace_counters(benchmark::State& state, const harness_state& harness, lo
 
 double median_unit_ns(const batch_record& record) {
   if (record.batch_ns.empty() || record.units_per_batch == 0) return 0.0;
-  std::vector<std::int64_t> sorted = record.batch_ns;
-  std::sort(sorted.begin(), sorted.end());
-  return static_cast<double>(sorted[sorted.size() / 2]) / static_cast<double>(record.units_per_batch);
+  const std::vector<double> batch_ns(record.batch_ns.begin(), record.batch_ns.end());
+  return platform::median(batch_ns) / static_cast<double>(record.units_per_batch);
 }
 
 double ns_per_unit(const call_result& result) {

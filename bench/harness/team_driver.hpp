@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <map>
@@ -22,6 +23,7 @@
 
 #include "bench/harness/run_book.hpp"
 #include "platform/placement.hpp"
+#include "platform/statistics.hpp"
 #include "sync/registry.hpp"
 #include "platform/thread_accounting.hpp"
 #include "sync/concepts.hpp"
@@ -295,11 +297,8 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   const auto flag_measured_entry = [&](const call_result& result, const std::string& reason) {
     std::vector<std::int64_t> times = result.batches.batch_ns;
     std::int64_t filler = result.batches.slowest_unit_ns * static_cast<std::int64_t>(result.batches.units_per_batch);
-    if (!times.empty()) {
-      std::vector<std::int64_t> sorted = times;
-      std::sort(sorted.begin(), sorted.end());
-      filler = sorted[sorted.size() / 2];
-    }
+    if (!times.empty())
+      filler = std::llround(platform::median(std::vector<double>(times.begin(), times.end())));
     const double units = static_cast<double>(std::max<std::uint64_t>(result.batches.units_per_batch, 1));
     std::size_t batch = 0;
     for (auto _ : state) {

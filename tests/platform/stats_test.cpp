@@ -1,6 +1,7 @@
 // Percentiles and histograms on inputs whose answers are known by hand (and
 // agree with numpy.percentile's default, linear interpolation).
 #include "platform/stats.hpp"
+#include "platform/statistics.hpp"
 
 #include <cstdint>
 #include <numeric>
@@ -11,7 +12,7 @@
 namespace {
 
 using lockstep::platform::histogram;
-using lockstep::platform::percentile_of_sorted;
+using lockstep::platform::quantile_of_sorted;
 using lockstep::platform::summarize;
 
 TEST(Stats, MedianOfAnEvenCountIsTheMeanOfTheMiddleTwo) {
@@ -38,10 +39,10 @@ TEST(Stats, OneToAThousandAndOne) {
 
 TEST(Stats, InterpolatesBetweenNeighbours) {
   const std::vector<double> sorted{10, 20, 30};
-  EXPECT_DOUBLE_EQ(percentile_of_sorted(std::span<const double>(sorted), 0.0), 10);
-  EXPECT_DOUBLE_EQ(percentile_of_sorted(std::span<const double>(sorted), 0.25), 15);
-  EXPECT_DOUBLE_EQ(percentile_of_sorted(std::span<const double>(sorted), 0.9), 28);
-  EXPECT_DOUBLE_EQ(percentile_of_sorted(std::span<const double>(sorted), 1.0), 30);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(std::span<const double>(sorted), 0.0), 10);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(std::span<const double>(sorted), 0.25), 15);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(std::span<const double>(sorted), 0.9), 28);
+  EXPECT_DOUBLE_EQ(quantile_of_sorted(std::span<const double>(sorted), 1.0), 30);
 }
 
 TEST(Stats, OneSampleIsEveryPercentile) {
@@ -55,7 +56,7 @@ TEST(Stats, OneSampleIsEveryPercentile) {
 TEST(Stats, NoSamplesIsAnErrorNotAZero) {
   EXPECT_THROW(summarize(std::vector<std::int64_t>{}), std::invalid_argument);
   const std::vector<double> one{1.0};
-  EXPECT_THROW(percentile_of_sorted(std::span<const double>(one), 1.5), std::invalid_argument);
+  EXPECT_THROW(quantile_of_sorted(std::span<const double>(one), 1.5), std::invalid_argument);
 }
 
 TEST(Histogram, BucketsAreHalfOpenAndOutliersCountedApart) {
