@@ -1,19 +1,18 @@
 #include "distributed/shm_window.hpp"
 
 #include <algorithm>
-#include <new>
 #include <stdexcept>
+#include <string>
 
+#include "distributed/shared_window_layout.hpp"
 #include "platform/cache_line.hpp"
 
 namespace lockstep::distributed {
 namespace {
-// Where the values start: the barrier's size, rounded up to a whole line, so
-// that no value shares a line with the barrier's words.
-constexpr std::size_t kValuesOffset =
-    (sizeof(sync::process_shared_futex_spin) + platform::kCacheLine - 1) / platform::kCacheLine * platform::kCacheLine;
 // Every rank on one host maps one window of `bytes` that rank 0 allocates;
-// returns its start (the same memory in every rank).
+// returns its start as this rank sees it (the same memory in every rank, at
+// an address of each rank's own, not aligned for what goes in it:
+// distributed/shared_window_layout.hpp).
 std::byte* map_shared_window(const exchange_setup& setup, std::size_t bytes, MPI_Win& window) {
   int host_size = 0;
   MPI_Comm_size(setup.host_comm, &host_size);
@@ -25,6 +24,17 @@ std::byte* map_shared_window(const exchange_setup& setup, std::size_t bytes, MPI
   int unit = 0;
   MPI_Win_shared_query(window, 0, &size, &unit, &base);
   return static_cast<std::byte*>(base);
+}
+
+// Every rank rounded up to the same offset from its base (so they all use
+// the same words); collective over `comm`.
+void check_same_offset(MPI_Comm comm, std::size_t offset) {
+  auto mine = static_cast<unsigned long long>(offset);
+  unsigned long long first = mine;
+  MPI_Bcast(&first, 1, MPI_UNSIGNED_LONG_LONG, 0, comm);
+  if (first != mine)
+    throw std::logic_error("shm_window: the ranks' shared-window bases differ in alignment (offset " +
+                           std::to_string(mine) + " here, " + std::to_string(first) + " on rank 0)");
 }
 
 // The window is ready for everyone: locked for load/store access (passive
@@ -43,10 +53,14 @@ void close_shared_window(MPI_Win& window) {
 
 shm_window_exchange::shm_window_exchange(const exchange_setup& setup)
     : comm_(setup.comm), equations_(setup.blocks.equations()) {
-  std::byte* const bytes_base = map_shared_window(setup, kValuesOffset + 5 * equations_ * sizeof(double), window_);
-  if (setup.rank == 0) new (bytes_base) sync::process_shared_futex_spin(static_cast<unsigned>(setup.size));
-  barrier_ = std::launder(reinterpret_cast<sync::process_shared_futex_spin*>(bytes_base));
-  values_ = reinterpret_cast<double*>(bytes_base + kValuesOffset);
+  // The barrier on its alignment from wherever the base lies, the values on
+  // the lines after it (distributed/shared_window_layout.hpp).
+  std::byte* const base =
+      map_shared_window(setup, barrier_window_layout::window_bytes(5 * equations_ * sizeof(double)), window_);
+  const barrier_window_layout layout(base);
+  check_same_offset(comm_, layout.barrier_offset());
+  barrier_ = layout.place_barrier(setup.rank == 0, static_cast<unsigned>(setup.size));
+  values_ = reinterpret_cast<double*>(layout.values_place());
   self_.id = static_cast<unsigned>(setup.rank);
   open_shared_window(comm_, window_);  // the barrier is built before anyone arrives at it
 }
@@ -92,11 +106,10 @@ shm_mailbox_exchange::shm_mailbox_exchange(const exchange_setup& setup)
   // heap counts them (sync/storage.hpp), plus room to align the start.
   const std::size_t bytes = sync::mailbox(graph, width_).storage_bytes() + platform::kPrefetchPair;
   std::byte* const base = map_shared_window(setup, bytes, window_);
-  auto address = reinterpret_cast<std::uintptr_t>(base);
-  const std::uintptr_t aligned = (address + platform::kPrefetchPair - 1) / platform::kPrefetchPair * platform::kPrefetchPair;
-  std::byte* const block = base + (aligned - address);
+  const std::size_t gap = alignment_gap(base, platform::kPrefetchPair);
+  check_same_offset(comm_, gap);
   channel_ = std::make_unique<sync::process_shared_mailbox>(
-      graph, width_, sync::process_shared_storage(block, bytes - (aligned - address), setup.rank == 0));
+      graph, width_, sync::process_shared_storage(base + gap, bytes - gap, setup.rank == 0));
   self_.id = static_cast<unsigned>(setup.rank);
   open_shared_window(comm_, window_);  // rank 0 wrote the first words before anyone publishes
 }

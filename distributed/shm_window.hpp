@@ -8,7 +8,12 @@
 //
 // The window (rank 0 allocates it, the others map it with
 // MPI_Win_shared_query):
-//     the barrier, then (from the next cache line) x[2][n], k[3][n] doubles
+//     slack, the barrier on its alignment, then (from the next cache line)
+//     x[2][n], k[3][n] doubles
+// The slack: a window's base is not aligned for the barrier (Open MPI 4.1
+// hands out bases 8 bytes past a page), so the barrier goes where
+// distributed/shared_window_layout.hpp rounds it up to, the same offset in
+// every rank.
 // x has two parities (a rank writes x_{n+1} while a slower one may still read
 // x_n); k_3 stays private to the step.
 // Contract (exchange.hpp): share(g) is one arrive_and_wait: every rank's

@@ -64,8 +64,11 @@ class process_shared_storage {
  public:
   static constexpr futex_scope kScope = futex_scope::process_shared;
 
-  // `block` must be aligned to at least the largest alignment handed out
-  // (a cache-line pair: a window's base is page-aligned).
+  // `block` must be aligned to at least the largest alignment handed out (a
+  // prefetch pair, 128 bytes). An MPI shared window's base is not: Open MPI
+  // 4.1's osc/sm hands out bases 8 bytes past a page boundary, so the caller
+  // rounds the block's start up from the base and allocates the slack that
+  // takes (distributed/shm_window.cpp, distributed/shared_window_layout.hpp).
   process_shared_storage(std::byte* block, std::size_t capacity, bool initialiser) noexcept
       : block_(block), capacity_(capacity), initialiser_(initialiser) {}
 
