@@ -42,6 +42,11 @@ MPI_Aint rma_put_exchange::consumed_displacement(int consumer) const noexcept {
   return ready_displacement(ranks_) + static_cast<MPI_Aint>(static_cast<std::size_t>(consumer) * 8);
 }
 
+// The poll is (D4) for a ready flag and (A3) for an acknowledgement: an
+// atomic read of the word (MPI_Fetch_and_op), then MPI_Win_flush, which
+// completes it before anything this rank does next (with osc/sm a full
+// memory barrier): the copy (D6) reads no slot, and the puts (D1) write none,
+// before the word was seen.
 void rma_put_exchange::wait_local(MPI_Aint displacement, std::uint64_t& seen, std::uint64_t target) {
   unsigned polls = 0;
   while (seen < target) {
@@ -60,28 +65,33 @@ void rma_put_exchange::share(std::uint64_t global_stage) {
     if (global_stage >= kDepth)
       for (std::size_t index = 0; index < consumers_.size(); ++index)
         wait_local(consumed_displacement(consumers_[index]), consumed_seen_[index], global_stage - kDepth + 1);
+    // (A4) after (A3) saw the acknowledgement: the puts below overwrite
+    // slot g % kDepth, which the consumer read at stage g - kDepth.
     for (int consumer : consumers_)
       MPI_Put(values + own_first_, own_count_, MPI_DOUBLE, consumer, data_displacement(slot, own_first_), own_count_,
-              MPI_DOUBLE, window_);
-    for (int consumer : consumers_) MPI_Win_flush(consumer, window_);
+              MPI_DOUBLE, window_);  // (D1)
+    for (int consumer : consumers_) MPI_Win_flush(consumer, window_);  // (D2)
     flag_ = global_stage + 1;
     for (int consumer : consumers_)
       MPI_Accumulate(&flag_, 1, MPI_UINT64_T, consumer, ready_displacement(rank_), 1, MPI_UINT64_T, MPI_REPLACE,
-                     window_);
+                     window_);  // (D3)
     for (int consumer : consumers_) MPI_Win_flush(consumer, window_);
   }
   if (producers_.empty()) return;
   for (std::size_t index = 0; index < producers_.size(); ++index)
     wait_local(ready_displacement(producers_[index].rank), ready_seen_[index], global_stage + 1);
-  MPI_Win_sync(window_);
+  MPI_Win_sync(window_);  // (D5)
   const auto* slot_values = reinterpret_cast<const double*>(base_ + data_displacement(slot, 0));
   for (const producer_block& producer : producers_)
-    std::memcpy(values + producer.first, slot_values + producer.first, producer.count * sizeof(double));
+    std::memcpy(values + producer.first, slot_values + producer.first, producer.count * sizeof(double));  // (D6)
   if (global_stage % 4 == 3) {
+    // (A1) the loads of (D6) from every slot this step read are done before
+    // (A2) tells the producers they may overwrite them.
+    MPI_Win_sync(window_);
     ack_ = global_stage + 1;
     for (const producer_block& producer : producers_)
       MPI_Accumulate(&ack_, 1, MPI_UINT64_T, producer.rank, consumed_displacement(rank_), 1, MPI_UINT64_T,
-                     MPI_REPLACE, window_);
+                     MPI_REPLACE, window_);  // (A2)
     for (const producer_block& producer : producers_) MPI_Win_flush(producer.rank, window_);
   }
 }

@@ -16,9 +16,30 @@
 // stage 3), one accumulate per producer, so a producer may lead a consumer by
 // one step without waiting; the acknowledgement is part of what this exchange
 // costs.
-// Ordering: the flush after the put completes it at the target before the flag
-// is written; the consumer's MPI_Win_sync after it saw the flag makes the
-// window's memory current for its own loads.
+// Ordering: two hand-offs, each a write, a flag and a read, with the MPI
+// call that orders each edge (numbered as in rma_put.cpp). With Open MPI's
+// osc/sm (ranks on one host) a put is a plain copy into the target's memory,
+// an accumulate a plain store under a lock, and MPI_Win_flush and
+// MPI_Win_sync are full memory barriers; nothing else orders a rank's own
+// loads and stores on a CPU that reorders them (AArch64, POWER; x86-64 keeps
+// loads before later stores, so it needs none of this to work).
+//   Data, producer to consumer:
+//     (D1) MPI_Put of stage g into the consumer's slot;
+//     (D2) MPI_Win_flush: the put complete at the target before
+//     (D3) MPI_Accumulate raises the ready flag (then flushed);
+//     (D4) the consumer's poll sees the flag (MPI_Fetch_and_op, then
+//          MPI_Win_flush) and
+//     (D5) MPI_Win_sync makes the window's memory current for
+//     (D6) its loads of the slot. (D2) pairs with (D4)/(D5).
+//   Acknowledgement, consumer to producer (the slot's reuse):
+//     (A1) MPI_Win_sync after the consumer's loads (D6) of the step: they are
+//          done before
+//     (A2) MPI_Accumulate writes the acknowledgement (then flushed);
+//     (A3) the producer's poll sees it (MPI_Fetch_and_op, MPI_Win_flush),
+//          and only then
+//     (A4) its puts (D1) overwrite the slots. (A1) pairs with (A3): without
+//          (A1), a consumer's load could still be pending when its
+//          acknowledgement is visible, and read the next stage's value.
 // Polling: the consumer reads its own flags with MPI_Fetch_and_op(MPI_NO_OP)
 // and a flush, which also drives MPI's progress engine (over TCP, Open MPI's
 // one-sided component needs the target to enter MPI). With more ranks than

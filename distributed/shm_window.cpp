@@ -38,11 +38,23 @@ void check_same_offset(MPI_Comm comm, std::size_t offset) {
 }
 
 // The window is ready for everyone: locked for load/store access (passive
-// target, for MPI_Win_sync) and rank 0's first writes visible.
+// target, for MPI_Win_sync) and rank 0's first writes visible to every rank.
+// MPI's pattern for a store in one process and a load in another under the
+// unified memory model: MPI_Win_sync, MPI_Barrier, MPI_Win_sync.
+//  (1) MPI_Win_sync in every rank, after rank 0's first writes (the barrier
+//      built, the mailbox's words initialised): their release; with Open
+//      MPI's osc/sm a full memory barrier (opal_atomic_mb).
+//  (2) MPI_Barrier: no rank leaves before rank 0 has passed (1); pairs (1)
+//      with (3).
+//  (3) MPI_Win_sync after the barrier: the acquire, before this rank's first
+//      load of the window (its first arrive_and_wait or publish). Without it
+//      a CPU that reorders loads (AArch64, POWER) may read the words from
+//      before (1); x86-64 does not, which is why its absence went unseen.
 void open_shared_window(MPI_Comm comm, MPI_Win window) {
   MPI_Win_lock_all(MPI_MODE_NOCHECK, window);
-  MPI_Win_sync(window);
-  MPI_Barrier(comm);
+  MPI_Win_sync(window);  // (1)
+  MPI_Barrier(comm);     // (2)
+  MPI_Win_sync(window);  // (3)
 }
 
 void close_shared_window(MPI_Win& window) {

@@ -16,8 +16,9 @@
 // of calls hands out the same offsets everywhere. Only the initialiser
 // constructs the arrays and writes first values (initialises() is true there
 // alone); the others take the addresses. Nobody may use the primitive before
-// every process has constructed it (the caller's barrier, MPI_Barrier in
-// shm_window), which also publishes the initialiser's writes.
+// every process has constructed it (the caller's barrier: in
+// distributed/shm_window.cpp MPI_Win_sync, MPI_Barrier, MPI_Win_sync), which
+// also publishes the initialiser's writes.
 // Objects placed in shared storage must own nothing (no heap pointer another
 // process could not follow): arrays of atomics and plain values.
 #include <cstddef>
