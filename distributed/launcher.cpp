@@ -163,4 +163,15 @@ std::string this_executable() {
   return std::string(buffer.data(), static_cast<std::size_t>(length));
 }
 
+std::vector<std::string> own_arguments() {
+  std::ifstream file("/proc/self/cmdline", std::ios::binary);
+  if (!file) throw std::runtime_error("cannot read /proc/self/cmdline");
+  std::vector<std::string> words;
+  std::string word;
+  while (std::getline(file, word, '\0')) words.push_back(word);
+  if (words.empty()) throw std::runtime_error("/proc/self/cmdline is empty");
+  words.erase(words.begin());  // the program name: the ranks run this_executable()
+  return words;
+}
+
 }  // namespace lockstep::distributed

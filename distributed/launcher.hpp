@@ -9,7 +9,7 @@
 //            --mca btl self,vader --mca btl_vader_single_copy_mechanism none      (--transport shm)
 //            --mca btl self,tcp --mca btl_tcp_if_include lo --mca osc pt2pt        (--transport tcp, one host)
 //            --mca btl self,vader,tcp                                              (--hostfile)
-//            [-x VARIABLE ...] <this lockstep> mpi <the same options>
+//            [-x VARIABLE ...] <this lockstep> <the user's own words>
 //   --bind-to none: lockstep pins its ranks itself (--pin, the same plans as
 //   threads); --oversubscribe when ranks exceed this host's CPUs; pml ob1 so
 //   that the btl list is the path the ranks take (and osc pt2pt so that
@@ -41,7 +41,7 @@ struct launch_request {
   unsigned host_cpus = 1;   // CPUs of this host (for --oversubscribe)
   bool as_root = false;
   std::string executable;   // this lockstep
-  std::vector<std::string> arguments;  // after the executable: "mpi", options...
+  std::vector<std::string> arguments;  // after the executable: the user's words ("mpi", options...)
   std::vector<std::string> forwarded;  // environment variables every rank must see (-x)
 };
 
@@ -67,5 +67,9 @@ struct launch_plan {
 int run_plan(const launch_plan& plan);
 // This process's executable (/proc/self/exe).
 [[nodiscard]] std::string this_executable();
+// The words this process was started with after its program name
+// (/proc/self/cmdline: argv[1], argv[2], ...), as the user typed them: what
+// the launcher hands its ranks, so that every option reaches them.
+[[nodiscard]] std::vector<std::string> own_arguments();
 
 }  // namespace lockstep::distributed

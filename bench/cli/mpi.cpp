@@ -1,7 +1,10 @@
 // lockstep mpi: the RK4 step across MPI ranks (distributed/). Run directly,
-// it checks every option, then launches mpirun for --ranks N on this host (or
-// the hosts of --hostfile) and says the command it ran; run under mpirun, each
-// rank measures, rank 0 prints and writes the result (README.md says what it
+// it checks every option and the user's files (--hostfile, --out), then
+// launches mpirun for --ranks N on this host (or the hosts of --hostfile)
+// with the user's own words for the ranks, and says the command it ran; run
+// under mpirun, each rank checks the options again (never a file: it may run
+// on a host where the user's files are not), measures, and rank 0 prints and
+// writes the result (README.md says what it
 // prints, docs/result-files.md what the file holds).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -69,10 +72,10 @@ constexpr int kExitJobFailed = 3;
 namespace dist = lockstep::distributed;
 
 // What every rank and the launcher derive from the options, checked: bad
-// input throws usage_error before anything is launched or measured.
+// input throws usage_error before anything is launched or measured. No file
+// is read here (the launcher checks --hostfile and --out on its own).
 struct checked_options {
   dist::transport how = dist::transport::shared_memory;
-  std::vector<std::string> hosts;  // from --hostfile; empty: this host
   std::vector<std::string> exchange_names;
   std::vector<std::string> sync_names;
   bool exchanges_named = false;
@@ -90,13 +93,6 @@ checked_options check(const mpi_options& options, unsigned ranks) {
     checked.how = dist::transport::tcp;
   else if (options.transport != "shm")
     throw usage_error("--transport: '" + options.transport + "' is not one of shm, tcp");
-  if (!options.hostfile.empty()) {
-    try {
-      checked.hosts = dist::read_hostfile(options.hostfile);
-    } catch (const std::invalid_argument& e) {
-      throw usage_error(e.what());
-    }
-  }
   checked.exchange_names = select_names(options.exchanges, dist::exchange_names(), "--exchange");
   checked.sync_names = select_names(options.syncs, dist::exchange_syncs(), "--sync");
   checked.exchanges_named = options.exchanges.has_value() || options.syncs.has_value();
@@ -115,7 +111,6 @@ checked_options check(const mpi_options& options, unsigned ranks) {
   if (checked.pin == platform::placement::migrate)
     throw usage_error("--pin: migrate moves threads of one process; ranks take none, compact or scatter");
   checked.watchdog_ns = parse_duration_ns(options.watchdog, "--watchdog", 100'000'000, 3'600'000'000'000);
-  check_out(options.out);
 
   if (const char* fault = std::getenv(kFaultVariable); fault != nullptr && *fault != '\0') {
     char kind[16] = {};
@@ -158,26 +153,21 @@ std::vector<const dist::exchange_entry*> applicable(const checked_options& check
   return result;
 }
 
-// The options again, for the ranks mpirun starts.
-std::vector<std::string> rank_arguments(const mpi_options& options, unsigned ranks) {
-  std::vector<std::string> arguments{"mpi", "--ranks", std::to_string(ranks), "--transport", options.transport,
-                                     "--steps", std::to_string(options.steps), "--warmup", std::to_string(options.warmup),
-                                     "--rounds", std::to_string(options.rounds), "--pingpong",
-                                     std::to_string(options.pingpong), "--pin", options.pin, "--watchdog",
-                                     options.watchdog};
-  if (options.exchanges) arguments.insert(arguments.end(), {"--exchange", *options.exchanges});
-  if (options.syncs) arguments.insert(arguments.end(), {"--sync", *options.syncs});
-  if (options.masses) arguments.insert(arguments.end(), {"--masses", std::to_string(*options.masses)});
-  if (!options.hostfile.empty()) arguments.insert(arguments.end(), {"--hostfile", options.hostfile});
-  if (!options.out.empty()) arguments.insert(arguments.end(), {"--out", options.out});
-  return arguments;
-}
-
 void launch(const mpi_options& options, int& result) {
   if (options.ranks == 0) throw usage_error("--ranks N is required when lockstep mpi is not run under mpirun");
   const checked_options checked = check(options, options.ranks);
-  const dist::job_shape shape{static_cast<int>(options.ranks),
-                              checked.hosts.empty() ? 1 : static_cast<int>(checked.hosts.size()), checked.how};
+  // The user's files, here only: a rank may run where they are not.
+  std::vector<std::string> hosts;  // from --hostfile; empty: this host
+  if (!options.hostfile.empty()) {
+    try {
+      hosts = dist::read_hostfile(options.hostfile);
+    } catch (const std::invalid_argument& e) {
+      throw usage_error(e.what());
+    }
+  }
+  check_out(options.out);
+  const dist::job_shape shape{static_cast<int>(options.ranks), hosts.empty() ? 1 : static_cast<int>(hosts.size()),
+                              checked.how};
   std::map<std::string, std::string> not_applicable;
   (void)applicable(checked, shape, not_applicable);
 
@@ -194,7 +184,9 @@ void launch(const mpi_options& options, int& result) {
   request.host_cpus = platform::affinity_cpu_count();
   request.as_root = geteuid() == 0;
   request.executable = dist::this_executable();
-  request.arguments = rank_arguments(options, options.ranks);
+  // The user's own words, every option as typed (the ranks know they are
+  // ranks from the variables mpirun sets: distributed::launched_by_mpi).
+  request.arguments = dist::own_arguments();
   request.forwarded = {kLaunchVariable};
   if (std::getenv(kFaultVariable) != nullptr) request.forwarded.emplace_back(kFaultVariable);
   dist::launch_plan plan;
@@ -395,12 +387,17 @@ void report(const mpi_options& options, const checked_options& checked, const di
 }
 
 void run_as_rank(const mpi_options& options, int& result) {
+  // Declared before the session, so that it goes after it: MPI_Finalize runs
+  // watched (a rank that hangs there is ended like any other stall).
+  std::optional<dist::watchdog> dog;
   dist::mpi_session session;
   const dist::world job = dist::describe_world();
-  // Every rank checks the same options the same way; rank 0 alone says why.
+  // Every rank checks the same options the same way. A rank that refuses says
+  // so in one line with its rank and host, and then no rank goes on.
   checked_options checked;
   std::map<std::string, std::string> not_applicable;
   std::vector<const dist::exchange_entry*> exchanges;
+  int refused = 0;
   try {
     if (options.ranks != 0 && options.ranks != static_cast<unsigned>(job.size))
       throw usage_error("--ranks " + std::to_string(options.ranks) + " but mpirun started " +
@@ -408,7 +405,12 @@ void run_as_rank(const mpi_options& options, int& result) {
     checked = check(options, static_cast<unsigned>(job.size));
     exchanges = applicable(checked, dist::job_shape{job.size, job.hosts, checked.how}, not_applicable);
   } catch (const usage_error& e) {
-    if (job.rank == 0) fmt::print(stderr, "lockstep: {}\n", e.what());
+    fmt::print(stderr, "lockstep mpi: rank {} on {}: {}\n", job.rank, job.host, e.what());
+    refused = 1;
+  }
+  int any_refused = 0;
+  MPI_Allreduce(&refused, &any_refused, 1, MPI_INT, MPI_MAX, job.comm);
+  if (any_refused != 0) {
     result = kExitUsage;
     return;
   }
@@ -428,17 +430,23 @@ void run_as_rank(const mpi_options& options, int& result) {
   settings.fault_rank = checked.fault_rank;
   settings.fault_step = checked.fault_step;
 
-  dist::watchdog dog(std::chrono::nanoseconds(checked.watchdog_ns),
-                     fmt::format("rank {} on {}", job.rank, job.host));
+  dog.emplace(std::chrono::nanoseconds(checked.watchdog_ns), fmt::format("rank {} on {}", job.rank, job.host));
   const dist::benchmark_result measured = dist::run_benchmark(
-      job, settings, dog, [](const std::string& line) { fmt::print(stderr, "lockstep mpi: {}\n", line); });
-  dog.phase("reporting");
+      job, settings, *dog, [](const std::string& line) { fmt::print(stderr, "lockstep mpi: {}\n", line); });
+  dog->phase("reporting");
   int status = kExitOk;
-  if (job.rank == 0)
-    report(options, checked, job, settings, measured, not_applicable,
-           launch_text != nullptr ? launch_text : "external (started by the user's mpirun)", status);
+  if (job.rank == 0) {
+    try {
+      report(options, checked, job, settings, measured, not_applicable,
+             launch_text != nullptr ? launch_text : "external (started by the user's mpirun)", status);
+    } catch (const bench::result_path_error& e) {
+      // --out was checked on the launcher's host; this one may differ.
+      fmt::print(stderr, "lockstep mpi: rank {} on {}: --out: {}\n", job.rank, job.host, e.what());
+      status = kExitUsage;
+    }
+  }
   MPI_Bcast(&status, 1, MPI_INT, 0, job.comm);
-  dog.phase("finalising MPI");
+  dog->phase("finalising MPI");
   result = status;
 }
 #endif  // LOCKSTEP_HAVE_MPI

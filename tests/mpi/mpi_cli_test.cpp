@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <string>
@@ -161,12 +164,93 @@ TEST(MpiCommand, UnderTheUsersMpirun) {
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_EQ(read_json(out).at("context").at("mpi_launch").get<std::string>().rfind("external", 0), 0U);
 
-  // --ranks that disagree with the job: every rank refuses, one line says why.
+  // --ranks that disagree with the job: every rank refuses, each in one line
+  // that names it and its host; none leaves silently.
   argv = mpirun;
   argv.insert(argv.end(), {LOCKSTEP_BINARY, "mpi", "--ranks", "3", "--steps", "100"});
   const command_result mismatch = run_command(argv);
   EXPECT_NE(mismatch.exit_status, 0);
   EXPECT_NE(mismatch.err.find("--ranks 3 but mpirun started 2 ranks"), std::string::npos) << mismatch.err;
+  for (const std::string rank : {"0", "1"})
+    EXPECT_NE(mismatch.err.find("lockstep mpi: rank " + rank + " on "), std::string::npos) << mismatch.err;
+}
+
+// An mpirun for --mpirun that stands between the launcher and Open MPI's: it
+// writes the words it was given to WORDS (one a line), and for its own
+// --hostfile F (the first; the ranks' words come after the executable) it
+// hands mpirun a copy of F and removes F first, so that the launcher and
+// mpirun read the hostfile and the ranks cannot.
+std::string write_mpirun_between(const scratch_directory& scratch) {
+  const std::string path = scratch.file("mpirun-between");
+  std::ofstream(path) << "#!/bin/sh\n"
+                         "printf '%s\\n' \"$@\" > '"
+                      << scratch.file("words") << "'\n"
+                         "previous=\n"
+                         "copied=\n"
+                         "for word do\n"
+                         "  shift\n"
+                         "  if [ \"$previous\" = --hostfile ] && [ -z \"$copied\" ]; then\n"
+                         "    cp \"$word\" \"$word.mpirun\" && rm \"$word\" && word=\"$word.mpirun\" && copied=1\n"
+                         "  fi\n"
+                         "  set -- \"$@\" \"$word\"\n"
+                         "  previous=$word\n"
+                         "done\n"
+                         "exec mpirun \"$@\"\n";
+  ::chmod(path.c_str(), 0755);
+  return path;
+}
+
+std::vector<std::string> read_lines(const std::string& path) {
+  std::ifstream file(path);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(file, line);) lines.push_back(line);
+  return lines;
+}
+
+// The ranks get the user's own words, as typed (every option reaches them,
+// in the user's spelling), and act on them: each non-default value is in the
+// settings rank 0 writes.
+TEST(MpiCommand, TheRanksGetTheOptionsAsTyped) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("typed.json");
+  const std::string mpirun = write_mpirun_between(scratch);
+  const std::vector<std::string> typed{"mpi", "--ranks", "2", "--steps=40", "--warmup", "3", "--rounds=1",
+                                       "--pingpong", "50", "--pin", "none", "--watchdog=25s", "--masses", "3",
+                                       "--exchange", "p2p", "--mpirun", mpirun, "--out", out};
+  std::vector<std::string> argv{LOCKSTEP_BINARY};
+  argv.insert(argv.end(), typed.begin(), typed.end());
+  const command_result result = run_command(argv);
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const std::vector<std::string> words = read_lines(scratch.file("words"));
+  ASSERT_GE(words.size(), typed.size());
+  EXPECT_EQ(std::vector<std::string>(words.end() - static_cast<std::ptrdiff_t>(typed.size()), words.end()), typed)
+      << "the words after the executable are not the user's";
+  const nlohmann::json settings = read_json(out).at("settings");
+  EXPECT_EQ(settings.at("steps"), 40);
+  EXPECT_EQ(settings.at("warmup_steps"), 3);
+  EXPECT_EQ(settings.at("rounds"), 1);
+  EXPECT_EQ(settings.at("pingpong_round_trips"), 50);
+  EXPECT_EQ(settings.at("pin"), "none");
+  EXPECT_EQ(settings.at("watchdog_ns"), 25'000'000'000LL);
+  EXPECT_EQ(settings.at("equations"), 6);
+  EXPECT_EQ(settings.at("exchanges").size(), 1U);
+}
+
+// The launcher reads --hostfile (and mpirun does); a rank never does, so a
+// hostfile the ranks cannot read (on another host, or gone, as here) stops
+// nothing.
+TEST(MpiCommand, AHostfileOnlyTheLauncherReadsStopsNoRank) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string out = scratch.file("hosts.json");
+  const std::string hostfile = scratch.file("hosts");
+  std::ofstream(hostfile) << "localhost slots=2\n";
+  const std::string mpirun = write_mpirun_between(scratch);
+  const command_result result = run_command({LOCKSTEP_BINARY, "mpi", "--ranks", "2", "--steps", "40", "--warmup", "3",
+                                             "--rounds", "1", "--pingpong", "50", "--exchange", "allgather",
+                                             "--hostfile", hostfile, "--mpirun", mpirun, "--out", out});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_FALSE(std::filesystem::exists(hostfile)) << "the stand-in mpirun removed it before the ranks started";
+  EXPECT_EQ(read_json(out).at("settings").at("ranks"), 2);
 }
 
 // A rank that stops (or dies) ends the job within the watchdog's bound, with
