@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "bench/cli/delay_output.hpp"
+#include "bench/harness/delay_output.hpp"
 #include "bench/probes/latency_histogram.hpp"
 #include "platform/idle_states.hpp"
 #include "tests/delay/cyclictest_histogram_parser.hpp"
@@ -49,7 +49,7 @@ TEST(CyclictestFormat, ReadsBackThroughAReaderOfTheDocumentedFormat) {
   }
   histogram.columns.push_back(probes::histogram_column(first, 20, "worker 0"));
   histogram.columns.push_back(probes::histogram_column(second, 20, "worker 1"));
-  std::istringstream text(lockstep::cli::cyclictest_histogram_text(histogram));
+  std::istringstream text(lockstep::bench::cyclictest_histogram_text(histogram));
   const auto parsed = lockstep::testing::parse_cyclictest_histogram(text);
   ASSERT_EQ(parsed.error, "");
   ASSERT_EQ(parsed.buckets.size(), 20u);
@@ -80,7 +80,7 @@ TEST(CyclictestFormat, UsesCyclictestsFieldWidths) {
   histogram.bound_us = 3;
   histogram.columns.push_back(probes::histogram_column({1500.0, 1500.0, 9000.0}, 3, "worker 0"));
   histogram.columns.push_back(probes::histogram_column({500.0}, 3, "worker 1"));
-  const std::string text = lockstep::cli::cyclictest_histogram_text(histogram);
+  const std::string text = lockstep::bench::cyclictest_histogram_text(histogram);
   EXPECT_EQ(text,
             "# Histogram\n"
             "000000 000000\t000001\n"
@@ -100,7 +100,7 @@ TEST(CyclictestFormat, UsesCyclictestsFieldWidths) {
 TEST(LogHistogram, SpreadsTheBulkAndKeepsTheTail) {
   std::vector<double> samples(9990, 15'000.0);  // 15 us: the bulk
   for (int i = 0; i < 10; ++i) samples.push_back(3'000'000.0);  // 3 ms: the tail
-  const std::string text = lockstep::cli::log_histogram_text({{"count", samples}});
+  const std::string text = lockstep::bench::log_histogram_text({{"count", samples}});
   EXPECT_NE(text.find("[    10,     20)"), std::string::npos) << text;
   EXPECT_NE(text.find("[  2000,   5000)"), std::string::npos) << text;
   // The one-sample-per-mille tail still draws a bar.
@@ -109,19 +109,19 @@ TEST(LogHistogram, SpreadsTheBulkAndKeepsTheTail) {
 }
 
 TEST(LogHistogram, HasAColumnPerSeriesAndAnAllColumn) {
-  const std::string text = lockstep::cli::log_histogram_text({{"cpu 0", {1500.0}}, {"cpu 1", {1500.0, 700'000.0}}});
+  const std::string text = lockstep::bench::log_histogram_text({{"cpu 0", {1500.0}}, {"cpu 1", {1500.0, 700'000.0}}});
   EXPECT_NE(text.find("cpu 0"), std::string::npos);
   EXPECT_NE(text.find("cpu 1"), std::string::npos);
   EXPECT_NE(text.find("all"), std::string::npos);
-  EXPECT_EQ(lockstep::cli::log_histogram_text({}), "  no samples\n");
+  EXPECT_EQ(lockstep::bench::log_histogram_text({}), "  no samples\n");
 }
 
 TEST(NoisiestCpu, HighestP99ThenHighestMaxThenLowestCpu) {
-  using lockstep::cli::cpu_latency;
-  EXPECT_FALSE(lockstep::cli::noisiest_cpu({}).has_value());
-  EXPECT_EQ(lockstep::cli::noisiest_cpu({{0, 10, 50}, {1, 20, 30}, {2, 15, 900}}), 1u);
-  EXPECT_EQ(lockstep::cli::noisiest_cpu({{0, 20, 50}, {1, 20, 60}}), 1u);
-  EXPECT_EQ(lockstep::cli::noisiest_cpu({{3, 20, 60}, {1, 20, 60}}), 1u);
+  using lockstep::bench::cpu_latency;
+  EXPECT_FALSE(lockstep::bench::noisiest_cpu({}).has_value());
+  EXPECT_EQ(lockstep::bench::noisiest_cpu({{0, 10, 50}, {1, 20, 30}, {2, 15, 900}}), 1u);
+  EXPECT_EQ(lockstep::bench::noisiest_cpu({{0, 20, 50}, {1, 20, 60}}), 1u);
+  EXPECT_EQ(lockstep::bench::noisiest_cpu({{3, 20, 60}, {1, 20, 60}}), 1u);
 }
 
 std::string scratch_file(const std::string& name) {

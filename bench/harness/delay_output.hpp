@@ -29,14 +29,14 @@
 
 #include "bench/probes/latency_histogram.hpp"
 
-namespace lockstep::cli {
+namespace lockstep::bench {
 
 // The histogram in cyclictest's -h text format (above).
-std::string cyclictest_histogram_text(const bench::probes::latency_histogram& histogram);
+std::string cyclictest_histogram_text(const probes::latency_histogram& histogram);
 
 // {"bucket_us": 1, "bound_us", "columns": [{"name", "cpu", "counts" (bound_us
 // numbers), "overflow", "samples", "min_us", "avg_us", "max_us"}]}.
-nlohmann::json latency_histogram_json(const bench::probes::latency_histogram& histogram);
+nlohmann::json latency_histogram_json(const probes::latency_histogram& histogram);
 
 struct labelled_samples {
   std::string name;
@@ -65,4 +65,4 @@ inline constexpr const char* kNoisiestRule =
 // The index (into `cpus`) of the noisiest CPU by kNoisiestRule; empty for none.
 std::optional<std::size_t> noisiest_cpu(const std::vector<cpu_latency>& cpus);
 
-}  // namespace lockstep::cli
+}  // namespace lockstep::bench

@@ -1,5 +1,5 @@
 // delay's histograms and per-CPU verdict (delay_output.hpp).
-#include "bench/cli/delay_output.hpp"
+#include "bench/harness/delay_output.hpp"
 
 #include <fmt/core.h>
 
@@ -7,7 +7,7 @@
 #include <cmath>
 #include <cstdint>
 
-namespace lockstep::cli {
+namespace lockstep::bench {
 
 std::string cyclictest_histogram_text(const bench::probes::latency_histogram& histogram) {
   std::string text = "# Histogram\n";
@@ -134,4 +134,4 @@ std::optional<std::size_t> noisiest_cpu(const std::vector<cpu_latency>& cpus) {
   return noisiest;
 }
 
-}  // namespace lockstep::cli
+}  // namespace lockstep::bench

@@ -1,0 +1,68 @@
+#pragma once
+// What a delay measurement (bench/probes/delay.hpp) means, and its two
+// readings: the text a person reads and the result file
+// (docs/result-files.md, kind "delay"). Google Benchmark keeps its runner
+// apart from its reporters in the same way: analyse_delay derives every
+// figure once; delay_text and delay_json only arrange them.
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bench/probes/delay.hpp"
+#include "bench/probes/latency_histogram.hpp"
+#include "platform/stats.hpp"
+#include "platform/topology.hpp"
+
+namespace lockstep::bench {
+
+// An answer this many times the largest completion p99 of the search's trials
+// was not set by the step: a step whose p99 is 150 us does not miss a 1.5 ms
+// deadline by its own cost, only when the machine stalls.
+inline constexpr double kStallDominatedFactor = 10.0;
+
+// One CPU of a --per-cpu run.
+struct per_cpu_row {
+  std::optional<unsigned> cpu;  // where its thread woke for its first period
+  unsigned shown_cpu = 0;       // the CPU's number, or the participant's where unknown
+  std::vector<double> wakeup_ns;
+  std::vector<double> completion_ns;
+  std::uint64_t deadline_misses = 0;  // its completions above the period
+};
+
+// The search's conclusions (--find-period).
+struct search_reading {
+  double largest_completion_p99_ns = 0;  // over every trial
+  // The answer was many times every trial's completion p99
+  // (kStallDominatedFactor): the misses that failed shorter periods were rare
+  // stalls of the machine, not the step's cost.
+  bool set_by_stalls = false;
+  std::optional<bool> confirm_within_rate;        // the confirming run's rate at most the asked one
+  double confirm_longest_completion_ns = 0;       // 0: no confirming run
+};
+
+struct delay_analysis {
+  probes::latency_histogram histogram;  // 1 us buckets per participant
+  std::vector<per_cpu_row> per_cpu;     // --per-cpu only
+  std::optional<std::size_t> noisiest;  // index into per_cpu, by kNoisiestRule
+  std::optional<search_reading> search;
+};
+
+// Every figure the readings print or write, derived once.
+delay_analysis analyse_delay(const probes::delay_measurement& measured);
+
+// The search's rule in words, as printed and written.
+std::string search_rule(const probes::period_search_settings& search, std::int64_t trial_periods);
+
+// The whole text of the run's answer (stdout). `histogram_file`: whether the
+// 1 us buckets also went to --histogram-file.
+std::string delay_text(const probes::delay_measurement& measured, const delay_analysis& analysis,
+                       bool histogram_file);
+
+// The result file's document (kind "delay"), the machine context included.
+nlohmann::json delay_json(const probes::delay_measurement& measured, const delay_analysis& analysis,
+                          const platform::topology& machine);
+
+}  // namespace lockstep::bench
