@@ -39,10 +39,5 @@ bool has_derived_ratios(const std::map<std::string, std::string>& fields) {
   return (field("kind") == "rk4" && field("variant") != "serial") || field("kind") == "overhead";
 }
 
-std::string format_ns(double ns) {
-  if (ns >= 1e6) return fmt::format("{:.2f} ms", ns / 1e6);
-  if (ns >= 1e3) return fmt::format("{:.2f} us", ns / 1e3);
-  return fmt::format("{:.1f} ns", ns);
-}
 
 }  // namespace lockstep::bench

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "platform/format.hpp"
+
 namespace lockstep::bench {
 
 // The run's calibrations (medians), either of which may be missing.
@@ -37,8 +39,8 @@ std::vector<derived_ratio> derived_ratios(const std::map<std::string, double>& c
 // derived ratios: the composed step's entries, not the calibrations.
 bool has_derived_ratios(const std::map<std::string, std::string>& fields);
 
-// "12.3 ns", "4.56 us", "7.89 ms": the one nanosecond formatter of the C++
-// side (reports/ has its Python twin, compare.format_ns).
-std::string format_ns(double ns);
+// "12.3 ns", "4.56 us", "7.89 ms": platform/format.hpp's, the one nanosecond
+// formatter of the C++ side.
+using platform::format_ns;
 
 }  // namespace lockstep::bench

@@ -7,14 +7,13 @@
 #include <cstddef>
 #include <vector>
 
+#include "platform/distribution_json.hpp"
 #include "platform/stats.hpp"
 
 namespace lockstep::bench {
 
-// {min, p50, p99, p999, max, mean, count} (platform/stats.hpp); no samples:
-// every statistic null and count 0 (a missing number is said, never faked).
-nlohmann::json distribution_json(const std::vector<double>& samples);
-nlohmann::json distribution_json(const platform::distribution& summary);
+// {min, p50, p99, p999, max, mean, count}: platform/distribution_json.hpp's.
+using platform::distribution_json;
 
 // The histogram of these samples (round bucket widths covering min..max, see
 // platform/stats.hpp), every sample added.
