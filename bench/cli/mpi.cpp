@@ -33,6 +33,7 @@
 #include "distributed/benchmark.hpp"
 #include "distributed/launcher.hpp"
 #include "distributed/registry.hpp"
+#include "distributed/report.hpp"
 #include "distributed/watchdog.hpp"
 #include "distributed/world.hpp"
 #include "platform/placement.hpp"
@@ -208,177 +209,30 @@ void launch(const mpi_options& options, int& result) {
   result = kExitOk;
 }
 
-std::string exchange_name(const dist::exchange_entry& entry, const dist::world& job) {
-  return fmt::format("mpi/{}/ranks:{}/hosts:{}", entry.segment, job.size, job.hosts);
-}
-std::string pingpong_name(const dist::world& job) { return fmt::format("mpi/pingpong/ranks:2/hosts:{}", job.hosts); }
-
-using bench::distribution_json;
-using bench::format_ns;
-
+// Rank 0's readings: the text, and the result file (the measurement's own
+// keys from distributed/report.hpp, the machine context beside them).
 void report(const mpi_options& options, const checked_options& checked, const dist::world& job,
             const dist::benchmark_settings& settings, const dist::benchmark_result& measured,
             const std::map<std::string, std::string>& not_applicable, const std::string& launch_text, int& result) {
-  const std::string library = dist::library_version();
-  const std::string library_short = library.substr(0, library.find(','));  // "Open MPI v4.1.4"
-  fmt::print("lockstep mpi: {} ranks on {} host{} ({} transport, {}), {}, pin {}, {} rounds of {} steps\n", job.size,
-             job.hosts, job.hosts == 1 ? "" : "s", dist::to_string(checked.how), library_short,
-             checked.model.description(), options.pin, settings.rounds, settings.steps);
-  if (!measured.plan.note.empty()) fmt::print("placement: {}\n", measured.plan.note);
-  std::vector<double> pingpong_means;
-  for (const auto& p : measured.pingpongs) pingpong_means.push_back(p.one_way_mean_ns);
-  const auto& last_pingpong = measured.pingpongs.back();
-  fmt::print("ping-pong, ranks 0 and 1, 0 bytes: one-way {} (OSU style: mean of {} round trips / 2; median of {} rounds, "
-             "range {}..{}); per round trip, last round: min {}, p50 {}, p99 {}\n",
-             format_ns(platform::median(pingpong_means)), settings.pingpong_round_trips, measured.pingpongs.size(),
-             format_ns(*std::min_element(pingpong_means.begin(), pingpong_means.end())),
-             format_ns(*std::max_element(pingpong_means.begin(), pingpong_means.end())), format_ns(last_pingpong.one_way.min),
-             format_ns(last_pingpong.one_way.p50), format_ns(last_pingpong.one_way.p99));
-  // Each round's ping-pong, for the ratio measured side by side with it.
-  std::map<unsigned, double> pingpong_of_round;
-  for (const auto& p : measured.pingpongs) pingpong_of_round[p.round] = p.one_way_mean_ns;
-  fmt::print("{:<21} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", "exchange",
-             "step (median, range)", "stage p50", "p99", "p99.9", "max", "skew p50", "skew p99", "slowest rank",
-             "transfer p50", "bitwise");
-  bool all_bitwise = true;
-  for (const dist::exchange_entry* entry : settings.exchanges) {
-    std::vector<const dist::exchange_figures*> rounds;
-    for (const auto& figures : measured.exchanges)
-      if (figures.entry == entry) rounds.push_back(&figures);
-    std::vector<double> steps;
-    std::vector<double> p50, p99, p999, max, skew50, skew99, transfer50, over_pingpong;
-    std::vector<std::uint64_t> slowest(static_cast<std::size_t>(job.size), 0);
-    bool bitwise = true;
-    for (const auto* figures : rounds) {
-      steps.push_back(figures->step_ns);
-      p50.push_back(figures->stage_latency.p50);
-      p99.push_back(figures->stage_latency.p99);
-      p999.push_back(figures->stage_latency.p999);
-      max.push_back(figures->stage_latency.max);
-      skew50.push_back(figures->skew.p50);
-      skew99.push_back(figures->skew.p99);
-      over_pingpong.push_back(figures->transfer.p50 / pingpong_of_round.at(figures->round));
-      transfer50.push_back(figures->transfer.p50);
-      for (std::size_t rank = 0; rank < slowest.size(); ++rank) slowest[rank] += figures->slowest_counts[rank];
-      bitwise = bitwise && figures->bitwise;
-    }
-    all_bitwise = all_bitwise && bitwise;
-    const auto most = std::max_element(slowest.begin(), slowest.end());
-    std::uint64_t total = 0;
-    for (std::uint64_t count : slowest) total += count;
-    fmt::print("{:<21} {:>22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>10} {:>14} {:>28} {:>8}\n", entry->label,
-               fmt::format("{} ({}..{})", format_ns(platform::median(steps)), format_ns(*std::min_element(steps.begin(), steps.end())),
-                           format_ns(*std::max_element(steps.begin(), steps.end()))),
-               format_ns(platform::median(p50)), format_ns(platform::median(p99)), format_ns(platform::median(p999)), format_ns(platform::median(max)),
-               format_ns(platform::median(skew50)), format_ns(platform::median(skew99)),
-               fmt::format("{} ({:.0f}%)", most - slowest.begin(),
-                           total ? 100.0 * static_cast<double>(*most) / static_cast<double>(total) : 0.0),
-               fmt::format("{} {:.2f}x ({:.2f}..{:.2f})", format_ns(platform::median(transfer50)), platform::median(over_pingpong),
-                           *std::min_element(over_pingpong.begin(), over_pingpong.end()),
-                           *std::max_element(over_pingpong.begin(), over_pingpong.end())),
-               bitwise ? "yes" : "NO");
-  }
-  fmt::print("stage figures: medians over rounds of each round's pooled per-stage exchange times (every rank, every "
-             "stage); skew: latest minus earliest arrival at a stage{}; transfer: latest departure minus latest arrival, "
-             "p50, and over the ping-pong one-way mean of the same round (median and range over rounds)\n",
-             measured.one_clock ? "" : " (clocks of several hosts, offsets estimated against rank 0)");
-  for (const auto& [name, reason] : not_applicable) fmt::print("not applicable: {}: {}\n", name, reason);
-
+  dist::report_input input;
+  input.job = &job;
+  input.settings = &settings;
+  input.measured = &measured;
+  input.how = checked.how;
+  input.pin = options.pin;
+  input.watchdog_ns = checked.watchdog_ns;
+  input.not_applicable = not_applicable;
+  input.launch_text = launch_text;
+  const dist::mpi_analysis analysis = dist::analyse(input);
+  fmt::print("{}", dist::mpi_text(analysis));
   if (!options.out.empty()) {
-    const platform::topology machine = platform::topology::this_machine();
-    nlohmann::json document = bench::result_document("mpi", machine);
-    bench::merge_into_result(document, bench::context_map{
-                                           {"mpi_library", library},
-                                           {"mpi_standard", dist::standard_version()},
-                                           {"mpi_transport", std::string(dist::to_string(checked.how))},
-                                           {"mpi_hosts", std::to_string(job.hosts)},
-                                           {"mpi_ranks", std::to_string(job.size)},
-                                           {"mpi_ranks_per_host", std::to_string(job.ranks_per_host_max)},
-                                           {"mpi_launch", launch_text},
-                                           {"lockstep_mode", "mpi"},
-                                       });
-    nlohmann::json names = nlohmann::json::array();
-    for (const auto* entry : settings.exchanges) names.push_back(entry->label);
-    document["settings"] = {{"ranks", job.size},
-                            {"hosts", job.hosts},
-                            {"transport", dist::to_string(checked.how)},
-                            {"model", checked.model.key()},
-                            {"equations", checked.model.equations()},
-                            {"steps", settings.steps},
-                            {"warmup_steps", settings.warmup_steps},
-                            {"rounds", settings.rounds},
-                            {"pin", options.pin},
-                            {"exchanges", names},
-                            {"pingpong_round_trips", settings.pingpong_round_trips},
-                            {"pingpong_warmup_round_trips", settings.pingpong_warmup},
-                            {"watchdog_ns", checked.watchdog_ns},
-                            {"arrival_clock", measured.one_clock ? "one host" : "offset-estimated"}};
-    nlohmann::json benchmarks = nlohmann::json::array();
-    for (const auto& p : measured.pingpongs) {
-      const std::string name = pingpong_name(job);
-      benchmarks.push_back({{"name", name}, {"run_name", name}, {"run_type", "iteration"},
-                            {"repetitions", settings.rounds}, {"repetition_index", p.round}, {"threads", 1},
-                            {"iterations", p.round_trips}, {"real_time", p.one_way_mean_ns},
-                            {"cpu_time", p.one_way_mean_ns}, {"time_unit", "ns"}, {"one_way_min_ns", p.one_way.min},
-                            {"one_way_p50_ns", p.one_way.p50}, {"one_way_p99_ns", p.one_way.p99}});
-    }
-    for (const auto& figures : measured.exchanges) {
-      const std::string name = exchange_name(*figures.entry, job);
-      const auto most = std::max_element(figures.slowest_counts.begin(), figures.slowest_counts.end());
-      const double stages = static_cast<double>(figures.skew.count);
-      std::int64_t switches = 0;
-      std::int64_t migrations = 0;
-      bool migrations_known = true;  // every rank's count is available
-      for (const auto& rank : figures.ranks) {
-        switches += rank.context_switches;
-        migrations += rank.migrations.value_or(0);
-        migrations_known = migrations_known && rank.migrations.has_value();
-      }
-      const double timed_steps = static_cast<double>(settings.steps);
-      nlohmann::json entry = {{"name", name}, {"run_name", name}, {"run_type", "iteration"},
-                              {"repetitions", settings.rounds}, {"repetition_index", figures.round}, {"threads", 1},
-                              {"iterations", settings.steps}, {"real_time", figures.step_ns},
-                              {"cpu_time", figures.step_ns}, {"time_unit", "ns"},
-                              {"stage_p50_ns", figures.stage_latency.p50}, {"stage_p99_ns", figures.stage_latency.p99},
-                              {"stage_p999_ns", figures.stage_latency.p999}, {"stage_max_ns", figures.stage_latency.max},
-                              {"skew_p50_ns", figures.skew.p50}, {"skew_p99_ns", figures.skew.p99},
-                              {"skew_max_ns", figures.skew.max}, {"slowest_rank", most - figures.slowest_counts.begin()},
-                              {"transfer_p50_ns", figures.transfer.p50}, {"transfer_p99_ns", figures.transfer.p99},
-                              {"transfer_p50_over_pingpong", figures.transfer.p50 / pingpong_of_round.at(figures.round)},
-                              {"stage_p50_over_pingpong", figures.stage_latency.p50 / pingpong_of_round.at(figures.round)},
-                              {"slowest_rank_share", stages > 0 ? static_cast<double>(*most) / stages : 0.0},
-                              {"context_switches_per_step", static_cast<double>(switches) / timed_steps},
-                              {"bitwise", figures.bitwise ? 1 : 0}};
-      if (migrations_known) entry["migrations_per_step"] = static_cast<double>(migrations) / timed_steps;
-      benchmarks.push_back(std::move(entry));
-    }
-    document["benchmarks"] = std::move(benchmarks);
-    nlohmann::json details = nlohmann::json::array();
-    for (const auto& figures : measured.exchanges) {
-      if (figures.round + 1 != settings.rounds) continue;  // the last round's details
-      nlohmann::json ranks = nlohmann::json::array();
-      for (const auto& rank : figures.ranks)
-        ranks.push_back({{"rank", rank.rank}, {"host", rank.host},
-                         {"cpu", rank.cpu ? nlohmann::json(*rank.cpu) : nlohmann::json(nullptr)},
-                         {"stage_p50_ns", rank.stage_p50_ns}, {"stage_p99_ns", rank.stage_p99_ns},
-                         {"context_switches", rank.context_switches},
-                         {"migrations", rank.migrations ? nlohmann::json(*rank.migrations) : nlohmann::json("unavailable")},
-                         {"futex_waits", rank.futex_waits}});
-      details.push_back({{"exchange", figures.entry->name}, {"sync", figures.entry->sync},
-                         {"label", figures.entry->label}, {"name", exchange_name(*figures.entry, job)},
-                         {"description", figures.entry->description}, {"round", figures.round},
-                         {"stage_latency_ns", distribution_json(figures.stage_latency)},
-                         {"skew_ns", distribution_json(figures.skew)},
-                         {"transfer_ns", distribution_json(figures.transfer)},
-                         {"slowest_rank_counts", figures.slowest_counts},
-                         {"per_rank", ranks}});
-    }
-    document["exchanges"] = std::move(details);
-    document["not_applicable"] = not_applicable;
+    nlohmann::json document = bench::result_document("mpi", platform::topology::this_machine());
+    bench::merge_into_result(document, dist::mpi_context(analysis));
+    document.update(dist::mpi_json(analysis));
     bench::write_result_file(options.out, document.dump(2) + "\n");
     fmt::print("wrote {}\n", options.out);
   }
-  if (!all_bitwise) {
+  if (!analysis.all_bitwise) {
     fmt::print(stderr, "lockstep mpi: a rank's block differs from the serial RK4 (bitwise column): the exchange is wrong\n");
     result = kExitCheckFailed;
     return;
