@@ -1,27 +1,23 @@
 // lockstep c2c: the core-to-core latency matrix, each pair labelled with its
 // hwloc relation (SMT siblings, shared L2, shared L3, different L3, different
 // package). The measurement is the c2c probe (bench/probes/core_to_core.hpp),
-// the pairs its plan (bench/probes/c2c_pairs.hpp).
+// the pairs its plan (bench/probes/c2c_pairs.hpp), what it means and its two
+// readings bench/harness/c2c_report.hpp; this file is the options, their
+// checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
-#include <algorithm>
 #include <cstdio>
-#include <map>
 #include <memory>
-#include <random>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "bench/cli/command.hpp"
 #include "bench/probes/core_to_core.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/machine_context.hpp"
+#include "bench/harness/c2c_report.hpp"
 #include "bench/harness/result_file.hpp"
-#include "bench/harness/result_json.hpp"
 #include "bench/probes/c2c_pairs.hpp"
-#include "platform/stats.hpp"
 #include "platform/topology.hpp"
 
 namespace lockstep::cli {
@@ -55,28 +51,6 @@ platform::topology load_machine(const std::string& synthetic) {
     return synthetic.empty() ? platform::topology::this_machine() : platform::topology::from_synthetic(synthetic);
   } catch (const platform::topology_error& e) {
     throw usage_error(std::string(synthetic.empty() ? "" : "--synthetic: ") + e.what());
-  }
-}
-
-void print_matrix(const std::vector<int>& cpus, const std::vector<bench::c2c::pair_latency>& results, method how) {
-  std::map<std::pair<int, int>, double> median;
-  for (const auto& r : results)
-    if (r.how == how) median[{r.a, r.b}] = median[{r.b, r.a}] = platform::summarize(r.one_way_ns).p50;
-  fmt::print("\nmedian one-way latency, ns ({}):\n{:>6}", bench::c2c::to_string(how), "");
-  for (int cpu : cpus) fmt::print(" {:>7}", cpu);
-  fmt::print("\n");
-  for (int row : cpus) {
-    fmt::print("{:>6}", row);
-    for (int col : cpus) {
-      const auto found = median.find({row, col});
-      if (row == col)
-        fmt::print(" {:>7}", "-");
-      else if (found == median.end())
-        fmt::print(" {:>7}", ".");  // not sampled
-      else
-        fmt::print(" {:>7.1f}", found->second);
-    }
-    fmt::print("\n");
   }
 }
 
@@ -118,36 +92,11 @@ void run_c2c(const c2c_options& options, int& result) {
   } catch (const std::runtime_error& e) {
     throw usage_error(std::string(e.what()) + "; choose usable CPUs with --cores");
   }
-  const auto relation_of = [&](int a, int b) {
-    return std::string(platform::to_string(machine.relation(static_cast<unsigned>(a), static_cast<unsigned>(b))));
-  };
-
-  fmt::print("one-way latency = round trip / 2, {} samples of {} round trips per pair\n", options.samples,
-             options.rounds);
-  fmt::print("{:>5} {:>5}  {:<18} {:<10} {:>9} {:>9} {:>9}\n", "cpu", "cpu", "relation", "method", "min ns", "p50 ns",
-             "p99 ns");
-  for (const auto& r : results) {
-    const platform::distribution one_way = platform::summarize(r.one_way_ns);
-    fmt::print("{:>5} {:>5}  {:<18} {:<10} {:>9.1f} {:>9.1f} {:>9.1f}\n", r.a, r.b, relation_of(r.a, r.b),
-               bench::c2c::to_string(r.how), one_way.min, one_way.p50, one_way.p99);
-  }
-  for (method how : methods) print_matrix(cpus, results, how);
+  const bench::c2c_analysis analysis = bench::analyse_c2c(results, methods, machine);
+  fmt::print("{}", bench::c2c_text(settings, cpus, results, analysis));
 
   if (!options.out.empty()) {
-    nlohmann::json document = bench::result_document("c2c", machine);
-    document["sampled"] = plan.sampled;
-    document["pairs_total"] = plan.all_pairs;
-    document["samples_per_pair"] = options.samples;
-    document["rounds_per_sample"] = options.rounds;
-    document["pairs"] = nlohmann::json::array();
-    for (const auto& r : results)
-      document["pairs"].push_back({{"a", r.a},
-                                   {"b", r.b},
-                                   {"relation", relation_of(r.a, r.b)},
-                                   {"method", bench::c2c::to_string(r.how)},
-                                   {"one_way_ns", bench::distribution_json(r.one_way_ns)},
-                                   {"samples", r.one_way_ns.size()}});
-    bench::write_result_file(options.out, document.dump(2) + "\n");
+    bench::write_result_file(options.out, bench::c2c_json(plan, settings, results, analysis, machine).dump(2) + "\n");
     fmt::print(stderr, "c2c: wrote {}\n", options.out);
   }
   result = kExitOk;
