@@ -1,21 +1,19 @@
 // lockstep falseshare: false sharing priced directly (the falseshare probe,
 // bench/probes/falseshare.hpp): pinned writers, counters `stride` bytes apart.
+// What it means and its two readings: bench/harness/falseshare_report.hpp;
+// this file is the options, their checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
-#include <algorithm>
 #include <memory>
 #include <string>
 #include <vector>
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/machine_context.hpp"
-#include "bench/harness/paired_ratio.hpp"
+#include "bench/harness/falseshare_report.hpp"
 #include "bench/harness/result_file.hpp"
-#include "bench/harness/result_json.hpp"
 #include "bench/probes/falseshare.hpp"
-#include "platform/stats.hpp"
 #include "platform/topology.hpp"
 
 namespace lockstep::cli {
@@ -63,69 +61,11 @@ void run_falseshare(const falseshare_options& options, int& result) {
     throw usage_error(std::string(e.what()) + "; choose usable CPUs with --cores");
   }
 
-  std::string cpu_text;
-  for (int cpu : cpus) cpu_text += (cpu_text.empty() ? "" : ",") + std::to_string(cpu);
-  fmt::print("false sharing: {} writers pinned to CPUs {}, counters `stride` bytes apart\n", cpus.size(), cpu_text);
-  fmt::print("time per write, ns ({} repeats x {} threads, {} each)\n", settings.repeats, cpus.size(), options.window);
-  fmt::print("{:>7}  {:<28} {:>9} {:>9} {:>9} {:>8}\n", "stride", "writers share", "min", "median", "max", "samples");
-  for (const auto& cost : costs) {
-    if (cost.ns_per_write.empty()) {
-      fmt::print("{:>7}  no writer was scheduled during any window (machine overloaded)\n", cost.stride_bytes);
-      continue;
-    }
-    const auto d = platform::summarize(cost.ns_per_write);
-    const char* sharing = cost.shares_line ? "a 64-byte line" : cost.shares_line_pair ? "a 128-byte pair, not a line"
-                                                                                       : "nothing";
-    fmt::print("{:>7}  {:<28} {:>9.2f} {:>9.2f} {:>9.2f} {:>8}\n", cost.stride_bytes, sharing, d.min, d.p50, d.max,
-               d.count);
-  }
-
-  // The known answer, paired: the smallest stride whose writers share a line
-  // against the smallest that shares nothing, a ratio per repeat (both ran
-  // within one repeat, a few windows apart).
-  nlohmann::json penalty;
-  const auto sharing = std::find_if(costs.begin(), costs.end(), [](const auto& cost) { return cost.shares_line; });
-  const auto apart = std::find_if(costs.begin(), costs.end(),
-                                  [](const auto& cost) { return !cost.shares_line && !cost.shares_line_pair; });
-  if (sharing != costs.end() && apart != costs.end()) {
-    std::vector<double> ratios;
-    for (std::size_t repeat = 0; repeat < sharing->repeat_mean_ns.size() && repeat < apart->repeat_mean_ns.size();
-         ++repeat)
-      if (sharing->repeat_mean_ns[repeat] && apart->repeat_mean_ns[repeat] && *apart->repeat_mean_ns[repeat] > 0.0)
-        ratios.push_back(*sharing->repeat_mean_ns[repeat] / *apart->repeat_mean_ns[repeat]);
-    if (!ratios.empty()) {
-      const bench::ratio_estimate estimate = bench::bootstrap_median(ratios);
-      const bench::ratio_verdict verdict = bench::verdict_of(estimate);
-      fmt::print("false-sharing penalty, stride {} / stride {} paired per repeat: {:.2f}x [{:.2f}, {:.2f}] {} ({} "
-                 "pairs, {:.0f} % bootstrap interval, noise band {:.0f} %)\n",
-                 sharing->stride_bytes, apart->stride_bytes, estimate.median, estimate.low, estimate.high,
-                 bench::to_string(verdict), ratios.size(), 100.0 * bench::kConfidence, 100.0 * bench::kDefaultNoise);
-      penalty = {{"a_stride_bytes", sharing->stride_bytes},
-                 {"b_stride_bytes", apart->stride_bytes},
-                 {"ratios", ratios},
-                 {"median", estimate.median},
-                 {"ci_low", estimate.low},
-                 {"ci_high", estimate.high},
-                 {"confidence", bench::kConfidence},
-                 {"noise", bench::kDefaultNoise},
-                 {"verdict", bench::to_string(verdict)}};
-    }
-  }
+  const bench::falseshare_analysis analysis = bench::analyse_falseshare(costs);
+  fmt::print("{}", bench::falseshare_text(settings, options.window, costs, analysis));
 
   if (!options.out.empty()) {
-    nlohmann::json document = bench::result_document("falseshare", machine);
-    if (!penalty.is_null()) document["penalty"] = penalty;
-    document["settings"] = {{"threads", options.threads},
-                            {"cpus", cpus},
-                            {"window_ns", settings.window_ns},
-                            {"repeats", settings.repeats}};
-    document["strides"] = nlohmann::json::array();
-    for (const auto& cost : costs)
-      document["strides"].push_back({{"stride_bytes", cost.stride_bytes},
-                                     {"share_line", cost.shares_line},
-                                     {"share_line_pair", cost.shares_line_pair},
-                                     {"ns_per_write", bench::distribution_json(cost.ns_per_write)}});
-    bench::write_result_file(options.out, document.dump(2) + "\n");
+    bench::write_result_file(options.out, bench::falseshare_json(settings, costs, analysis, machine).dump(2) + "\n");
     fmt::print(stderr, "falseshare: wrote {}\n", options.out);
   }
   result = kExitOk;
