@@ -1,5 +1,7 @@
 // lockstep migrate: the cost of one forced migration, the move and the cache
-// refill (the migrate probe, bench/probes/migrate.hpp).
+// refill (the migrate probe, bench/probes/migrate.hpp). What it means and its
+// two readings: bench/harness/migrate_report.hpp; this file is the options,
+// their checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
@@ -10,12 +12,10 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/machine_context.hpp"
+#include "bench/harness/migrate_report.hpp"
 #include "bench/harness/result_file.hpp"
-#include "bench/harness/result_json.hpp"
 #include "bench/probes/migrate.hpp"
 #include "platform/cache_line.hpp"
-#include "platform/stats.hpp"
 #include "platform/topology.hpp"
 
 namespace lockstep::cli {
@@ -27,11 +27,6 @@ struct migrate_options {
   int repeats = 200;
   std::string out;
 };
-
-void print_row(const char* what, const std::vector<double>& values) {
-  const auto d = platform::summarize(values);
-  fmt::print("{:<34} {:>10.0f} {:>10.0f} {:>10.0f} {:>10.0f}\n", what, d.min, d.p50, d.p99, d.max);
-}
 
 void run_migrate(const migrate_options& options, int& result) {
   const platform::topology machine = platform::topology::this_machine();
@@ -57,30 +52,11 @@ void run_migrate(const migrate_options& options, int& result) {
   } catch (const std::runtime_error& e) {
     throw usage_error(std::string(e.what()) + "; choose usable CPUs with --cores");
   }
-  const std::string relation(platform::to_string(machine.relation(settings.from, settings.to)));
-
-  fmt::print("forced migration between CPU {} and CPU {} ({}), working set {} bytes, {} migrations\n", settings.from,
-             settings.to, relation, settings.bytes, settings.repeats);
-  fmt::print("{:<34} {:>10} {:>10} {:>10} {:>10}\n", "ns", "min", "median", "p99", "max");
-  print_row("move (setaffinity until there)", samples.move_ns);
-  print_row("  baseline: setaffinity, no move", samples.stay_ns);
-  print_row("refill (first pass - next pass)", samples.refill_ns);
-  print_row("  first pass after the move", samples.first_pass_ns);
-  print_row("  next pass (lines local)", samples.next_pass_ns);
-  const auto move = platform::summarize(samples.move_ns);
-  const auto refill = platform::summarize(samples.refill_ns);
-  fmt::print("one migration ~ {:.0f} ns move + {:.0f} ns refill (medians)\n", move.p50, refill.p50);
+  const bench::migrate_analysis analysis = bench::analyse_migrate(settings, samples, machine);
+  fmt::print("{}", bench::migrate_text(settings, analysis));
 
   if (!options.out.empty()) {
-    nlohmann::json document = bench::result_document("migrate", machine);
-    document["settings"] = {{"from", settings.from},   {"to", settings.to},          {"relation", relation},
-                            {"bytes", settings.bytes}, {"repeats", settings.repeats}};
-    document["move_ns"] = bench::distribution_json(samples.move_ns);
-    document["setaffinity_no_move_ns"] = bench::distribution_json(samples.stay_ns);
-    document["refill_ns"] = bench::distribution_json(samples.refill_ns);
-    document["first_pass_ns"] = bench::distribution_json(samples.first_pass_ns);
-    document["next_pass_ns"] = bench::distribution_json(samples.next_pass_ns);
-    bench::write_result_file(options.out, document.dump(2) + "\n");
+    bench::write_result_file(options.out, bench::migrate_json(settings, samples, analysis, machine).dump(2) + "\n");
     fmt::print(stderr, "migrate: wrote {}\n", options.out);
   }
   result = kExitOk;
