@@ -74,14 +74,24 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
     run.run_name.iterations.clear();
     run.run_name.repetitions.clear();
     run.run_name.time_type.clear();
-    // The CPU time per unit in place of the benchmark thread's own (which
-    // only replayed the batch times). JSONReporter writes a time as
-    // cpu_accumulated_time * multiplier / iterations, and a percentage
+    // The time per unit in place of the batch's (an iteration is a batch:
+    // team_driver.hpp, before measure_entry), from the counter that holds it
+    // (for an aggregate, the counter's aggregate). JSONReporter writes a time
+    // as accumulated_time * multiplier / iterations, and a percentage
     // aggregate (cv) as it is.
+    const bool percentage = run.run_type == Run::RT_Aggregate && run.aggregate_unit == benchmark::kPercentage;
+    for (const char* counter_name : {"ns_per_step", "ns_per_episode"}) {
+      const auto real = run.counters.find(counter_name);
+      if (real == run.counters.end() || !std::isfinite(real->second.value)) continue;
+      run.real_accumulated_time =
+          percentage ? real->second.value : real->second.value * 1e-9 * static_cast<double>(run.iterations);
+      break;
+    }
+    // The CPU time per unit in place of the benchmark thread's own (which
+    // only replayed the batch times).
     for (const char* counter_name : {"cpu_ns_per_step", "cpu_ns_per_episode"}) {
       const auto cpu = run.counters.find(counter_name);
       if (cpu == run.counters.end() || !std::isfinite(cpu->second.value)) continue;
-      const bool percentage = run.run_type == Run::RT_Aggregate && run.aggregate_unit == benchmark::kPercentage;
       run.cpu_accumulated_time =
           percentage ? cpu->second.value : cpu->second.value * 1e-9 * static_cast<double>(run.iterations);
       break;

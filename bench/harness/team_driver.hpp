@@ -243,10 +243,13 @@ double median_unit_ns(const batch_record& record);
 // that its JSON reads as any Google Benchmark file does and Google Benchmark's
 // own tools/compare.py compares what `lockstep compare` compares:
 // - one iteration is one timed batch of units (RK4 steps, or episodes of a
-//   bare barrier), and its manual time (SetIterationTime) is the batch's time
-//   divided by its units; so a repetition's real_time, Google Benchmark's
-//   sum of iteration times over the iterations, is exactly that repetition's
-//   time per unit, the ns_per_step (ns_per_episode) counter;
+//   bare barrier), and its manual time (SetIterationTime) is the batch's
+//   time: Google Benchmark decides how many iterations a repetition runs from
+//   the time an iteration takes, and a time per unit would make it ask for a
+//   batch's worth of units too many (a quick run's entry ran out of its call
+//   budget). result_json_reporter (reporters.hpp) then writes real_time per
+//   unit: a repetition's real_time is its ns_per_step (ns_per_episode)
+//   counter, the time per unit over its timed batches;
 // - Google Benchmark's median aggregate of real_time is then the median of
 //   the repetitions' ns_per_<unit>, the figure `lockstep compare` builds each
 //   side of its ratio from (reports/lockstep_reports/compare.py); so the two
@@ -299,10 +302,9 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
     std::int64_t filler = result.batches.slowest_unit_ns * static_cast<std::int64_t>(result.batches.units_per_batch);
     if (!times.empty())
       filler = std::llround(platform::median(std::vector<double>(times.begin(), times.end())));
-    const double units = static_cast<double>(std::max<std::uint64_t>(result.batches.units_per_batch, 1));
     std::size_t batch = 0;
     for (auto _ : state) {
-      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) / units * 1e-9);
+      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) * 1e-9);
       ++batch;
     }
     const std::string message = reason + " (this repetition stopped after " + std::to_string(times.size()) + " of " +
@@ -414,11 +416,12 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   set_pace_counters(state, harness, pace_before, pace_after);
   if (harness.short_batches.count(name) > 0) state.counters["short_batches"] = 1.0;
 
-  // Per unit (see above): a batch's time over its units.
+  // A batch's time (see above): Google Benchmark sizes the next repetition's
+  // iterations by it; the JSON reporter writes it per unit.
   const double units = static_cast<double>(result.batches.units_per_batch);
   std::size_t batch = 0;
   for (auto _ : state) {
-    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) / units * 1e-9);
+    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) * 1e-9);
     ++batch;
   }
   const std::string unit_name(unit);
