@@ -15,7 +15,7 @@ namespace bench = lockstep::bench;
 namespace cli = lockstep::cli;
 
 TEST(DelayJson, DistributionOfKnownSamples) {
-  const auto json = bench::distribution_json({5, 1, 4, 2, 3});
+  const auto json = bench::distribution_json(std::vector<double>{5, 1, 4, 2, 3});
   EXPECT_EQ(json["count"], 5);
   EXPECT_EQ(json["min"], 1.0);
   EXPECT_EQ(json["p50"], 3.0);
@@ -25,7 +25,7 @@ TEST(DelayJson, DistributionOfKnownSamples) {
 }
 
 TEST(DelayJson, NoSamplesIsNullNotZero) {
-  const auto json = bench::distribution_json({});
+  const auto json = bench::distribution_json(std::vector<double>{});
   EXPECT_EQ(json["count"], 0);
   for (const char* key : {"min", "p50", "p99", "p999", "max"}) EXPECT_TRUE(json[key].is_null()) << key;
 }
