@@ -389,6 +389,7 @@ nlohmann::json delay_json(const delay_measurement& measured, const delay_analysi
         {"model", settings.model.key()},
         {"equations", settings.model.equations()},
         {"per_cpu", settings.per_cpu},
+        {"compare_pinning", settings.compare_pinning},
         {"view", measured.view},
         {"fifo_priority", settings.fifo_priority ? nlohmann::json(*settings.fifo_priority) : nullptr},
         {"mlock", settings.mlock},

@@ -959,8 +959,9 @@ def _delay_extras(path: str, document: dict) -> DelayExtras:
                 idle[key] = raw[key]
     settings = {}
     raw = document.get("settings", {})
-    if "per_cpu" in raw:
-        settings["per_cpu"] = raw["per_cpu"]
+    for key in ("per_cpu", "compare_pinning"):
+        if key in raw:
+            settings[key] = raw[key]
     for key in ("dma_latency_us", "histogram_bound_us", "stop_above_ns"):
         if raw.get(key) is not None:
             settings[key] = raw[key]
