@@ -185,6 +185,8 @@ void atomic_result_file::commit() {
   for (int signal_number : kEndingSignals) sigaddset(&block, signal_number);
   ::pthread_sigmask(SIG_BLOCK, &block, &previous);
   int expected = writing;
+  // (1) on success, as the stores below: a handler that reads `renaming`
+  // waits for the outcome this thread stores after the rename.
   if (!g_state.compare_exchange_strong(expected, renaming, std::memory_order_acq_rel)) {
     // Unreachable while this object lives: only commit() leaves `writing`,
     // and a handler never changes the state.
