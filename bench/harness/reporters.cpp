@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <initializer_list>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
@@ -80,22 +81,19 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
     // as accumulated_time * multiplier / iterations, and a percentage
     // aggregate (cv) as it is.
     const bool percentage = run.run_type == Run::RT_Aggregate && run.aggregate_unit == benchmark::kPercentage;
-    for (const char* counter_name : {"ns_per_step", "ns_per_episode"}) {
-      const auto real = run.counters.find(counter_name);
-      if (real == run.counters.end() || !std::isfinite(real->second.value)) continue;
-      run.real_accumulated_time =
-          percentage ? real->second.value : real->second.value * 1e-9 * static_cast<double>(run.iterations);
-      break;
-    }
+    const auto per_unit = [&](std::initializer_list<const char*> counter_names, double& accumulated) {
+      for (const char* counter_name : counter_names) {
+        const auto counter = run.counters.find(counter_name);
+        if (counter == run.counters.end() || !std::isfinite(counter->second.value)) continue;
+        accumulated = percentage ? counter->second.value
+                                 : counter->second.value * 1e-9 * static_cast<double>(run.iterations);
+        return;
+      }
+    };
+    per_unit({"ns_per_step", "ns_per_episode"}, run.real_accumulated_time);
     // The CPU time per unit in place of the benchmark thread's own (which
     // only replayed the batch times).
-    for (const char* counter_name : {"cpu_ns_per_step", "cpu_ns_per_episode"}) {
-      const auto cpu = run.counters.find(counter_name);
-      if (cpu == run.counters.end() || !std::isfinite(cpu->second.value)) continue;
-      run.cpu_accumulated_time =
-          percentage ? cpu->second.value : cpu->second.value * 1e-9 * static_cast<double>(run.iterations);
-      break;
-    }
+    per_unit({"cpu_ns_per_step", "cpu_ns_per_episode"}, run.cpu_accumulated_time);
     // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
     // Google Benchmark would write it as NaN, which is not JSON. Omitted.
     for (auto counter = run.counters.begin(); counter != run.counters.end();) {
