@@ -94,14 +94,14 @@ std::string per_cpu_text(const delay_analysis& analysis, std::int64_t period_ns)
                      "cpu", "min", "p50", "p99", "p99.9", "max", "count", "misses", microseconds_text(period_ns));
   for (const per_cpu_row& row : analysis.per_cpu) {
     if (row.wakeup_ns.empty()) continue;
-    const auto d = platform::summarize(row.wakeup_ns);
+    const platform::distribution& d = row.wakeup;
     out += fmt::format("{:<8} {:>10.1f} {:>10.1f} {:>10.1f} {:>10.1f} {:>10.1f} {:>9} {:>8}\n", row.shown_cpu,
                        d.min / 1e3, d.p50 / 1e3, d.p99 / 1e3, d.p999 / 1e3, d.max / 1e3, d.count, row.deadline_misses);
   }
   if (analysis.noisiest) {
     const per_cpu_row& worst = analysis.per_cpu[*analysis.noisiest];
-    out += fmt::format("noisiest CPU: {} (p99 {:.1f} us; rule: {})\n", worst.shown_cpu,
-                       platform::summarize(worst.wakeup_ns).p99 / 1e3, kNoisiestRule);
+    out += fmt::format("noisiest CPU: {} (p99 {:.1f} us; rule: {})\n", worst.shown_cpu, worst.wakeup.p99 / 1e3,
+                       kNoisiestRule);
   }
   return out;
 }
@@ -116,8 +116,7 @@ nlohmann::json per_cpu_json(const delay_analysis& analysis) {
   nlohmann::json noisiest = nullptr;
   if (analysis.noisiest) {
     const per_cpu_row& worst = analysis.per_cpu[*analysis.noisiest];
-    const auto d = platform::summarize(worst.wakeup_ns);
-    noisiest = {{"cpu", worst.shown_cpu}, {"p99_ns", d.p99}, {"max_ns", d.max}, {"rule", kNoisiestRule}};
+    noisiest = {{"cpu", worst.shown_cpu}, {"p99_ns", worst.wakeup.p99}, {"max_ns", worst.wakeup.max}, {"rule", kNoisiestRule}};
   }
   return {{"cpus", rows}, {"noisiest", noisiest}};
 }
@@ -297,8 +296,8 @@ delay_analysis analyse_delay(const delay_measurement& measured) {
       row.completion_ns = probes::participant_samples(run.end_ns, run.participants, id);
       for (double end : row.completion_ns) row.deadline_misses += end > static_cast<double>(measured.period_ns) ? 1 : 0;
       if (!row.wakeup_ns.empty()) {
-        const auto d = platform::summarize(row.wakeup_ns);
-        latencies.push_back({row.shown_cpu, d.p99, d.max});
+        row.wakeup = platform::summarize(row.wakeup_ns);
+        latencies.push_back({row.shown_cpu, row.wakeup.p99, row.wakeup.max});
         row_of_latency.push_back(analysis.per_cpu.size());
       }
       analysis.per_cpu.push_back(std::move(row));

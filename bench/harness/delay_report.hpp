@@ -28,6 +28,7 @@ struct per_cpu_row {
   std::optional<unsigned> cpu;  // where its thread woke for its first period
   unsigned shown_cpu = 0;       // the CPU's number, or the participant's where unknown
   std::vector<double> wakeup_ns;
+  platform::distribution wakeup;  // of wakeup_ns (empty: count 0)
   std::vector<double> completion_ns;
   std::uint64_t deadline_misses = 0;  // its completions above the period
 };
