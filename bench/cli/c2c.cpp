@@ -111,7 +111,7 @@ void add_c2c(CLI::App& app, int& result) {
   command->add_option("--cores", options->cores, "CPUs to measure, e.g. 0,2,4-7 (default: every usable core)");
   command->add_flag("--smt", options->smt, "Include SMT siblings (default: one PU per core)");
   command->add_option("--method", options->methods, "cas, store_load or both")->capture_default_str();
-  command->add_option("--samples", options->samples, "One-way latency samples per pair")
+  command->add_option("--samples", options->samples, "One-way latency samples per pair and method, taken back to back, each the mean of --rounds round trips")
       ->check(CLI::Range(1, 1'000'000))
       ->capture_default_str();
   command->add_option("--rounds", options->rounds, "Round trips averaged into one sample")

@@ -40,4 +40,9 @@ void add_migrate(CLI::App& app, int& result);
 void add_mpi(CLI::App& app, int& result);  // the step across MPI ranks (distributed/)
 void add_reports(CLI::App& app, int& result);  // compare and report (Python, reports/)
 
+// `lockstep help compare`, `lockstep help report`: the Python tool's own
+// --help, exactly as `lockstep compare --help` shows it (the process becomes
+// the tool; returns only by throwing usage_error).
+[[noreturn]] void exec_reports_help(const std::string& tool);
+
 }  // namespace lockstep::cli

@@ -5,6 +5,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -23,21 +24,21 @@ struct falseshare_options {
   int threads = 2;
   std::string cores;
   std::string strides = "8,16,32,64,128,256";
-  // Nine repeats of 50 ms windows: nine pairs for the penalty's interval in
-  // the same 2.7 s that five repeats of 100 ms took.
+  // Nine repetitions of 50 ms windows: nine pairs for the penalty's interval
+  // in the same 2.7 s that five repetitions of 100 ms took.
   std::string window = "50ms";
-  int repeats = 9;
+  int repetitions = 9;
   std::string out;
 };
 
 void run_falseshare(const falseshare_options& options, int& result) {
   bench::probes::falseshare_settings settings;
-  for (long long stride : parse_number_list(options.strides, "--strides", 8, 4096)) {
-    if (stride % 8 != 0) throw usage_error(fmt::format("--strides: {} is not a multiple of 8", stride));
+  for (const std::uint64_t stride : parse_size_list(options.strides, "--strides", 8, 4096)) {
+    if (stride % 8 != 0) throw usage_error(fmt::format("--strides: {} bytes is not a multiple of 8", stride));
     settings.strides.push_back(static_cast<std::size_t>(stride));
   }
   settings.window_ns = parse_duration_ns(options.window, "--window", 1'000'000, 60'000'000'000);
-  settings.repeats = options.repeats;
+  settings.repeats = options.repetitions;
   const platform::topology machine = platform::topology::this_machine();
   std::vector<int> cpus = usable_cpus(machine, false);
   if (!options.cores.empty())
@@ -51,7 +52,7 @@ void run_falseshare(const falseshare_options& options, int& result) {
   check_out(options.out);
 
   settings.on_repeat = [&](int repeat) {
-    fmt::print(stderr, "falseshare: repeat {}/{} ({} strides x {})\n", repeat + 1, settings.repeats,
+    fmt::print(stderr, "falseshare: repetition {}/{} ({} strides x {})\n", repeat + 1, settings.repeats,
                settings.strides.size(), options.window);
   };
   std::vector<bench::probes::stride_cost> costs;
@@ -76,18 +77,19 @@ void run_falseshare(const falseshare_options& options, int& result) {
 void add_falseshare(CLI::App& app, int& result) {
   auto options = std::make_shared<falseshare_options>();
   auto* command = app.add_subcommand(
-      "falseshare", "False sharing priced directly: pinned threads write counters `stride` bytes apart, 8..256");
+      "falseshare", "False sharing priced directly: pinned threads write counters `stride` bytes apart (by default 8 to 256)");
   command->add_option("--threads", options->threads, "Writers, each pinned to its own CPU")
       ->check(CLI::Range(2, 1024))
       ->capture_default_str();
   command->add_option("--cores", options->cores, "CPUs for the writers, e.g. 0,1 (default: one PU per core)");
-  command->add_option("--strides", options->strides, "Strides in bytes (multiples of 8, 8..4096)")
+  command->add_option("--strides", options->strides,
+                      "Strides between neighbouring counters, a comma list of sizes (bytes, or with a unit: 1KiB), "
+                      "multiples of 8 from 8 to 4KiB")
       ->capture_default_str();
   command->add_option("--window", options->window, "How long the writers write per measurement, with a unit")
       ->capture_default_str();
-  command->add_option("--repeats", options->repeats, "Measurements per stride")
-      ->check(CLI::Range(1, 1000))
-      ->capture_default_str();
+  add_repetitions_option(*command, options->repetitions, 1000, "every stride measured once, for one --window each",
+                         "--repeats");
   add_out_option(*command, options->out);
   command->callback([options, &result] { run_falseshare(*options, result); });
 }

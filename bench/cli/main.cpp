@@ -7,11 +7,14 @@
 #include <string>
 
 #include "bench/cli/command.hpp"
+#include "bench/cli/options.hpp"
 #include "bench/harness/build_info.hpp"
 
 namespace {
 
 // `lockstep help [COMMAND]`: the same text as `lockstep COMMAND --help`.
+// compare and report are CLI11 prefix commands (bench/cli/reports.cpp) whose
+// help is their Python tool's, so theirs is that tool's --help.
 void add_help(CLI::App& app, int& result) {
   auto* help = app.add_subcommand("help", "Show the help of lockstep or of one command");
   auto command = std::make_shared<std::string>();
@@ -26,10 +29,10 @@ void add_help(CLI::App& app, int& result) {
     try {
       sub = app.get_subcommand(*command);
     } catch (const CLI::OptionNotFound&) {
-      throw lockstep::cli::usage_error("unknown command '" + *command +
-                                       "'; `lockstep --help` lists the commands");
+      throw lockstep::cli::usage_error(lockstep::cli::unknown_command_message(app, *command));
     }
-    fmt::print("{}", sub->help());
+    if (sub->get_prefix_command()) lockstep::cli::exec_reports_help(sub->get_name());
+    fmt::print("{}", sub->help(app.get_name()));
     result = lockstep::cli::kExitOk;
   });
 }
@@ -69,7 +72,10 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    fmt::print(stderr, "lockstep: {}\n", e.what());
+    // A mistyped command or option first, with the nearest valid spelling
+    // (bench/cli/options.hpp: unknown_word_message); else CLI11's own line.
+    const std::string unknown = lockstep::cli::unknown_word_message(app);
+    fmt::print(stderr, "lockstep: {}\n", unknown.empty() ? std::string(e.what()) : unknown);
     return lockstep::cli::kExitUsage;
   } catch (const lockstep::cli::usage_error& e) {
     fmt::print(stderr, "lockstep: {}\n", e.what());

@@ -23,8 +23,8 @@ namespace {
 
 struct migrate_options {
   std::string cores;  // two CPUs: from,to
-  std::uint64_t bytes = 256 * 1024;
-  int repeats = 200;
+  std::string bytes = "256KiB";  // the working set
+  int repetitions = 200;
   std::string out;
 };
 
@@ -39,8 +39,8 @@ void run_migrate(const migrate_options& options, int& result) {
   bench::probes::migrate_settings settings;
   settings.from = static_cast<unsigned>(cpus[0]);
   settings.to = static_cast<unsigned>(cpus[1]);
-  settings.bytes = options.bytes;
-  settings.repeats = options.repeats;
+  settings.bytes = parse_size_bytes(options.bytes, "--bytes", platform::kCacheLine, std::uint64_t{1} << 34);
+  settings.repeats = options.repetitions;
   settings.on_progress = [](int done, int total) { fmt::print(stderr, "migrate: {}/{} migrations\n", done, total); };
   check_out(options.out);
 
@@ -69,12 +69,14 @@ void add_migrate(CLI::App& app, int& result) {
   auto* command = app.add_subcommand(
       "migrate", "Cost of one forced migration: the move itself, and the cache refill of a working set");
   command->add_option("--cores", options->cores, "The two CPUs to move between, e.g. 0,1 (default: first two cores)");
-  command->add_option("--bytes", options->bytes, "Working set in bytes")
-      ->check(CLI::Range(std::uint64_t{platform::kCacheLine}, std::uint64_t{1} << 34))
-      ->capture_default_str();
-  command->add_option("--repeats", options->repeats, "Migrations measured")
-      ->check(CLI::Range(1, 1'000'000))
-      ->capture_default_str();
+  command->add_option("--bytes", options->bytes,
+                      fmt::format("Working set, a size: 256KiB, 4MiB, or bytes (one cache line, {} bytes, to 16GiB; "
+                                  "default {})",
+                                  platform::kCacheLine, options->bytes))
+      ->option_text("SIZE");
+  add_repetitions_option(*command, options->repetitions, 1'000'000,
+                         "one forced migration (the move, the stay baseline, the two passes over the working set)",
+                         "--repeats");
   add_out_option(*command, options->out);
   command->callback([options, &result] { run_migrate(*options, result); });
 }

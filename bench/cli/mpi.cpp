@@ -52,7 +52,7 @@ struct mpi_options {
   std::string hostfile;
   std::uint64_t steps = 5000;
   std::uint64_t warmup = 500;
-  unsigned rounds = 5;  // compare needs 5 repetitions a side for an interval
+  int repetitions = 5;  // compare needs 5 repetitions a side for an interval
   std::uint64_t pingpong = 10000;
   std::string pin = "compact";
   std::optional<std::size_t> masses;
@@ -276,7 +276,7 @@ void run_as_rank(const mpi_options& options, int& result) {
   settings.dt = bench::kBenchmarkStepSeconds;
   settings.steps = options.steps;
   settings.warmup_steps = options.warmup;
-  settings.rounds = options.rounds;
+  settings.rounds = static_cast<unsigned>(options.repetitions);
   settings.pingpong_round_trips = options.pingpong;
   settings.pingpong_warmup = options.pingpong / 10;  // osu_latency's ratio: 1,000 skipped before 10,000 timed
   settings.pin = checked.pin;
@@ -345,9 +345,9 @@ void add_mpi(CLI::App& app, int& result) {
   command->add_option("--warmup", options->warmup, "Steps before each measurement")
       ->check(CLI::Range(std::uint64_t{0}, std::uint64_t{10'000'000}))
       ->capture_default_str();
-  command->add_option("--rounds", options->rounds, "Rounds; each measures the ping-pong and every exchange in turn")
-      ->check(CLI::Range(1U, 1000U))
-      ->capture_default_str();
+  add_repetitions_option(*command, options->repetitions, 1000,
+                         "a round, the ping-pong and every exchange measured in turn (compare needs 5 a side)",
+                         "--rounds");
   command->add_option("--pingpong", options->pingpong, "Ping-pong round trips per round (after a tenth as many untimed, as osu_latency skips 1,000 of 10,000)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}))
       ->capture_default_str();

@@ -4,8 +4,11 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
+#include <utility>
 
 #include "bench/harness/result_file.hpp"
 
@@ -76,6 +79,106 @@ std::int64_t parse_duration_ns(const std::string& text, const std::string& optio
   if (!std::isfinite(ns) || ns < static_cast<double>(min_ns) || ns > static_cast<double>(max_ns))
     throw usage_error(fmt::format("{}: '{}' is out of range ({}ns to {}ns)", option, text, min_ns, max_ns));
   return static_cast<std::int64_t>(std::llround(ns));
+}
+
+namespace {
+
+// "64B", "4KiB", "16GiB": the largest binary unit that divides `bytes`.
+std::string size_text(std::uint64_t bytes) {
+  constexpr std::pair<std::uint64_t, const char*> units[] = {
+      {1ULL << 30, "GiB"}, {1ULL << 20, "MiB"}, {1ULL << 10, "KiB"}};
+  for (const auto& [scale, unit] : units)
+    if (bytes != 0 && bytes % scale == 0) return fmt::format("{}{}", bytes / scale, unit);
+  return fmt::format("{}B", bytes);
+}
+
+// A decimal number as the sizes and percentages write it: digits, at most one
+// point, at least one digit; no sign, no exponent. Where it ends in `text`.
+std::size_t decimal_end(const std::string& text) {
+  std::size_t end = 0;
+  bool point = false;
+  bool digit = false;
+  for (; end < text.size(); ++end) {
+    const char c = text[end];
+    if (c >= '0' && c <= '9') {
+      digit = true;
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      break;
+    }
+  }
+  return digit ? end : 0;
+}
+
+// The value of a number decimal_end accepted (strtod: no exception; a number
+// too large for a double is infinite, and out of every range).
+double decimal_value(const std::string& number) { return std::strtod(number.c_str(), nullptr); }
+
+std::string lowercase(std::string text) {
+  for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return text;
+}
+
+std::string trimmed(const std::string& text) {
+  const auto first = text.find_first_not_of(" \t");
+  if (first == std::string::npos) return "";
+  return text.substr(first, text.find_last_not_of(" \t") - first + 1);
+}
+
+}  // namespace
+
+std::uint64_t parse_size_bytes(const std::string& text, const std::string& option, std::uint64_t min_bytes,
+                               std::uint64_t max_bytes) {
+  const std::size_t number_end = decimal_end(text);
+  if (number_end == 0)
+    throw usage_error(fmt::format("{}: '{}' is not a size (examples: 256KiB, 4MiB, 65536 for bytes)", option, text));
+  const std::string unit = text.substr(number_end);
+  double scale = 0;
+  if (unit.empty() || unit == "B")
+    scale = 1;
+  else if (unit == "KiB")
+    scale = 1024.0;
+  else if (unit == "MiB")
+    scale = 1024.0 * 1024.0;
+  else if (unit == "GiB")
+    scale = 1024.0 * 1024.0 * 1024.0;
+  else if (const std::string lower = lowercase(unit);
+           lower == "k" || lower == "kb" || lower == "m" || lower == "mb" || lower == "g" || lower == "gb")
+    throw usage_error(fmt::format("{}: '{}': {} is read as 1000 or as 1024 by different tools; write {}{}iB for "
+                                  "powers of 1024 (or the number of bytes)",
+                                  option, text, unit, text.substr(0, number_end),
+                                  static_cast<char>(std::toupper(static_cast<unsigned char>(lower[0])))));
+  else
+    throw usage_error(
+        fmt::format("{}: '{}' needs a unit B, KiB, MiB or GiB, or none for bytes (example: 256KiB)", option, text));
+  const double bytes = decimal_value(text.substr(0, number_end)) * scale;
+  if (bytes != std::floor(bytes))
+    throw usage_error(fmt::format("{}: '{}' is not a whole number of bytes", option, text));
+  if (bytes < static_cast<double>(min_bytes) || bytes > static_cast<double>(max_bytes))
+    throw usage_error(fmt::format("{}: '{}' is out of range ({} to {})", option, text, size_text(min_bytes),
+                                  size_text(max_bytes)));
+  return static_cast<std::uint64_t>(bytes);
+}
+
+std::vector<std::uint64_t> parse_size_list(const std::string& text, const std::string& option,
+                                           std::uint64_t min_bytes, std::uint64_t max_bytes) {
+  std::vector<std::uint64_t> sizes;
+  for (const std::string& item : items_of(text, option)) {
+    const std::uint64_t size = parse_size_bytes(item, option, min_bytes, max_bytes);
+    if (std::find(sizes.begin(), sizes.end(), size) == sizes.end()) sizes.push_back(size);
+  }
+  return sizes;
+}
+
+double parse_percent(const std::string& text, const std::string& option) {
+  std::string number = trimmed(text);
+  if (!number.empty() && number.back() == '%') number = trimmed(number.substr(0, number.size() - 1));
+  if (number.empty() || decimal_end(number) != number.size())
+    throw usage_error(fmt::format("{}: '{}' is not a percentage (examples: 5, 5%, 0.5%)", option, text));
+  const double percent = decimal_value(number);
+  if (percent > 100.0) throw usage_error(fmt::format("{}: '{}' is out of range (0 to 100 percent)", option, text));
+  return percent;
 }
 
 std::vector<long long> parse_number_list(const std::string& text, const std::string& option, long long min,
@@ -166,6 +269,133 @@ CLI::Option* add_out_option(CLI::App& command, std::string& path, const std::str
   return command.add_option("--out", path,
                             "Write " + what + " to FILE (atomically; its directory must exist and be writable)")
       ->option_text("FILE");
+}
+
+CLI::Option* add_noise_option(CLI::App& command, double& percent, const std::string& what) {
+  // The transform reads the words (parse_percent throws usage_error, one
+  // line) and hands CLI11 the bare number it stores in `percent`.
+  const CLI::Validator as_percent(
+      [](std::string& text) {
+        text = fmt::format("{}", parse_percent(text, "--noise"));
+        return std::string();
+      },
+      "");
+  return command
+      .add_option("--noise", percent,
+                  fmt::format("The noise band in percent, 0 to 100, the sign optional (5 or 5%; default {:g}): {}",
+                              percent, what))
+      ->transform(as_percent)
+      ->option_text("PCT");
+}
+
+CLI::Option* add_repetitions_option(CLI::App& command, int& repetitions, int max, const std::string& one,
+                                    const std::string& old_name) {
+  std::string names = "--repetitions";
+  std::string description =
+      fmt::format("How many times the whole measurement is repeated, 1 to {} (default {}); one repetition: {}", max,
+                  repetitions, one);
+  if (!old_name.empty()) {
+    names += "," + old_name;
+    description += fmt::format(" ({} is the old name, still accepted)", old_name);
+  }
+  return command.add_option(names, repetitions, description)->check(CLI::Range(1, max))->option_text("N");
+}
+
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  // distance[i][j]: a's first i characters against b's first j.
+  std::vector<std::vector<std::size_t>> distance(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) distance[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) distance[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t substitution = a[i - 1] == b[j - 1] ? 0 : 1;
+      distance[i][j] = std::min({distance[i - 1][j] + 1, distance[i][j - 1] + 1, distance[i - 1][j - 1] + substitution});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        distance[i][j] = std::min(distance[i][j], distance[i - 2][j - 2] + 1);
+    }
+  }
+  return distance[a.size()][b.size()];
+}
+
+std::optional<std::string> nearest_name(const std::string& word, const std::vector<std::string>& candidates) {
+  const std::size_t allowed = word.size() <= 4 ? 1 : word.size() <= 8 ? 2 : 3;
+  std::optional<std::string> nearest;
+  std::size_t nearest_distance = allowed + 1;
+  for (const std::string& candidate : candidates) {
+    const std::size_t distance = edit_distance(word, candidate);
+    if (distance < nearest_distance) {
+      nearest = candidate;
+      nearest_distance = distance;
+    }
+  }
+  if (nearest || word.size() < 3) return nearest;
+  std::vector<std::string> begun;
+  for (const std::string& candidate : candidates)
+    if (candidate.rfind(word, 0) == 0 && std::find(begun.begin(), begun.end(), candidate) == begun.end())
+      begun.push_back(candidate);
+  if (begun.size() == 1) return begun.front();
+  return std::nullopt;
+}
+
+namespace {
+
+std::vector<std::string> command_names(const CLI::App& app) {
+  std::vector<std::string> names;
+  for (const CLI::App* command : app.get_subcommands([](const CLI::App*) { return true; }))
+    names.push_back(command->get_name());
+  return names;
+}
+
+// "--quik", "--quik=1", "-quick": an option no one took, named beside the
+// nearest option of `command` (its first long name, an old alias's too).
+std::string unknown_option_message(const CLI::App& command, const std::string& word, const std::string& help) {
+  const std::string option = word.substr(0, word.find('='));
+  std::vector<std::string> spellings;  // without the dashes, as typed after them
+  std::vector<std::string> primary;    // the name the help leads with, for each spelling
+  for (const CLI::Option* candidate : command.get_options()) {
+    const auto& long_names = candidate->get_lnames();
+    if (long_names.empty()) continue;
+    for (const std::string& name : long_names) {
+      spellings.push_back(name);
+      primary.push_back("--" + long_names.front());
+    }
+  }
+  const std::string bare = option.substr(std::min(option.find_first_not_of('-'), option.size()));
+  if (const auto nearest = nearest_name(bare, spellings)) {
+    const auto at = std::find(spellings.begin(), spellings.end(), *nearest) - spellings.begin();
+    return fmt::format("unknown option {}; did you mean {}?", option, primary[static_cast<std::size_t>(at)]);
+  }
+  return fmt::format("unknown option {} (`{} --help` lists the options)", option, help);
+}
+
+}  // namespace
+
+std::string unknown_command_message(const CLI::App& app, const std::string& word) {
+  if (const auto nearest = nearest_name(word, command_names(app)))
+    return fmt::format("unknown command '{}'; did you mean '{}'?", word, *nearest);
+  return fmt::format("unknown command '{}'; `{} --help` lists the commands", word, app.get_name());
+}
+
+std::string unknown_word_message(const CLI::App& app) {
+  // Before the command: an option of no one's, or a command that is not one.
+  for (const std::string& word : app.remaining()) {
+    if (word.rfind('-', 0) == 0) return unknown_option_message(app, word, app.get_name());
+    return unknown_command_message(app, word);
+  }
+  const std::vector<const CLI::App*> parsed = app.get_subcommands([](const CLI::App* command) {
+    return command->parsed();
+  });
+  if (parsed.empty()) return fmt::format("no command given; `{} --help` lists the commands", app.get_name());
+  for (const CLI::App* command : parsed) {
+    // compare and report hand every word to their Python tool (reports.cpp).
+    if (command->get_allow_extras() || command->get_prefix_command()) continue;
+    const std::string help = app.get_name() + " " + command->get_name();
+    for (const std::string& word : command->remaining()) {
+      if (word.rfind('-', 0) == 0) return unknown_option_message(*command, word, help);
+      return fmt::format("unexpected argument '{}' (`{} --help` lists the options)", word, help);
+    }
+  }
+  return "";
 }
 
 CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses) {

@@ -82,14 +82,17 @@ void add_pass_through(CLI::App& app, const std::string& name, const std::string&
 
 }  // namespace
 
+void exec_reports_help(const std::string& tool) { exec_python_tool(tool, {"--help"}); }
+
 void add_reports(CLI::App& app, int& result) {
   (void)result;  // the exec'd tool's exit status is the process's exit status
   add_pass_through(app, "compare",
-                   "Compare result files across runs and machines: ratio of medians with a confidence "
-                   "interval, Mann-Whitney U with Holm's correction, counters, machine fingerprints "
-                   "(`lockstep compare --help` for the options)");
+                   "Compare result files across runs and machines: each entry's ratio of medians B/A, called "
+                   "slower or faster only when its exact 95 % interval lies beyond the noise band (--noise, "
+                   "default 5 %), Mann-Whitney U p-values with Benjamini-Hochberg's adjustment, pace-aware "
+                   "verdicts, the machines' fingerprints (`lockstep compare --help` for the options)");
   add_pass_through(app, "report",
-                   "HTML + Markdown report with figures from result files (run, c2c, delay, verify --csv) "
+                   "HTML + Markdown report with figures from result files (run, c2c, delay, mpi, verify --csv) "
                    "(`lockstep report --help` for the options)");
 }
 

@@ -228,10 +228,9 @@ void add_run(CLI::App& app, int& result) {
                               "their intervals; default {}, --quick {}; 0: none)",
                               bench::kDefaultPairs, bench::kQuickPairs))
       ->check(CLI::Range(0, 1000));
-  run->add_option("--noise", options->noise_pct,
-                  "The noise band in percent: a paired ratio whose interval lies inside it is \"within noise\", "
-                  "one whose interval straddles its edge \"unsure\" (default 5)")
-      ->check(CLI::Range(0.0, 100.0));
+  add_noise_option(*run, options->noise_pct,
+                   "a paired ratio whose interval lies inside it is \"within noise\", one whose interval straddles "
+                   "its edge \"unsure\"");
   run->add_flag("--no-accounting", options->no_accounting,
                 "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");
   run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");
