@@ -62,6 +62,7 @@ struct run_options {
   std::string min_time;  // empty: the mode's default
   std::string out;
   bool quick = false;
+  bool verbose = false;  // every table of the summary, not only the answer
   bool no_accounting = false;
   bool no_interleave = false;
   bool interleave = false;  // the default now; kept so that older command lines still run
@@ -180,7 +181,7 @@ int execute(const run_options& options) {
       return kExitOk;
     }
     const bench::run_book book = bench::run_matrix(request, machine, *result_file);
-    fmt::print("{}", bench::render_summary(book, result_file->destination()));
+    fmt::print("{}", bench::render_summary(book, result_file->destination(), options.verbose));
   } catch (const bench::matrix_request_error& error) {
     throw usage_error(error.what());
   }
@@ -218,6 +219,10 @@ void add_run(CLI::App& app, int& result) {
                               bench::kDefaultMinTime, bench::kQuickMinTime));
   add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)")->excludes(plan);
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
+  run->add_flag("--verbose", options->verbose,
+                "Print every table when the run is over (the full ranking, the bare primitives, every paired ratio, "
+                "the harness overhead, what was left out); by default the summary is the fastest few combinations "
+                "and the answer, and the tables live in the JSON and the report");
   run->add_flag("--no-interleave", options->no_interleave,
                 "Run every entry's repetitions back to back. The default shuffles the repetitions of all entries "
                 "over the whole run (Google Benchmark's random interleaving), so that a machine that changes pace "

@@ -55,12 +55,11 @@ std::vector<std::string> register_barrier_benchmarks(const run_selection& select
       if (threads < 2) continue;  // one participant never waits: an episode of nothing
       for (platform::placement pin : selection.pins) {
         const entry_spec spec{entry_kind::barrier, name, {}, pin, threads};
-        benchmark::RegisterBenchmark(spec.name().c_str(),
-                                     [&harness, spec](benchmark::State& state) {
-                                       barrier_entry<Primitive>(state, harness, spec);
-                                     })
-            ->UseManualTime()
-            ->Unit(benchmark::kNanosecond);
+        auto* entry = benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
+          barrier_entry<Primitive>(state, harness, spec);
+        });
+        measure_briefly_if_it_will_collapse(*entry, sync::info_of<Primitive>(), threads, harness);
+        entry->UseManualTime()->Unit(benchmark::kNanosecond);
         registered.push_back(spec.name());
         // The entry's side of a paired comparison (paired_blocks.hpp).
         using episode_barrier = sync::as_barrier_t<Primitive>;

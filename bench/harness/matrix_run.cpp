@@ -16,7 +16,10 @@
 
 #include "bench/harness/barrier_entries.hpp"
 #include "bench/harness/derived_figures.hpp"
+#include "bench/harness/falseshare_report.hpp"
+#include "bench/harness/headline.hpp"
 #include "bench/harness/machine_context.hpp"
+#include "bench/harness/migrate_report.hpp"
 #include "bench/harness/pace.hpp"
 #include "bench/harness/paired_blocks.hpp"
 #include "bench/harness/reporters.hpp"
@@ -24,8 +27,12 @@
 #include "bench/harness/scaling.hpp"
 #include "bench/harness/summary.hpp"
 #include "bench/harness/team_driver.hpp"
+#include "bench/probes/falseshare.hpp"
+#include "bench/probes/migrate.hpp"
 #include "kernels/model_choice.hpp"
+#include "platform/cache_line.hpp"
 #include "platform/clock.hpp"
+#include "platform/placement.hpp"
 #include "sync/registry.hpp"
 
 namespace lockstep::bench {
@@ -82,6 +89,57 @@ std::string plan_of(const platform::topology& machine, const run_selection& sele
              cost.repetitions, book.not_applicable.size(), comparisons, cost.pairs,
              format_seconds(estimate.total_s()), format_seconds(estimate.matrix_s),
              format_seconds(estimate.pairs_s), entries);
+}
+
+// The known answers the headline sets the step's ratios beside
+// (headline.hpp), each a short run of a probe lockstep also has as a command:
+// falseshare's two strides (one line, 8 bytes apart, against 128 bytes apart:
+// no shared line nor shared prefetch pair) on the pinned pair, and migrate's
+// forced moves between those two CPUs. Blocks of 20 ms (10 ms quick) over 7
+// repeats (5 quick) cost about 0.3 s; 60 moves (30 quick) a few ms.
+known_answers measure_known_answers(const platform::topology& machine, bool quick) {
+  known_answers answers;
+  const platform::placement_plan pair = platform::plan_placement(machine, platform::placement::compact, 2);
+  if (pair.oversubscribed || pair.wrapped || !pair.entries[0].pu || !pair.entries[1].pu ||
+      *pair.entries[0].pu == *pair.entries[1].pu) {
+    answers.false_sharing_unavailable = answers.migration_unavailable = "fewer than two CPUs to pin two threads on";
+    return answers;
+  }
+  const unsigned first = *pair.entries[0].pu;
+  const unsigned second = *pair.entries[1].pu;
+  try {
+    probes::falseshare_settings settings;
+    settings.cpus = {static_cast<int>(first), static_cast<int>(second)};
+    settings.strides = {8, platform::kPrefetchPair};
+    settings.window_ns = quick ? 10'000'000 : 20'000'000;
+    settings.repeats = quick ? 5 : 7;
+    const falseshare_analysis analysis = analyse_falseshare(probes::measure_false_sharing(settings));
+    if (analysis.penalty) {
+      answers.false_sharing = false_sharing_probe{fmt::format("{},{}", first, second),
+                                                  analysis.penalty->sharing_stride_bytes,
+                                                  analysis.penalty->apart_stride_bytes,
+                                                  analysis.penalty->estimate,
+                                                  analysis.penalty->verdict,
+                                                  analysis.penalty->ratios.size()};
+    } else {
+      answers.false_sharing_unavailable = "no repeat scheduled both writers";
+    }
+  } catch (const std::exception& error) {
+    answers.false_sharing_unavailable = error.what();
+  }
+  try {
+    probes::migrate_settings settings;
+    settings.from = first;
+    settings.to = second;
+    settings.repeats = quick ? 30 : 60;
+    const probes::migrate_result result = probes::measure_migration(settings);
+    const migrate_analysis analysis = analyse_migrate(settings, result, machine);
+    answers.migration = migration_probe{fmt::format("{}<->{}", first, second), settings.bytes, analysis.move,
+                                        analysis.refill};
+  } catch (const std::exception& error) {
+    answers.migration_unavailable = error.what();
+  }
+  return answers;
 }
 
 // How many registered entries Google Benchmark's own --benchmark_filter keeps
@@ -206,31 +264,44 @@ run_book execute_matrix(const matrix_request& request, const platform::topology&
     return book;
   }
 
-  progress_reporter progress(book, count_selected(names));
+  // The estimate comes from the plan (run_plan.hpp), the same one --plan prints.
+  const run_cost cost{repetitions, request.min_time_ns, pairing.pairs, pairing.block_ns, pairing.budget_ns};
+  const std::size_t selected = count_selected(names);
+  const double planned_matrix_s = estimate_run(selected, 0, cost).matrix_s;
+  progress_reporter progress(book, selected, planned_matrix_s);
+  harness.after_call = [&progress] { progress.tick(); };
   result_json_reporter json;
-  fmt::print(stderr, "lockstep run: {} entries, {} repetitions each; JSON to {}\n", count_selected(names),
-             repetitions, result_file->destination());
+  fmt::print(stderr, "lockstep run: {} entries, {} repetitions each, about {} (the plan's estimate); JSON to {}\n",
+             selected, repetitions, format_seconds(planned_matrix_s), result_file->destination());
   std::fflush(stderr);
   benchmark::RunSpecifiedBenchmarks(&progress, &json);
   benchmark::Shutdown();
+  harness.after_call = nullptr;
   book.derive_ratios();
+  book.collapsed = find_collapsed(book);
 
   // The paired comparisons, after the matrix: the plan needs its medians.
   const std::vector<comparison> plan = plan_comparisons(book);
+  const double planned_pairs_s = estimate_run(0, plan.size(), cost).pairs_s;
   if (pairing.pairs > 0 && !plan.empty()) {
-    fmt::print(stderr, "lockstep run: {} paired comparisons, {} pairs of blocks of about {} each\n", plan.size(),
-               pairing.pairs, format_ns(static_cast<double>(pairing.block_ns)));
+    fmt::print(stderr, "lockstep run: {} paired comparisons, {} rounds of a pair of blocks of about {} each, about {}\n",
+               plan.size(), pairing.pairs, format_ns(static_cast<double>(pairing.block_ns)),
+               format_seconds(planned_pairs_s));
     std::fflush(stderr);
   }
-  measure_pairs(harness, plan, pairing, [](std::size_t done, std::size_t total) {
-    if (done % 25 == 0 || done == total) {
-      fmt::print(stderr, "  paired {}/{}\n", done, total);
-      std::fflush(stderr);
-    }
+  const std::int64_t pairs_start_ns = platform::now_ns();
+  measure_pairs(harness, plan, pairing, [&](std::size_t round, std::size_t rounds) {
+    const double elapsed = static_cast<double>(platform::now_ns() - pairs_start_ns) / 1e9;
+    fmt::print(stderr, "  paired round {}/{}, {} elapsed, {}\n", round, rounds, format_seconds(elapsed),
+               time_left(elapsed, planned_pairs_s, round, rounds));
+    std::fflush(stderr);
   });
+  const known_answers probes = measure_known_answers(machine, request.quick);
   pace.take();  // the trace's last reading
   const pace_modes modes = find_modes(pace.trace());
   assign_pace_modes(book, modes);
+  book.cpus = static_cast<unsigned>(machine.affinity().size());
+  book.headline = make_headline(book, probes, book.cpus, result_file->destination());
 
   // The in-run context keys, then the rename.
   nlohmann::json document;
@@ -246,6 +317,7 @@ run_book execute_matrix(const matrix_request& request, const platform::topology&
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
   derive_ratios(document, book);
   write_pace_and_pairs(document, book, &pace, modes);
+  document["lockstep_headline"] = headline_json(book.headline);
   if (request.scaling) document["lockstep_scaling"] = scaling_json(scaling_of(book), book.c2c_one_way_ns());
   // The machine's fingerprint from the one producer (replacing Google
   // Benchmark's host_name and num_cpus with the same figures), then the

@@ -70,6 +70,9 @@ void plan_migration(std::vector<comparison>& plan, const std::vector<measured_en
       const auto compact = pins.find("compact");
       const auto none = pins.find("none");
       if (compact == pins.end() || none == pins.end()) continue;
+      // A penalty of migration needs migrations: an unpinned entry the OS
+      // left in place (or one that did not count) prices nothing.
+      if (!(none->second.entry->median("migrations_per_kstep").value_or(0.0) > 0.0)) continue;
       if (!best || compact->second.median < best->second.median) best = {none->second, compact->second};
     }
     if (!best) continue;
@@ -96,10 +99,13 @@ void plan_against_best_other(std::vector<comparison>& plan, const std::vector<me
     for (const auto& [sync, item] : best) ranked.push_back(item);
     std::sort(ranked.begin(), ranked.end(),
               [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
-    for (std::size_t index = 0; index < ranked.size(); ++index)
+    // Every other primitive against the leader; the leader against the
+    // runner-up would be the runner-up's pair again, measured a second
+    // time, and two measurements of one comparison can disagree.
+    for (std::size_t index = 1; index < ranked.size(); ++index)
       plan.push_back({comparison_kind::against_best_other,
                       fmt::format("{} pin:{} threads:{}", what, key.first, key.second), ranked[index].entry->name,
-                      ranked[index == 0 ? 1 : 0].entry->name});
+                      ranked[0].entry->name});
   }
 }
 
@@ -191,9 +197,57 @@ std::vector<measured_entry> measured_of(const run_book& book, const std::string&
   std::vector<measured_entry> found;
   for (const auto& entry : book.entries()) {
     if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
+    if (book.collapsed.count(entry.name) > 0) continue;
     if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
   }
   return found;
+}
+
+std::set<std::string> find_collapsed(const run_book& book) {
+  // (kind, model, threads) -> the best median of the group
+  using group_key = std::tuple<std::string, std::string, std::string>;
+  const auto key_of = [](const captured_entry& entry) {
+    return group_key{entry.field("kind"), entry.field("model"), entry.field("threads")};
+  };
+  const auto time_of = [](const captured_entry& entry) {
+    return entry.median(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  };
+  const auto counts = [](const captured_entry& entry) {
+    const std::string kind = entry.field("kind");
+    return (kind == "rk4" || kind == "barrier") && entry.error.empty() && entry.field("variant") != "serial";
+  };
+  std::map<group_key, double> best;
+  for (const auto& entry : book.entries()) {
+    if (!counts(entry)) continue;
+    if (const auto time = time_of(entry); time && *time > 0.0) {
+      const auto [found, inserted] = best.try_emplace(key_of(entry), *time);
+      if (!inserted) found->second = std::min(found->second, *time);
+    }
+  }
+  std::set<std::string> collapsed;
+  for (const auto& entry : book.entries()) {
+    if (!counts(entry) || entry.median("oversubscribed").value_or(0.0) < 0.5) continue;
+    const auto time = time_of(entry);
+    const auto group_best = best.find(key_of(entry));
+    if (time && group_best != best.end() && *time >= kCollapseFactor * group_best->second)
+      collapsed.insert(entry.name);
+  }
+  return collapsed;
+}
+
+std::vector<best_other_view> against_best_other_views(const run_book& book, const std::string& group) {
+  std::vector<best_other_view> views;
+  const paired_result* runner_up = nullptr;
+  for (const paired_result& pair : book.pairs) {
+    if (pair.what.kind != comparison_kind::against_best_other || pair.what.group != group) continue;
+    if (!pair.failure.empty() || pair.ratios.empty()) continue;
+    views.push_back({pair.what.a, pair.what.b, &pair, false, pair.estimate, pair.verdict});
+    if (runner_up == nullptr) runner_up = &pair;  // the plan's order: the runner-up's pair first
+  }
+  if (runner_up != nullptr)
+    views.insert(views.begin(), best_other_view{runner_up->what.b, runner_up->what.a, runner_up, true,
+                                                inverse(runner_up->estimate), inverse(runner_up->verdict)});
+  return views;
 }
 
 std::vector<comparison> plan_comparisons(const run_book& book) {
@@ -213,12 +267,6 @@ void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, 
   std::vector<comparison_in_progress> running;
   running.reserve(plan.size());
   for (const comparison& what : plan) running.push_back(start_comparison(harness, what, settings));
-  std::size_t done = 0;
-  const auto finished = [&] {
-    if (progress) progress(++done, plan.size());
-  };
-  for (const auto& item : running)
-    if (item.finished) finished();
   // Rounds: each round takes one pair of every comparison still running, in
   // an order shuffled per round (seeded: a run can be repeated), so that a
   // comparison's pairs lie spread over the whole pairing phase, not within
@@ -234,17 +282,13 @@ void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, 
       if (pair >= kMinPairs && item.spent_ns > settings.budget_ns) {
         item.result.budget_cut = true;
         item.finished = true;
-        finished();
         continue;
       }
       take_pair(harness, item, pair);
-      if (item.finished) finished();
     }
+    if (progress) progress(pair + 1, settings.pairs);
   }
-  for (auto& item : running) {
-    if (!item.finished) finished();
-    harness.book->pairs.push_back(finish_comparison(item, settings));
-  }
+  for (auto& item : running) harness.book->pairs.push_back(finish_comparison(item, settings));
 }
 
 void assign_pace_modes(run_book& book, const pace_modes& modes) {

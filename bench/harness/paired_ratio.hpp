@@ -52,6 +52,23 @@ inline ratio_verdict verdict_of(const ratio_estimate& estimate, double noise = k
   return platform::verdict_of(estimate.low, estimate.high, noise);
 }
 
+// The same comparison read the other way round (b / a): the median and the
+// interval's ends inverted, the verdict mirrored. The band is symmetric on a
+// log scale ([1 / (1 + noise), 1 + noise]), so the mirrored verdict is the
+// one the inverted interval would get; it is mirrored, not recomputed, so
+// that rounding at a band edge cannot make the two directions disagree.
+inline ratio_estimate inverse(const ratio_estimate& estimate) {
+  const auto invert = [](double value) { return value > 0.0 ? 1.0 / value : 0.0; };
+  return {invert(estimate.median), invert(estimate.high), invert(estimate.low)};
+}
+inline ratio_verdict inverse(ratio_verdict verdict) {
+  switch (verdict) {
+    case ratio_verdict::penalty: return ratio_verdict::gain;
+    case ratio_verdict::gain: return ratio_verdict::penalty;
+    default: return verdict;
+  }
+}
+
 // What a comparison sets side by side (the summary's sections).
 // against_best_other compares RK4 steps (rk4/...) or bare episodes (barrier/...): the names say which.
 enum class comparison_kind { false_sharing, migration, against_best_other };

@@ -1,6 +1,8 @@
 // Progress and the run book's feed, and the result JSON's names (reporters.hpp).
 #include "bench/harness/reporters.hpp"
 
+#include "bench/harness/run_plan.hpp"
+
 #include "bench/harness/derived_figures.hpp"
 
 #include <fcntl.h>
@@ -24,18 +26,8 @@ namespace lockstep::bench {
 
 namespace {
 
-std::string format_duration(double seconds) {
-  if (seconds < 90.0) return fmt::format("{:.0f} s", seconds);
-  return fmt::format("{:.0f} min {:02.0f} s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
-}
 
 
-// The counter a user reads first for each kind of entry.
-const char* headline_counter(const std::string& kind) {
-  if (kind == "c2c") return "one_way_ns";
-  if (kind == "barrier") return "ns_per_episode";
-  return "ns_per_step";
-}
 
 }  // namespace
 
@@ -107,8 +99,36 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
   JSONReporter::ReportRuns(renamed);
 }
 
-progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries)
-    : book_(book), expected_(expected_entries), start_(std::chrono::steady_clock::now()) {}
+progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries, double planned_s)
+    : book_(book),
+      expected_(expected_entries),
+      planned_s_(planned_s),
+      start_(std::chrono::steady_clock::now()),
+      last_line_(start_) {}
+
+std::string time_left(double elapsed_s, double planned_s, std::size_t done, std::size_t total) {
+  if (total == 0 || done >= total) return "done";
+  double left = planned_s - elapsed_s;
+  if (2 * done >= total && done > 0)
+    left = elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
+  if (left < 1.0) return fmt::format("a little past the estimate of {}", format_seconds(planned_s));
+  return "about " + format_seconds(left) + " left";
+}
+
+void progress_reporter::tick() {
+  if (std::chrono::steady_clock::now() - last_line_ >= kProgressEvery) line(false);
+}
+
+void progress_reporter::line(bool force) {
+  const auto now = std::chrono::steady_clock::now();
+  if (!force && now - last_line_ < kProgressEvery) return;
+  last_line_ = now;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const std::size_t total = std::max(expected_, finished_);
+  fmt::print(stderr, "  {} elapsed, {} of {} entries complete, {}\n", format_seconds(elapsed), finished_, total,
+             time_left(elapsed, planned_s_, finished_, total));
+  std::fflush(stderr);
+}
 
 void derive_ratios(nlohmann::json& result, const run_book& book) {
   if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
@@ -160,19 +180,7 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
     entry.error.clear();
   }
   ++finished_;
-
-  const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-  std::string what;
-  if (!entry.error.empty()) {
-    what = entry.error;
-  } else if (const auto median = entry.median(headline_counter(entry.field("kind")))) {
-    what = format_ns(*median) + (entry.field("kind") == "barrier" ? "/episode" : entry.field("kind") == "c2c" ? " one-way" : "/step");
-  }
-  const std::size_t total = std::max(expected_, finished_);
-  const double left = elapsed / static_cast<double>(finished_) * static_cast<double>(total - finished_);
-  fmt::print(stderr, "[{}/{}] {}  {}  ({} elapsed, about {} left)\n", finished_, total, entry.name, what,
-             format_duration(elapsed), format_duration(left));
-  std::fflush(stderr);
+  line(finished_ >= expected_);
   book_.record(std::move(entry));
 }
 

@@ -15,26 +15,45 @@
 
 namespace lockstep::bench {
 
-// Google Benchmark's display reporter for `lockstep run`: prints one progress
-// line per finished entry on stderr ("[i/n] name  median  elapsed, estimate"),
-// nothing on stdout (the summary goes there at the end), and records every
-// entry's repetitions in the run book, which is how later entries read the
-// in-run calibrations.
+// Google Benchmark's display reporter for `lockstep run`: records every
+// entry's repetitions in the run book (how later entries read the in-run
+// calibrations) and prints progress on stderr, nothing on stdout (the
+// summary goes there at the end).
+//
+// Progress: with random interleaving (the default) an entry is complete only
+// when its last repetition ran, which for most entries is near the end, so a
+// count of complete entries says little until late. The time left is the
+// plan's estimate (run_plan.hpp: estimate_run) less the time elapsed, until
+// half of the entries are complete; from then on, the rate at which they
+// complete. A line at most every kProgressEvery, from tick() (called after
+// every call of an entry) or from a completed entry, and one at the end.
 class progress_reporter : public benchmark::BenchmarkReporter {
  public:
-  progress_reporter(run_book& book, std::size_t expected_entries);
+  progress_reporter(run_book& book, std::size_t expected_entries, double planned_s);
 
   bool ReportContext(const Context& context) override;
   void ReportRuns(const std::vector<Run>& runs) override;
+  // After every call of an entry: a progress line when one is due.
+  void tick();
 
   std::size_t finished() const noexcept { return finished_; }
 
  private:
+  void line(bool force);
+
   run_book& book_;
   std::size_t expected_;
+  double planned_s_;
   std::size_t finished_ = 0;
   std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_line_;
 };
+inline constexpr std::chrono::seconds kProgressEvery{10};
+
+// "about 1 min 20 s left" from the plan's estimate and what is done: the
+// estimate less the time elapsed while fewer than half of `total` are done,
+// the observed rate after; past the estimate, "a little past the estimate".
+std::string time_left(double elapsed_s, double planned_s, std::size_t done, std::size_t total);
 
 // Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
 // Google Benchmark appends "/manual_time", "/real_time", "/iterations:N" and

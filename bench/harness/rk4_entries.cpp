@@ -256,6 +256,7 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
           : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
               rk4_entry<Sync, Layout, Model, kernels::sync_timing::off>(state, harness, spec);
             });
+  measure_briefly_if_it_will_collapse(*entry, sync::info_of<Sync>(), spec.threads, harness);
   return entry->UseManualTime()->Unit(benchmark::kNanosecond);
 }
 

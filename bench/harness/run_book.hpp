@@ -38,10 +38,12 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "bench/harness/derived_figures.hpp"
+#include "bench/harness/headline.hpp"
 #include "bench/harness/pace.hpp"
 #include "bench/harness/paired_ratio.hpp"
 #include "platform/clock.hpp"
@@ -165,6 +167,12 @@ class run_book {
   // The pace modes of the run (pace.hpp), once the trace is analysed; a
   // repetition's "pace_mode" counter holds its index (-1: it straddles a change).
   std::optional<pace_modes> pace;
+  // Entries that collapsed (paired_blocks.hpp: find_collapsed): reported in a
+  // line, kept out of rankings, paired comparisons and colour scales.
+  std::set<std::string> collapsed;
+  // The answer (headline.hpp), made when the run is over.
+  run_headline headline;
+  unsigned cpus = 0;  // the affinity set the run measured on
 
  private:
   std::vector<captured_entry> entries_;

@@ -13,10 +13,14 @@ namespace lockstep::bench {
 
 namespace {
 
-// A repetition lasts about this many times its minimum time (Google
-// Benchmark's trial to size the iteration count, the team's start): 95 ms
-// for 40 ms on the development VM.
-constexpr double kRepetitionOverMinTime = 2.4;
+// A repetition lasts a fixed part (the team's start, the pace readings
+// around its call, the first call's batch-size probe) and a part that grows
+// with its minimum time (Google Benchmark's trial to size the iteration
+// count, the warm-up batch): on the development VM the default mode's
+// repetitions (40 ms) took about 95 ms and the quick mode's (5 ms) about
+// 22 ms, once collapsing entries were measured briefly.
+constexpr double kRepetitionFixedNs = 12'000'000.0;
+constexpr double kRepetitionOverMinTime = 2.1;
 // A pair of blocks costs this many times its two timed blocks (building the
 // two teams once, the pace readings around each pair): 0.10 s for 10 pairs of
 // 1 ms blocks on the development VM.
@@ -59,8 +63,8 @@ std::vector<unsigned> scaling_thread_counts(unsigned cpus) {
 
 run_estimate estimate_run(std::size_t entries, std::size_t comparisons, const run_cost& cost) {
   run_estimate estimate;
-  estimate.matrix_s = static_cast<double>(entries) * cost.repetitions * kRepetitionOverMinTime *
-                      static_cast<double>(cost.min_time_ns) / 1e9;
+  estimate.matrix_s = static_cast<double>(entries) * cost.repetitions *
+                      (kRepetitionFixedNs + kRepetitionOverMinTime * static_cast<double>(cost.min_time_ns)) / 1e9;
   const double per_comparison_ns = std::min<double>(
       kPairOverBlocks * 2.0 * static_cast<double>(cost.block_ns) * cost.pairs,
       static_cast<double>(cost.pair_budget_ns) + kPairOverBlocks * 2.0 * static_cast<double>(cost.block_ns) * kMinPairs);

@@ -21,6 +21,8 @@ namespace lockstep::bench {
 
 namespace {
 
+// The short summary's ranking: this many combinations per group.
+constexpr std::size_t kShortRankingPerGroup = 3;
 
 std::string spread_of(const captured_entry& entry, const std::string& counter) {
   const auto median = entry.median(counter);
@@ -141,13 +143,59 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
                            median_of(book, what.b), comparison_figure(book, what));
         break;
       case comparison_kind::against_best_other:
-        if (what.group != last_group) out += "  " + what.group + "\n";
+        if (what.group == last_group) break;
         last_group = what.group;
-        out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {}\n", a->field("sync"), median_of(book, what.a),
-                           a->field("layout").empty() ? std::string() : fmt::format("({})", a->field("layout")), b->field("sync"),
-                           comparison_figure(book, what));
+        out += "  " + what.group + "\n";
+        // One measurement per unordered pair: the leader's line is its pair
+        // with the runner-up read the other way round.
+        for (const best_other_view& view : against_best_other_views(book, what.group)) {
+          const captured_entry* entry = book.find(view.entry);
+          const captured_entry* other = book.find(view.other);
+          if (entry == nullptr || other == nullptr) continue;
+          out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})\n",
+                             entry->field("sync"), median_of(book, view.entry),
+                             entry->field("layout").empty() ? std::string() : fmt::format("({})", entry->field("layout")),
+                             other->field("sync"), view.estimate.median, view.estimate.low, view.estimate.high,
+                             to_string(view.verdict), view.pair->ratios.size(),
+                             view.inverted ? ", the runner-up's pair inverted" : "",
+                             view.pair->budget_cut ? ", cut by the time budget: slow blocks" : "");
+        }
         break;
     }
+  }
+}
+
+// The short ranking: the fastest few combinations of each model, thread
+// count and placement.
+void short_ranking(std::string& out, const run_book& book, std::size_t per_group) {
+  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  std::stable_sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) {
+    const auto key = [](const measured_entry& item) {
+      return std::tuple(std::stoul(item.entry->field("threads")), item.entry->field("model"), item.entry->field("pin"),
+                        item.median);
+    };
+    return key(a) < key(b);
+  });
+  if (steps.empty()) return;
+  out += fmt::format("\nFastest {} per thread count and placement (median step, spread over repetitions, stage "
+                     "sync in core-to-core transfers):\n",
+                     per_group);
+  std::string group;
+  std::size_t shown = 0;
+  for (const auto& step : steps) {
+    const captured_entry& entry = *step.entry;
+    const std::string this_group = fmt::format("{}threads:{} pin:{}",
+                                               entry.field("model").empty() ? "" : "model:" + entry.field("model") + " ",
+                                               entry.field("threads"), entry.field("pin"));
+    if (this_group != group) {
+      group = this_group;
+      shown = 0;
+      out += "  " + group + "\n";
+    }
+    if (shown++ >= per_group) continue;
+    out += fmt::format("    {:>11} {:>8} {:>6}  {} + {}{}\n", format_ns(step.median), spread_of(entry, "ns_per_step"),
+                       optional_number(entry, "vs_c2c", "{:.2f}"), entry.field("sync"), entry.field("layout"),
+                       entry_flags(entry));
   }
 }
 
@@ -169,7 +217,7 @@ std::string oversubscribed_note(const run_book& book, unsigned cpus) {
                      cpus, counts);
 }
 
-std::string render_summary(const run_book& book, const std::string& result_path) {
+std::string render_summary(const run_book& book, const std::string& result_path, bool verbose) {
   std::string out;
   std::size_t skipped = 0;
   for (const auto& entry : book.entries()) skipped += entry.error.empty() ? 0 : 1;
@@ -189,6 +237,12 @@ std::string render_summary(const run_book& book, const std::string& result_path)
   if (book.pace) {
     out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n",
                        book.pace->mode_of.size(), book.pace->summary());
+  }
+
+  if (!verbose) {
+    short_ranking(out, book, kShortRankingPerGroup);
+    out += "\n" + headline_text(book.headline);
+    return out;
   }
 
   std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
@@ -298,17 +352,19 @@ std::string render_summary(const run_book& book, const std::string& result_path)
 
   per_mode_medians(out, book);
 
-  std::vector<std::string> oversubscribed;
-  for (const auto& entry : book.entries())
-    if (entry.error.empty() && entry.median("oversubscribed").value_or(0.0) > 0.5) oversubscribed.push_back(entry.name);
-  out += fmt::format("\nRan oversubscribed (more threads than CPUs): {}\n",
-                     oversubscribed.empty() ? std::string("none") : std::to_string(oversubscribed.size()) + " entries");
-  for (const auto& name : oversubscribed) out += "  " + name + "\n";
+  out += "\nRan oversubscribed (more threads than CPUs): " + oversubscribed_note(book, book.cpus) + "\n";
+  if (!book.collapsed.empty()) {
+    out += fmt::format("Collapsed ({}: oversubscribed and at least {:.0f}x the best of their kind and thread count; "
+                       "out of the rankings and pairs above):\n",
+                       book.collapsed.size(), kCollapseFactor);
+    for (const auto& name : book.collapsed) out += fmt::format("  {:<62} {}\n", name, median_of(book, name));
+  }
 
   if (!book.not_applicable.empty()) {
+    std::map<std::string, std::vector<std::string>> by_reason;
+    for (const auto& skipped_entry : book.not_applicable) by_reason[skipped_entry.reason].push_back(skipped_entry.name);
     out += fmt::format("\nNot applicable ({}):\n", book.not_applicable.size());
-    for (const auto& skipped_entry : book.not_applicable)
-      out += "  " + skipped_entry.name + ": " + skipped_entry.reason + "\n";
+    for (const auto& [reason, names] : by_reason) out += fmt::format("  {} entries: {}\n", names.size(), reason);
   }
   if (skipped > 0) {
     out += fmt::format("\nStalled or skipped ({}):\n", skipped);
@@ -316,6 +372,7 @@ std::string render_summary(const run_book& book, const std::string& result_path)
       if (!entry.error.empty()) out += "  " + entry.name + ": " + entry.error + "\n";
   }
   for (const auto& note : book.notes) out += "\nNote: " + note + "\n";
+  out += "\n" + headline_text(book.headline);
   return out;
 }
 

@@ -49,7 +49,15 @@ long pace_reading_before(harness_state& harness) {
   return harness.pace == nullptr ? -1 : static_cast<long>(harness.pace->latest_or_take(kFreshReadingNs));
 }
 
+void measure_briefly_if_it_will_collapse(benchmark::internal::Benchmark& entry, const sync::primitive_info& primitive,
+                                         unsigned threads, const harness_state& harness) {
+  if (primitive.pure_spin && harness.machine != nullptr &&
+      platform::is_oversubscribed(threads, static_cast<unsigned>(harness.machine->affinity().size())))
+    entry.Repetitions(kBriefRepetitions);
+}
+
 long pace_reading_after(harness_state& harness) {
+  if (harness.after_call) harness.after_call();
   return harness.pace == nullptr ? -1 : static_cast<long>(harness.pace->take());
 }
 

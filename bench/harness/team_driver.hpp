@@ -211,12 +211,27 @@ struct harness_state {
   unsigned stalls_before_skipping_sync = 3;
   // Readings of the machine's pace around every repetition (pace.hpp); null: none taken.
   pace_probe* pace = nullptr;
+  // Called after every call of an entry (with pace_reading_after): the
+  // run's progress line (reporters.hpp: progress_reporter::tick). May be empty.
+  std::function<void()> after_call;
   // Entry name -> how to build one side of a paired comparison of it.
   std::map<std::string, block_runner_factory> block_runners;
   // Entries whose batches stayed shorter than a quarter of the target after
   // re-probing: the harness barrier weighs in their figure (the summary says so).
   std::set<std::string> short_batches;
 };
+
+// Collapse measured briefly: a pure spinner (sync/registry.hpp: pure_spin)
+// with more threads than the CPUs of the affinity set waits for a scheduler
+// quantum at every stage, so its step takes tens of milliseconds, where the
+// others' take microseconds, and every repetition costs tens of units of
+// that (ck_*'s entries at threads:4 took 13.6 s of the 42 s quick run on the
+// 2-vCPU development VM). One repetition shows it; the summary then reports
+// such an entry as collapsed (paired_blocks.hpp: find_collapsed) when it
+// does collapse, and ranks it as usual, with one repetition, when it does not.
+inline constexpr int kBriefRepetitions = 1;
+void measure_briefly_if_it_will_collapse(benchmark::internal::Benchmark& entry, const sync::primitive_info& primitive,
+                                         unsigned threads, const harness_state& harness);
 
 // Takes a pace reading around a call (pace.hpp: the reading after the
 // previous call when it is fresh, else a new one; always a new one after)
@@ -358,15 +373,25 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
     // speeds (win_event) took batches many times the target, and the default
     // run twice as long. The timed call below catches what a slow probe
     // still gets wrong.
+    //
+    // A unit that alone outlasts the target makes a batch of one unit
+    // whatever the probe says, so a first batch of one unit that does is
+    // the whole probe: an oversubscribed pure spinner (tens of ms a step)
+    // spent about eleven units, most of a second, on a probe whose answer
+    // was known after one; collapsed entries took half of the quick run.
     constexpr unsigned kProbeBatches = 8;
     constexpr unsigned kCheckBatches = 3;
     constexpr int kRegrowths = 3;
-    call_result probe = run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
+    call_result first = run_call(team, slots, plan, 1, 1, settings, false, work);
+    if (!first.failure.empty()) return record_placement_failure(first);
+    if (first.batches.stalled || first.batches.over_budget) return record_stop(first);
+    const bool slow_unit = median_unit_ns(first.batches) >= static_cast<double>(settings.target_batch_ns);
+    call_result probe = slow_unit ? std::move(first) : run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
     if (!probe.failure.empty()) return record_placement_failure(probe);
     if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
     std::uint64_t units = units_for_batch(median_unit_ns(probe.batches), settings);
     bool short_batch = false;
-    for (int regrowth = 0; regrowth <= kRegrowths; ++regrowth) {
+    for (int regrowth = 0; regrowth <= kRegrowths && !slow_unit; ++regrowth) {
       call_result check = run_call(team, slots, plan, kCheckBatches, units, settings, false, work);
       if (!check.failure.empty()) return record_placement_failure(check);
       if (check.batches.stalled || check.batches.over_budget) return record_stop(check);
