@@ -73,12 +73,13 @@ TEST(PairedRounds, EveryRoundTakesOnePairOfEveryComparison) {
   bench::pairing_settings settings;
   settings.pairs = 6;
   settings.budget_ns = std::int64_t{1} << 60;
-  std::size_t progress_calls = 0;
-  bench::measure_pairs(run.harness, run.plan, settings, [&](std::size_t, std::size_t total) {
+  std::size_t progress_calls = 0;  // once a round, counting the rounds
+  bench::measure_pairs(run.harness, run.plan, settings, [&](std::size_t round, std::size_t rounds) {
     ++progress_calls;
-    EXPECT_EQ(total, 3u);
+    EXPECT_EQ(round, progress_calls);
+    EXPECT_EQ(rounds, 6u);
   });
-  EXPECT_EQ(progress_calls, 3u);
+  EXPECT_EQ(progress_calls, 6u);
   ASSERT_EQ(run.log.size(), 3u * 6u * 2u);
   // Round r holds blocks [6 r, 6 r + 6): each comparison's two blocks, once.
   for (std::size_t round = 0; round < 6; ++round) {
