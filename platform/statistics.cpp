@@ -1,8 +1,6 @@
 // The statistics (statistics.hpp).
 #include "platform/statistics.hpp"
 
-#include <random>
-
 namespace lockstep::platform {
 
 namespace {
@@ -23,6 +21,19 @@ interval percentile_interval(std::vector<double>& resample_medians, double confi
   const double tail = (1.0 - confidence) / 2.0;
   const std::span<const double> sorted(resample_medians);
   return {quantile_of_sorted(sorted, tail), quantile_of_sorted(sorted, 1.0 - tail)};
+}
+
+// The high 64 bits of the 128-bit product x n, from 32-bit halves (no
+// compiler's 128-bit integer needed): floor(x n / 2^64).
+std::uint64_t multiply_high(std::uint64_t x, std::uint64_t n) noexcept {
+  constexpr std::uint64_t kLow = 0xffff'ffffu;
+  const std::uint64_t x_high = x >> 32, x_low = x & kLow;
+  const std::uint64_t n_high = n >> 32, n_low = n & kLow;
+  const std::uint64_t low_low = x_low * n_low;
+  const std::uint64_t high_low = x_high * n_low;
+  const std::uint64_t low_high = x_low * n_high;
+  const std::uint64_t middle = (low_low >> 32) + (high_low & kLow) + low_high;
+  return x_high * n_high + (high_low >> 32) + (middle >> 32);
 }
 
 void check_confidence(double confidence) {
@@ -71,19 +82,30 @@ median_estimate bootstrap_median(std::span<const double> values, double confiden
     estimate.low = estimate.high = estimate.median;
     return estimate;
   }
-  std::mt19937_64 generator(seed);
-  std::uniform_int_distribution<std::size_t> pick(0, values.size() - 1);
+  bootstrap_draws draws(seed);
   std::vector<double> medians;
   medians.reserve(resamples);
   std::vector<double> scratch(values.size());
   for (unsigned resample = 0; resample < resamples; ++resample) {
-    for (double& value : scratch) value = values[pick(generator)];
+    for (double& value : scratch) value = values[draws.next_index(values.size())];
     medians.push_back(median_in_place(scratch));
   }
   const interval ends = percentile_interval(medians, confidence);
   estimate.low = ends.low;
   estimate.high = ends.high;
   return estimate;
+}
+
+std::uint64_t bootstrap_draws::next() noexcept {
+  state_ += 0x9e37'79b9'7f4a'7c15u;
+  std::uint64_t z = state_;
+  z = (z ^ (z >> 30)) * 0xbf58'476d'1ce4'e5b9u;
+  z = (z ^ (z >> 27)) * 0x94d0'49bb'1331'11ebu;
+  return z ^ (z >> 31);
+}
+
+std::size_t bootstrap_draws::next_index(std::size_t n) noexcept {
+  return static_cast<std::size_t>(multiply_high(next(), static_cast<std::uint64_t>(n)));
 }
 
 std::string_view to_string(verdict outcome) noexcept {

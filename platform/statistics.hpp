@@ -17,12 +17,30 @@
 // Bootstrap interval of a median (percentile bootstrap): B resamples, each n
 // indices into the n values drawn with replacement; the median of each
 // resample; the interval at confidence c is [Q((1 - c) / 2), Q(1 - (1 - c) / 2)]
-// of those B medians. bootstrap_interval takes the resamples' indices (the
-// rule the golden file checks on both sides); bootstrap_median draws them
-// from std::mt19937_64(seed) through std::uniform_int_distribution<size_t>
-// (0, n - 1), resample after resample, index after index, so an interval in a
-// result file can be recomputed from its values and seed. One value: the
-// interval is that value; no resamples: the interval is the median.
+// of those B medians. bootstrap_interval takes the resamples' indices;
+// bootstrap_median draws them. One value: the interval is that value; no
+// resamples: the interval is the median.
+//
+// The draws (bootstrap_draws), portable so that any language can recompute a
+// result file's interval from its values and seed: the generator is
+// splitmix64 started at the seed,
+//     state += 0x9e3779b97f4a7c15
+//     z = state;  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9
+//                 z = (z ^ (z >> 27)) * 0x94d049bb133111eb
+//     output z ^ (z >> 31)                         (all arithmetic mod 2^64)
+// and an output x becomes the index floor(x n / 2^64) in [0, n) (Lemire's
+// multiply-shift, without his rejection step: an index's probability is off
+// by at most n / 2^64). Resample after resample, index after index: resample
+// r's index i is output number r n + i. std::uniform_int_distribution is not
+// used: its mapping is each standard library's own.
+//
+// Agreement with reports/lockstep_reports/statistics.py: the draws are
+// integers and identical; the medians and quantiles are the same IEEE
+// expressions in the same order, so on this build the two agree to the last
+// bit (the golden file's seeded cases agree exactly on x86-64). The golden
+// tests allow 1 ulp: a compiler that fuses x[floor h] + w (x[floor h + 1] -
+// x[floor h]) into one multiply-add (an FMA target, -ffp-contract=fast) may
+// move an interpolated end by that much; a changed draw moves it by far more.
 //
 // Verdict of a ratio's interval [low, high] against a noise band of half-width
 // `noise` (a fraction: 0.05 is 5 %), the band being [1 / (1 + noise), 1 + noise]:
@@ -76,6 +94,21 @@ struct interval {
 interval bootstrap_interval(std::span<const double> values, const std::vector<std::vector<std::size_t>>& resamples,
                             double confidence);
 
+// The seeded draws of the contract above: splitmix64 from `seed`, each output
+// mapped to an index in [0, n).
+class bootstrap_draws {
+ public:
+  explicit bootstrap_draws(std::uint64_t seed) noexcept : state_(seed) {}
+
+  // The generator's next output.
+  std::uint64_t next() noexcept;
+  // The next output as an index in [0, n): floor(x n / 2^64). n >= 1.
+  std::size_t next_index(std::size_t n) noexcept;
+
+ private:
+  std::uint64_t state_;
+};
+
 struct median_estimate {
   double median = 0.0;
   double low = 0.0;  // the interval's ends
@@ -83,7 +116,9 @@ struct median_estimate {
 };
 
 // The median of `values` and its bootstrap interval over `resamples`
-// resamples drawn from `seed` as the contract says. No values: all zero.
+// resamples drawn by bootstrap_draws(seed), resample after resample, index
+// after index. No values: all zero; one value or no resamples: the interval
+// is the median.
 median_estimate bootstrap_median(std::span<const double> values, double confidence, unsigned resamples,
                                  std::uint64_t seed);
 

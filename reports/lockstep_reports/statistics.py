@@ -9,8 +9,12 @@ holds both to the same answers: tests/platform/statistics_golden_test.cpp, repor
   Q(0.5) up to rounding).
 - bootstrap interval of a median (percentile bootstrap): the median of each resample (n indices drawn with
   replacement), and [Q((1 - c) / 2), Q(1 - (1 - c) / 2)] of those medians at confidence c. bootstrap_interval
-  takes the resamples' indices; lockstep draws them with mt19937_64 (C++), bootstrap_median here with numpy's
-  generator: the same rule over other draws.
+  takes the resamples' indices; bootstrap_median draws them by the one portable rule (bootstrap_indices):
+  splitmix64 started at the seed, an output x giving the index (x n) >> 64 in [0, n), resample after resample,
+  index after index. lockstep run draws its pairs' intervals the same way (PAIR_RESAMPLES resamples from
+  PAIR_SEED), so bootstrap_median(ratios, confidence, PAIR_RESAMPLES, PAIR_SEED) recomputes a run file's interval
+  from its ratios: the same integers, the same IEEE expressions in the same order, the same bits on x86-64
+  (the golden tests allow 1 ulp for a C++ compiler that fuses a multiply-add).
 - verdict of a ratio's interval [low, high] against the noise band [1 / (1 + noise), 1 + noise]: penalty (the
   whole interval above the band), gain (wholly below it), within noise (wholly inside it, an end on an edge
   counting as inside), unsure (anything else: it straddles an edge). compare.py says "slower" / "faster" for
@@ -56,6 +60,12 @@ MIN_REPETITIONS = 5
 # (never written by lockstep run) there is no interval.
 MAX_EXACT = 200
 BASE_SEED = 20260101
+# The resamples and seed of a run file's pair intervals: bench/harness/paired_ratio.hpp's kBootstrapResamples and
+# kBootstrapSeed (the file does not carry them).
+PAIR_RESAMPLES = 4000
+PAIR_SEED = 0x5EED1234
+
+_MASK64 = (1 << 64) - 1
 
 
 def median(values) -> float:
@@ -114,18 +124,47 @@ def bootstrap_interval(values, resamples, confidence: float = CONFIDENCE) -> tup
                                confidence)
 
 
+def _splitmix64(seed: int):
+    """splitmix64's outputs from `seed` (mod 2^64), without end (platform/statistics.hpp, bootstrap_draws)."""
+    state = seed & _MASK64
+    while True:
+        state = (state + 0x9E3779B97F4A7C15) & _MASK64
+        z = state
+        z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & _MASK64
+        z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & _MASK64
+        yield z ^ (z >> 31)
+
+
+def _index_of(output: int, n: int) -> int:
+    """An output x of the generator as an index in [0, n): (x n) >> 64 (Lemire's multiply-shift)."""
+    return (output * n) >> 64
+
+
+def _resamples_from(outputs, n: int, resamples: int) -> list[list[int]]:
+    """`resamples` lists of n indices in [0, n) from the generator's outputs."""
+    if n < 1:
+        raise ValueError("draws into no values")
+    return [[_index_of(next(outputs), n) for _ in range(n)] for _ in range(resamples)]
+
+
+def bootstrap_indices(n: int, resamples: int, seed: int) -> list[list[int]]:
+    """The seeded bootstrap's draws (platform/statistics.hpp, bootstrap_draws): `resamples` lists of n indices in
+    [0, n), from splitmix64 started at `seed`, each output x mapped to (x n) >> 64, resample after resample, index
+    after index."""
+    return _resamples_from(_splitmix64(seed), n, resamples)
+
+
 def bootstrap_median(values, confidence: float = CONFIDENCE, resamples: int = BOOTSTRAP_RESAMPLES,
                      seed: int = BASE_SEED) -> tuple[float, float, float]:
-    """(median, low, high): the median and its bootstrap interval over `resamples` resamples drawn by numpy's
-    generator from `seed` (not lockstep's mt19937_64 draws: an interval close to, not equal to, a result
-    file's). One value: the interval is that value."""
+    """(median, low, high): the median and its bootstrap interval over `resamples` resamples drawn by
+    bootstrap_indices from `seed`, platform::bootstrap_median's rule and draws. One value or no resamples: the
+    interval is the median; no values: ValueError."""
     values = [float(value) for value in values]
+    whole = median(values)
     if len(values) < 2 or resamples == 0:
-        whole = median(values)
         return whole, whole, whole
-    indices = np.random.default_rng(seed).integers(0, len(values), (resamples, len(values)))
-    low, high = bootstrap_interval(values, indices.tolist(), confidence)
-    return median(values), low, high
+    low, high = bootstrap_interval(values, bootstrap_indices(len(values), resamples, seed), confidence)
+    return whole, low, high
 
 
 PENALTY, GAIN, WITHIN_NOISE, UNSURE = "penalty", "gain", "within noise", "unsure"
@@ -148,20 +187,21 @@ def verdict(low: float, high: float, noise: float) -> str:
 
 def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     """Percentile bootstrap interval of median(b)/median(a); None with fewer than 2 values a side.
-    Each side is sorted first, so the interval does not depend on the order of the repetitions in a file."""
-    a = np.sort(np.asarray(a, dtype=float))
-    b = np.sort(np.asarray(b, dtype=float))
-    if a.size < 2 or b.size < 2:
+    Each side is sorted first, so the interval does not depend on the order of the repetitions in a file. The
+    draws are bootstrap_median's rule from one seed per name: a's resamples, then b's from the same generator."""
+    a = sorted(float(value) for value in a)
+    b = sorted(float(value) for value in b)
+    if len(a) < 2 or len(b) < 2:
         return None
-    rng = np.random.default_rng(BASE_SEED + zlib.crc32(name.encode("utf-8")))
-    medians_a = np.median(a[rng.integers(0, a.size, (BOOTSTRAP_RESAMPLES, a.size))], axis=1)
-    medians_b = np.median(b[rng.integers(0, b.size, (BOOTSTRAP_RESAMPLES, b.size))], axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratios = medians_b / medians_a
-    ratios = ratios[np.isfinite(ratios)]
-    if ratios.size == 0:
+    outputs = _splitmix64(BASE_SEED + zlib.crc32(name.encode("utf-8")))
+    medians_a = [median([a[index] for index in indices]) for indices in _resamples_from(outputs, len(a),
+                                                                                          BOOTSTRAP_RESAMPLES)]
+    medians_b = [median([b[index] for index in indices]) for indices in _resamples_from(outputs, len(b),
+                                                                                          BOOTSTRAP_RESAMPLES)]
+    ratios = [of_b / of_a for of_a, of_b in zip(medians_a, medians_b) if of_a != 0.0 and math.isfinite(of_b / of_a)]
+    if not ratios:
         return None
-    return percentile_interval(ratios.tolist())
+    return percentile_interval(ratios)
 
 
 @functools.lru_cache(maxsize=None)

@@ -1,6 +1,7 @@
 """statistics.py against the golden file it shares with platform/statistics.hpp
 (tests/fixtures/statistics/golden.json: numpy's answers and the verdict rule's;
 tests/platform/statistics_golden_test.cpp checks the C++ side against the same file)."""
+import itertools
 import json
 import math
 import os
@@ -38,6 +39,35 @@ class Golden(unittest.TestCase):
                 self.assert_near(statistics.median(case["values"]), case["median"])
                 self.assert_near(low, case["low"])
                 self.assert_near(high, case["high"])
+
+    def assert_within_ulps(self, actual, expected):
+        # Within the file's seeded_ulps: the same draws and expressions give the same bits, a fused multiply-add
+        # on the C++ side may move an interpolated end by one ulp (platform/statistics.hpp).
+        ulps = GOLDEN_CASES["seeded_ulps"]
+        self.assertTrue(abs(actual - expected) <= ulps * math.ulp(expected), f"{actual!r} is not {expected!r}")
+
+    def test_the_seeded_draws_are_splitmix64_mapped_by_multiply_shift(self):
+        self.assertTrue(GOLDEN_CASES["draws"])
+        for case in GOLDEN_CASES["draws"]:
+            with self.subTest(seed=case["seed"], n=case["n"]):
+                count = len(case["outputs"])
+                outputs = list(itertools.islice(statistics._splitmix64(case["seed"]), count))
+                self.assertEqual(outputs, case["outputs"])
+                self.assertEqual([statistics._index_of(output, case["n"]) for output in outputs], case["indices"])
+                if case["n"] <= count:  # resample after resample, index after index
+                    resamples = statistics.bootstrap_indices(case["n"], count // case["n"], case["seed"])
+                    flat = [index for indices in resamples for index in indices]
+                    self.assertEqual(flat, case["indices"][:len(flat)])
+
+    def test_seeded_bootstrap_medians(self):
+        self.assertTrue(GOLDEN_CASES["seeded"])
+        for case in GOLDEN_CASES["seeded"]:
+            with self.subTest(case["name"]):
+                median, low, high = statistics.bootstrap_median(case["values"], case["confidence"],
+                                                                case["resamples"], case["seed"])
+                self.assert_within_ulps(median, case["median"])
+                self.assert_within_ulps(low, case["low"])
+                self.assert_within_ulps(high, case["high"])
 
     def test_verdicts(self):
         self.assertTrue(GOLDEN_CASES["verdicts"])

@@ -7,7 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -31,6 +33,22 @@ const nlohmann::json& golden() {
   const double tolerance = golden().at("tolerance").get<double>() * std::max(1.0, std::fabs(expected));
   if (std::fabs(actual - expected) <= tolerance) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << actual << " is not " << expected;
+}
+
+// Within the file's seeded_ulps of the expected value (the same draws and the
+// same expressions give the same bits; a fused multiply-add may move an
+// interpolated end by one ulp: platform/statistics.hpp).
+::testing::AssertionResult within_ulps(double actual, double expected) {
+  const int ulps = golden().at("seeded_ulps").get<int>();
+  double below = expected;
+  double above = expected;
+  for (int step = 0; step < ulps; ++step) {
+    below = std::nextafter(below, -std::numeric_limits<double>::infinity());
+    above = std::nextafter(above, std::numeric_limits<double>::infinity());
+  }
+  if (actual >= below && actual <= above) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << std::hexfloat << actual << " is not " << expected << " within " << ulps
+                                       << " ulp";
 }
 
 TEST(StatisticsGolden, MediansAndQuantiles) {
@@ -70,7 +88,34 @@ TEST(StatisticsGolden, Verdicts) {
   }
 }
 
-// What the golden file cannot hold: the seeded draws are C++'s own.
+TEST(StatisticsGolden, TheSeededDrawsAreSplitmix64MappedByMultiplyShift) {
+  ASSERT_FALSE(golden().at("draws").empty());
+  for (const auto& item : golden().at("draws")) {
+    const auto seed = item.at("seed").get<std::uint64_t>();
+    const auto n = item.at("n").get<std::uint64_t>();
+    SCOPED_TRACE("seed " + std::to_string(seed) + ", n " + std::to_string(n));
+    platform::bootstrap_draws outputs(seed);
+    for (const auto& expected : item.at("outputs")) EXPECT_EQ(outputs.next(), expected.get<std::uint64_t>());
+    platform::bootstrap_draws indices(seed);
+    for (const auto& expected : item.at("indices"))
+      EXPECT_EQ(indices.next_index(static_cast<std::size_t>(n)), expected.get<std::size_t>());
+  }
+}
+
+TEST(StatisticsGolden, SeededBootstrapMedians) {
+  ASSERT_FALSE(golden().at("seeded").empty());
+  for (const auto& item : golden().at("seeded")) {
+    SCOPED_TRACE(item.at("name").get<std::string>());
+    const auto values = item.at("values").get<std::vector<double>>();
+    const platform::median_estimate found =
+        platform::bootstrap_median(values, item.at("confidence").get<double>(), item.at("resamples").get<unsigned>(),
+                                   item.at("seed").get<std::uint64_t>());
+    EXPECT_TRUE(within_ulps(found.median, item.at("median").get<double>()));
+    EXPECT_TRUE(within_ulps(found.low, item.at("low").get<double>()));
+    EXPECT_TRUE(within_ulps(found.high, item.at("high").get<double>()));
+  }
+}
+
 TEST(Statistics, TheSeededBootstrapIsDeterministicAndBracketsTheMedian) {
   const std::vector<double> ratios{1.02, 0.97, 1.10, 1.01, 0.99, 1.05, 1.03};
   const auto first = platform::bootstrap_median(ratios, 0.95, 2000, 7);
