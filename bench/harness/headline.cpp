@@ -13,6 +13,7 @@
 #include "bench/harness/paired_blocks.hpp"
 #include "bench/harness/run_book.hpp"
 #include "platform/format.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::bench {
 
@@ -97,8 +98,8 @@ std::vector<headline_choice> choose(const run_book& book) {
     // is against the median leader, which is the choice unless overturned.
     for (const auto& view : views) {
       const captured_entry* entry = book.find(view.entry);
-      if (entry == nullptr || entry->field("sync") != "std_barrier" || view.entry == choice.entry) continue;
-      if (view.other == choice.entry) choice.std_barrier = rival_from(view, book);
+      if (entry == nullptr || entry->field("sync") != sync::kBaselinePrimitive || view.entry == choice.entry) continue;
+      if (view.other == choice.entry) choice.baseline = rival_from(view, book);
     }
     choices.push_back(std::move(choice));
   }
@@ -125,9 +126,9 @@ void choice_lines(std::vector<std::string>& lines, const headline_choice& choice
   } else if (choice.basis == "medians") {
     second = "no paired comparison (--pairs 0): ranked by medians only";
   }
-  if (choice.std_barrier)
-    second += fmt::format("{}std::barrier takes {}", second.empty() ? "" : "; ",
-                          ratio_text(choice.std_barrier->estimate, choice.std_barrier->verdict));
+  if (choice.baseline)
+    second += fmt::format("{}{} takes {}", second.empty() ? "" : "; ", choice.baseline->sync,
+                          ratio_text(choice.baseline->estimate, choice.baseline->verdict));
   if (!second.empty()) lines.push_back("      " + second);
 }
 
@@ -304,7 +305,7 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"basis", choice.basis},
                                {"median_leader", choice.median_leader},
                                {"runner_up", rival_json(choice.runner_up)},
-                               {"std_barrier", rival_json(choice.std_barrier)}});
+                               {"baseline", rival_json(choice.baseline)}});
   }
   nlohmann::json false_sharing = nullptr;
   if (const auto& probe = headline.probes.false_sharing) {

@@ -66,7 +66,7 @@ struct headline_choice {
   std::string basis;
   std::string median_leader;        // the entry first by median (differs from `entry` when the pair overturned it)
   std::optional<headline_rival> runner_up;
-  std::optional<headline_rival> std_barrier;
+  std::optional<headline_rival> baseline;  // kBaselinePrimitive against the choice
 };
 
 // The known answers measured beside the matrix (matrix_run.cpp, briefly):

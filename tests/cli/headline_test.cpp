@@ -163,8 +163,8 @@ TEST(Headline, KeepsTheMedianLeaderWhenThePairAgreesOrCannotTell) {
     EXPECT_EQ(two.runner_up->sync, "seqlock");
     EXPECT_EQ(two.runner_up->verdict, seqlock_over_mailbox > 1.1 ? bench::ratio_verdict::penalty
                                                                  : bench::ratio_verdict::within_noise);
-    ASSERT_TRUE(two.std_barrier);
-    EXPECT_NEAR(two.std_barrier->estimate.median, 5.8, 0.1);
+    ASSERT_TRUE(two.baseline);
+    EXPECT_NEAR(two.baseline->estimate.median, 5.8, 0.1);
   }
 }
 
