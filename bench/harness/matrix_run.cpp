@@ -42,20 +42,26 @@ namespace {
 // --plan: what the run would measure and how long it would take, from the
 // entries registered exactly as a run registers them; nothing is measured or
 // written.
-std::string plan_of(const platform::topology& machine, const run_selection& selection,
-               const std::vector<std::string>& names, const run_book& book, const run_cost& cost) {
-  std::map<std::string, std::size_t> by_kind;
+// How many paired comparisons the plan expects of these entries: any figure
+// will do, plan_comparisons reads which entries exist (a run plans fewer:
+// collapsed entries and unpinned entries that did not migrate drop out).
+std::size_t planned_comparisons(const std::vector<std::string>& names) {
   run_book planned;
   for (const auto& name : names) {
     captured_entry entry;
     entry.name = name;
     entry.fields = parse_entry_name(name);
-    ++by_kind[entry.fields["kind"]];
-    // Any figure will do: the plan of comparisons reads which entries exist.
-    entry.repetitions.push_back({{"ns_per_step", 1.0}, {"ns_per_episode", 1.0}});
+    entry.repetitions.push_back({{"ns_per_step", 1.0}, {"ns_per_episode", 1.0}, {"migrations_per_kstep", 1.0}});
     planned.record(std::move(entry));
   }
-  const std::size_t comparisons = plan_comparisons(planned).size();
+  return plan_comparisons(planned).size();
+}
+
+std::string plan_of(const platform::topology& machine, const run_selection& selection,
+               const std::vector<std::string>& names, const run_book& book, const run_cost& cost) {
+  std::map<std::string, std::size_t> by_kind;
+  for (const auto& name : names) ++by_kind[parse_entry_name(name)["kind"]];
+  const std::size_t comparisons = planned_comparisons(names);
   const run_estimate estimate = estimate_run(names.size(), comparisons, cost);
   std::string models;
   std::vector<std::size_t> seen;
@@ -267,12 +273,15 @@ run_book execute_matrix(const matrix_request& request, const platform::topology&
   // The estimate comes from the plan (run_plan.hpp), the same one --plan prints.
   const run_cost cost{repetitions, request.min_time_ns, pairing.pairs, pairing.block_ns, pairing.budget_ns};
   const std::size_t selected = count_selected(names);
-  const double planned_matrix_s = estimate_run(selected, 0, cost).matrix_s;
-  progress_reporter progress(book, selected, planned_matrix_s);
+  const run_estimate planned = estimate_run(selected, planned_comparisons(names), cost);
+  progress_reporter progress(book, selected, planned.matrix_s);
   harness.after_call = [&progress] { progress.tick(); };
   result_json_reporter json;
-  fmt::print(stderr, "lockstep run: {} entries, {} repetitions each, about {} (the plan's estimate); JSON to {}\n",
-             selected, repetitions, format_seconds(planned_matrix_s), result_file->destination());
+  fmt::print(stderr,
+             "lockstep run: {} entries, {} repetitions each, then the paired comparisons: about {} in all (the plan's "
+             "estimate: {} and {}); JSON to {}\n",
+             selected, repetitions, format_seconds(planned.total_s()), format_seconds(planned.matrix_s),
+             format_seconds(planned.pairs_s), result_file->destination());
   std::fflush(stderr);
   benchmark::RunSpecifiedBenchmarks(&progress, &json);
   benchmark::Shutdown();

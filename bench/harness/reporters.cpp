@@ -125,7 +125,7 @@ void progress_reporter::line(bool force) {
   last_line_ = now;
   const double elapsed = std::chrono::duration<double>(now - start_).count();
   const std::size_t total = std::max(expected_, finished_);
-  fmt::print(stderr, "  {} elapsed, {} of {} entries complete, {}\n", format_seconds(elapsed), finished_, total,
+  fmt::print(stderr, "  {} elapsed, {} of {} entries complete, matrix: {}\n", format_seconds(elapsed), finished_, total,
              time_left(elapsed, planned_s_, finished_, total));
   std::fflush(stderr);
 }

@@ -240,6 +240,7 @@ std::string render_summary(const run_book& book, const std::string& result_path,
   }
 
   if (!verbose) {
+    if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
     short_ranking(out, book, kShortRankingPerGroup);
     out += "\n" + headline_text(book.headline);
     return out;

@@ -140,7 +140,11 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
                                             "--benchmark_min_time=0.001"}));
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find(out.string()), std::string::npos) << "the summary names the result file:\n" << result.out;
-  EXPECT_NE(result.err.find("[1/"), std::string::npos) << "progress on stderr:\n" << result.err;
+  EXPECT_NE(result.err.find("entries complete"), std::string::npos) << "progress on stderr:\n" << result.err;
+  // The short summary ends with the answer, and says where the tables are.
+  EXPECT_NE(result.out.find("The answer on this machine"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("lockstep run --verbose"), std::string::npos) << result.out;
+  EXPECT_EQ(result.out.find("Paired ratios:"), std::string::npos) << "a table outside --verbose:\n" << result.out;
 
   // Only the result file: no temporary left behind.
   std::vector<std::string> files;
@@ -235,7 +239,7 @@ TEST(RunCli, RunWritesThePaceTraceAndThePairedRatios) {
   const fs::path out = scratch.path() / "paired.json";
   const auto result = run_command(run_args({"--quick", "--sync", "futex_spin,seqlock", "--layout", "per_thread,packed",
                                             "--threads", "2", "--pin", "compact", "--repetitions", "2", "--pairs", "4",
-                                            "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
+                                            "--verbose", "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("Pace of the machine"), std::string::npos) << result.out;
   EXPECT_NE(result.out.find("Paired ratios"), std::string::npos) << result.out;
@@ -308,7 +312,7 @@ TEST(RunCli, InterleavedRunDerivesRatiosFromTheWholeRun) {
   const fs::path out = scratch.path() / "interleaved.json";
   const auto result = run_command(run_args({"--quick", "--interleave", "--sync", "futex_spin,seqlock", "--layout",
                                             "per_thread", "--threads", "2", "--pin", "compact", "--repetitions", "3",
-                                            "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
+                                            "--verbose", "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
   ASSERT_EQ(result.exit_status, 0) << result.err;
   std::ifstream file(out);
   const nlohmann::json document = nlohmann::json::parse(file);
