@@ -88,6 +88,11 @@ READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
 PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
 PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
 SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, threads, points, best, c2c_one_way_ns}
+# top level: the run's answer (bench/harness/headline.hpp): {lines, recommendations, collapsed, ...}; a file
+# written before it has none and reads as before.
+HEADLINE_KEY = "lockstep_headline"
+# How a recommendation was chosen (lockstep_headline.recommendations[].basis).
+HEADLINE_BASES = ("paired", "medians")
 SCALING_COUNTERS = ("sync_ns_per_stage", "ns_per_step")
 # Per-repetition counters (iteration rows only; an aggregate's median or mean of a mode index means nothing).
 PACE_C2C_COUNTER = "pace_c2c_ns"  # ns; NaN on a machine of one CPU (no pair to measure)

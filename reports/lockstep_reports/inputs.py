@@ -34,7 +34,7 @@ import os
 from collections import Counter
 from dataclasses import dataclass, field
 
-from . import fields, schemas
+from . import fields, schemas, statistics
 from .names import BenchmarkKey, parse_name
 from .schemas import json_kind, shown as _shown  # noqa: F401 (json_kind: the fuzz test names kinds by it)
 
@@ -251,6 +251,49 @@ class PacePair:
     noise: float  # a fraction: 0.05 is 5 %
     verdict: str  # fields.PAIR_VERDICTS
     block_ms: float
+    inverted: bool = False  # the pair read the other way round (inverse): b / a
+
+    def inverse(self) -> "PacePair":
+        """The same comparison read the other way round, b / a: each ratio and the median inverted, the
+        interval [1 / ci_high, 1 / ci_low], penalty and gain swapped (within noise and unsure stay). The
+        verdict is mirrored, not recomputed, as lockstep run mirrors it (bench/harness/paired_ratio.hpp,
+        inverse): the band is symmetric on a log scale, and rounding at its edge cannot make the two
+        directions of one comparison disagree."""
+        mirrored = {statistics.PENALTY: statistics.GAIN, statistics.GAIN: statistics.PENALTY}
+        return PacePair(self.comparison, self.group, self.b, self.a, self.b_key, self.a_key,
+                        tuple(1.0 / ratio for ratio in self.ratios), self.modes, 1.0 / self.median,
+                        1.0 / self.ci_high, 1.0 / self.ci_low, self.confidence, self.noise,
+                        mirrored.get(self.verdict, self.verdict), self.block_ms, not self.inverted)
+
+
+def _best_other_group(pair: PacePair) -> tuple:
+    """Which "each primitive against the best other" group a pair belongs to: its kind of entry (an RK4 step,
+    a bare episode), model, placement and thread count, read from its numerator's name."""
+    key = pair.a_key
+    return key.family, key.get("model") or "", key.get("pin") or "", key.threads or 0
+
+
+def against_best_other_views(pairs: list[PacePair]) -> list[PacePair]:
+    """Every primitive's line of "each primitive against the best other", group by group in the file's order.
+
+    Since lockstep run measures each unordered comparison once (docs/pace.md), a group's leader (its fastest
+    primitive by median) has no pair of its own: every pair of the group has the leader as its denominator,
+    and the leader's line is its pair with the runner-up read the other way round (PacePair.inverse), put
+    first. The runner-up's pair is the group's first in the file (lockstep run writes them in its plan's
+    order, the runner-up first: bench/harness/paired_blocks.hpp). A file written before that, where every
+    primitive has a pair of its own, leader included, gives its pairs as they are."""
+    groups: dict[tuple, list[PacePair]] = {}
+    for pair in pairs:
+        if pair.comparison == "against_best_other":
+            groups.setdefault(_best_other_group(pair), []).append(pair)
+    views = []
+    for members in groups.values():
+        leaders = {pair.b_key for pair in members}
+        leader = next(iter(leaders))
+        if len(leaders) == 1 and all(pair.a_key != leader for pair in members):
+            views.append(members[0].inverse())
+        views += members
+    return views
 
 
 @dataclass(frozen=True)
@@ -285,6 +328,7 @@ class RunFile:
     pace: PaceTrace | None = None  # None: written before the pace trace
     pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
     scaling: ScalingCurve | None = None  # None: not a --scaling run
+    headline: Headline | None = None  # None: written before lockstep_headline
     mpi: "MpiDetails | None" = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
 
     def context_number(self, key: str) -> float | None:
@@ -295,6 +339,11 @@ class RunFile:
         except (TypeError, ValueError):
             return None
         return number if math.isfinite(number) and number > 0 else None
+
+    @property
+    def collapsed(self) -> frozenset:
+        """The entries (BenchmarkKey) the run found collapsed: out of every ranking, ratio and colour scale."""
+        return self.headline.collapsed_keys if self.headline else frozenset()
 
 
 def _read_context(path: str, label: str, raw: dict) -> tuple[dict, list[str]]:
@@ -503,6 +552,95 @@ def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
                         curve.get("best"), curve.get("c2c_one_way_ns"))
 
 
+# ---------------------------------------------------------------- the run's answer
+
+@dataclass(frozen=True)
+class Recommendation:
+    """One of lockstep_headline's recommendations: the combination to use at one model, thread count and
+    placement, as lockstep run chose it (bench/harness/headline.hpp)."""
+
+    threads: int
+    pin: str
+    model: str  # "": the paper's two-mass system
+    entry: str  # its entry's name, as written
+    entry_key: BenchmarkKey
+    sync: str
+    layout: str
+    ns_per_step: float
+    basis: str  # fields.HEADLINE_BASES: "paired" (its pair with the runner-up decided) or "medians"
+
+
+@dataclass(frozen=True)
+class Headline:
+    """The file's "lockstep_headline": the run's answer as its terminal printed it (lines, shown verbatim:
+    the same fact reads the same everywhere), the recommendations, and the entries that collapsed
+    (oversubscribed and at least 100 times the best of their kind and thread count: kept out of rankings,
+    ratios and colour scales)."""
+
+    lines: tuple[str, ...]
+    recommendations: tuple[Recommendation, ...]
+    collapsed: tuple[str, ...]  # entry names as written, each once
+    collapsed_keys: frozenset
+
+
+def _headline_text(path: str, place: tuple, value) -> str:
+    if not isinstance(value, str):
+        _fail(path, place, f"is {json_kind(value)}, not text")
+    return value
+
+
+def _headline_list(path: str, block: dict, key: str) -> list:
+    if key not in block:
+        _fail(path, (fields.HEADLINE_KEY, key), "is missing")
+    if not isinstance(block[key], list):
+        _fail(path, (fields.HEADLINE_KEY, key), f"is {json_kind(block[key])}, not a list")
+    return block[key]
+
+
+def _read_headline(path: str, document: dict) -> Headline | None:
+    """The top-level "lockstep_headline"; None when the file has none (written before it). Read leniently (a
+    key it does not name is ignored) but whole: what it reads is checked here, whatever the schema says."""
+    if fields.HEADLINE_KEY not in document:
+        return None
+    block = document[fields.HEADLINE_KEY]
+    at = (fields.HEADLINE_KEY,)
+    if not isinstance(block, dict):
+        _fail(path, at, f"is {json_kind(block)}, not an object")
+    lines = tuple(_headline_text(path, at + ("lines", index), line)
+                  for index, line in enumerate(_headline_list(path, block, "lines")))
+    if not lines:
+        _fail(path, at + ("lines",), "is empty: a run's answer has at least its first line")
+    collapsed, keys = [], set()
+    for index, name in enumerate(_headline_list(path, block, "collapsed")):
+        key = parse_name(_headline_text(path, at + ("collapsed", index), name))
+        if not key.family:
+            _fail(path, at + ("collapsed", index), f"is {_shown(name)}: no benchmark family")
+        if key not in keys:
+            collapsed.append(name)
+            keys.add(key)
+    recommendations = []
+    for index, raw in enumerate(_headline_list(path, block, "recommendations")):
+        here = at + ("recommendations", index)
+        if not isinstance(raw, dict):
+            _fail(path, here, f"is {json_kind(raw)}, not an object")
+        item = _Object(path, raw, schemas.json_path(here))
+        texts = {}
+        for key in ("pin", "model", "entry", "sync", "layout", "basis"):
+            texts[key] = _headline_text(path, here + (key,), item._get(key, required=True))
+        if texts["basis"] not in fields.HEADLINE_BASES:
+            _fail(path, here + ("basis",), f"is {_shown(texts['basis'])}, not one of {', '.join(fields.HEADLINE_BASES)}")
+        threads = item._get("threads", required=True)
+        if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
+            _fail(path, here + ("threads",), f"is {_shown(threads)}, not a thread count (a whole number from 1)")
+        entry_key = parse_name(texts["entry"])
+        if not entry_key.family:
+            _fail(path, here + ("entry",), f"is {_shown(texts['entry'])}: no benchmark family")
+        step = item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")
+        recommendations.append(Recommendation(threads, texts["pin"], texts["model"], texts["entry"], entry_key,
+                                              texts["sync"], texts["layout"], step, texts["basis"]))
+    return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys))
+
+
 # ---------------------------------------------------------------- mpi files
 
 @dataclass(frozen=True)
@@ -632,7 +770,7 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs, scaling=_read_scaling(path, document),
+                   pairs=pairs, scaling=_read_scaling(path, document), headline=_read_headline(path, document),
                    mpi=_read_mpi(path, document) if document.get("kind") == "mpi" else None)
 
 
@@ -656,6 +794,9 @@ def read_document(path: str, text: str | None = None) -> tuple[str, object]:
     if not isinstance(document, dict):
         raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
                                "not an object with \"context\" and \"benchmarks\"")
+    if "kind" in document and document["kind"] is None:
+        raise InputError(path, "kind is null: a lockstep result names its kind (a `lockstep run` file, Google "
+                               "Benchmark's JSON, has no kind at all)")
     kind = "run" if document.get("kind") is None else document["kind"]
     if kind not in schemas.KINDS or kind == "run" and document.get("kind") is not None:
         raise InputError(path, f"unknown lockstep file kind {_shown(kind)}")

@@ -1,8 +1,11 @@
 """Shared helpers of the report tools' tests: fixture paths and running the tool as a user would."""
 import io
+import json
 import os
 import pathlib
 import sys
+import tempfile
+import unittest
 from contextlib import redirect_stderr, redirect_stdout
 
 REPORTS_DIR = pathlib.Path(__file__).resolve().parent.parent
@@ -23,3 +26,37 @@ def run_tool(*argv: str):
     with redirect_stdout(out), redirect_stderr(err):
         status = main(list(argv))
     return status, out.getvalue(), err.getvalue()
+
+
+# A `lockstep run` file with the run's answer (lockstep_headline): reports/tests/fixtures/make_fixtures.py.
+HEADLINE = "headline.json"
+
+
+def headline_document() -> dict:
+    with open(fixture(HEADLINE), encoding="utf-8") as stream:
+        return json.load(stream)
+
+
+class Scratch(unittest.TestCase):
+    """A test with a scratch directory: write() puts a file there, report() makes a report of files and returns
+    its two pages (HTML, Markdown)."""
+
+    def setUp(self):
+        self.directory = tempfile.TemporaryDirectory()
+        self.addCleanup(self.directory.cleanup)
+
+    def write(self, name, document):
+        path = os.path.join(self.directory.name, name)
+        with open(path, "w", encoding="utf-8") as stream:
+            stream.write(document if isinstance(document, str) else json.dumps(document))
+        return path
+
+    def report(self, *paths):
+        out = os.path.join(self.directory.name, "report")
+        status, _, err = run_tool("report", *paths, "--out", out)
+        self.assertEqual(status, 0, err)
+        pages = []
+        for page in ("report.html", "report.md"):
+            with open(os.path.join(out, page), encoding="utf-8") as stream:
+                pages.append(stream.read())
+        return pages

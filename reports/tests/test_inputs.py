@@ -5,9 +5,11 @@ import os
 import tempfile
 import unittest
 
-from support import fixture, run_tool
+from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports.inputs import InputError, load_any, load_run_file, C2cFile, DelayFile, VerifyFile
+from lockstep_reports import statistics
+from lockstep_reports.inputs import (InputError, against_best_other_views, load_any, load_run_file, C2cFile,
+                                     DelayFile, VerifyFile)
 from lockstep_reports.names import parse_name
 
 
@@ -279,6 +281,98 @@ class PaceTraceAndPairs(unittest.TestCase):
         self.assertEqual({key: run.times_ns() for key, run in plain.runs.items()},
                          {key: run.times_ns() for key, run in paced.runs.items()})
 
+
+class ReadingTheHeadline(Scratch):
+    def test_the_lines_recommendations_and_collapsed_entries_are_read(self):
+        run_file = load_run_file(fixture(HEADLINE))
+        document = headline_document()["lockstep_headline"]
+        self.assertEqual(list(run_file.headline.lines), document["lines"])
+        self.assertEqual(len(run_file.headline.recommendations), len(document["recommendations"]))
+        first = run_file.headline.recommendations[0]
+        self.assertEqual((first.threads, first.pin, first.model, first.basis), (2, "compact", "", "paired"))
+        self.assertEqual(run_file.collapsed, frozenset(parse_name(name) for name in document["collapsed"]))
+        self.assertIn(parse_name("rk4/sync:ck_tas/layout:packed/pin:none/threads:4"), run_file.collapsed)
+
+    def test_a_file_without_it_reads_as_before(self):
+        run_file = load_run_file(fixture("paced_a.json"))
+        self.assertIsNone(run_file.headline)
+        self.assertEqual(run_file.collapsed, frozenset())
+
+    def test_unknown_keys_are_ignored(self):
+        document = headline_document()
+        document["lockstep_headline"]["a_later_key"] = {"anything": [1, 2]}
+        document["lockstep_headline"]["recommendations"][0]["a_later_key"] = "text"
+        run_file = load_run_file(self.write("later.json", document))
+        self.assertEqual(run_file.headline, load_run_file(fixture(HEADLINE)).headline)
+
+    def test_what_it_reads_is_checked_in_one_line(self):
+        def set_line(block):
+            block["lines"][2] = 17
+
+        def empty_lines(block):
+            block["lines"] = []
+
+        def nameless(block):
+            block["collapsed"][0] = ""
+
+        def no_basis(block):
+            del block["recommendations"][1]["basis"]
+
+        def endless_step(block):
+            block["recommendations"][0]["ns_per_step"] = math.inf
+
+        def no_threads(block):
+            block["recommendations"][0]["threads"] = 0
+
+        for mutate in (set_line, empty_lines, nameless, no_basis, endless_step, no_threads):
+            with self.subTest(mutate.__name__):
+                document = headline_document()
+                mutate(document["lockstep_headline"])
+                path = self.write(f"{mutate.__name__}.json", json.dumps(document, allow_nan=True))
+                with self.assertRaises(InputError) as raised:
+                    load_run_file(path)
+                self.assertEqual(len(str(raised.exception).splitlines()), 1)
+                self.assertIn("lockstep_headline", str(raised.exception))
+
+
+class LeaderLine(unittest.TestCase):
+    def test_the_leader_has_the_runner_ups_pair_inverted(self):
+        run_file = load_run_file(fixture(HEADLINE))
+        views = against_best_other_views(run_file.pairs)
+        measured = [pair for pair in run_file.pairs if pair.comparison == "against_best_other"]
+        inverted = [view for view in views if view.inverted]
+        # one inverted line per group: 2 placements x 2 thread counts of steps, 1 of bare episodes
+        self.assertEqual(len(inverted), 5)
+        self.assertEqual(len(views), len(measured) + len(inverted))
+        for view in inverted:
+            runner_up = next(pair for pair in measured if pair.a_key == view.b_key and pair.b_key == view.a_key)
+            # the group's first pair in the file is the runner-up's
+            group = [pair for pair in measured if pair.b_key == runner_up.b_key]
+            self.assertIs(group[0], runner_up)
+            self.assertAlmostEqual(view.median, 1.0 / runner_up.median)
+            self.assertAlmostEqual(view.ci_low, 1.0 / runner_up.ci_high)
+            self.assertAlmostEqual(view.ci_high, 1.0 / runner_up.ci_low)
+            self.assertEqual(view.verdict, {"penalty": "gain", "gain": "penalty"}.get(runner_up.verdict,
+                                                                                    runner_up.verdict))
+            self.assertEqual(len(view.ratios), len(runner_up.ratios))
+            # the leader has no pair of its own: its line comes first in its group
+            self.assertFalse(any(pair.a_key == view.a_key for pair in measured))
+            self.assertIs(views[views.index(view) + 1], runner_up)
+
+    def test_within_noise_and_unsure_stay_as_they_are(self):
+        run_file = load_run_file(fixture(HEADLINE))
+        pair = next(pair for pair in run_file.pairs if pair.comparison == "against_best_other")
+        for verdict in (statistics.WITHIN_NOISE, statistics.UNSURE):
+            with self.subTest(verdict):
+                turned = type(pair)(**{**pair.__dict__, "verdict": verdict}).inverse()
+                self.assertEqual(turned.verdict, verdict)
+                self.assertTrue(turned.inverted)
+                self.assertFalse(turned.inverse().inverted)
+
+    def test_a_file_where_every_primitive_has_its_own_pair_is_shown_as_it_is(self):
+        run_file = load_run_file(fixture("paced_every_pair.json"))
+        views = against_best_other_views(run_file.pairs)
+        self.assertEqual(views, [pair for pair in run_file.pairs if pair.comparison == "against_best_other"])
 
 if __name__ == "__main__":
     unittest.main()
