@@ -529,7 +529,8 @@ def rk4_keys(run_files: list[RunFile]) -> list[BenchmarkKey]:
 
 
 def layout_effects(run_files: list[RunFile], reference: str = "packed", time_kind: str = "real"):
-    """Rows (sync, pin, threads, layout, [speed-up over the reference layout per file])."""
+    """Rows (sync, pin, threads, layout, [speed-up over the reference layout per file]); a file where either
+    entry collapsed (its headline's) has none."""
     rows = []
     for key in rk4_keys(run_files):
         layout = key.get("layout")
@@ -538,6 +539,9 @@ def layout_effects(run_files: list[RunFile], reference: str = "packed", time_kin
         reference_key = key.replaced("layout", reference)
         speedups = []
         for run_file in run_files:
+            if key in run_file.collapsed or reference_key in run_file.collapsed:
+                speedups.append(None)
+                continue
             this, base = run_median(run_file, key, time_kind), run_median(run_file, reference_key, time_kind)
             speedups.append(base / this if (this and base) else None)
         if any(s is not None for s in speedups):
@@ -546,7 +550,8 @@ def layout_effects(run_files: list[RunFile], reference: str = "packed", time_kin
 
 
 def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10):
-    """{(pin, threads): [per file: [(sync/layout, median ns, x serial), ...] fastest first]}."""
+    """{(pin, threads): [per file: [(sync/layout, median ns, x serial), ...] fastest first]}; the entries a
+    file's headline calls collapsed are not ranked."""
     groups: dict[tuple[str, int], list] = {}
     for key in rk4_keys(run_files):
         group = (key.get("pin") or "", key.threads or 0)
@@ -557,7 +562,7 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
         for run_file in run_files:
             entries = []
             for key in rk4_keys([run_file]):
-                if (key.get("pin") or "", key.threads or 0) != group:
+                if (key.get("pin") or "", key.threads or 0) != group or key in run_file.collapsed:
                     continue
                 step = run_median(run_file, key, time_kind)
                 if step is None:
@@ -807,10 +812,102 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
     return out
 
 
+# The default output (render_text without everything) lists at most this many changed entries each way.
+SHOWN_CHANGES = 10
+ALL_HINT = ("(lockstep compare --all prints every entry with its interval, q and counters, the calibrations, the "
+            "whole context and the across-machines tables)")
+
+
+def differing_context_lines(files) -> list[str]:
+    """The fingerprint's keys whose values differ between the files, as a table (A, B, ... side by side), or
+    one line saying they are all the same."""
+    labels = [f"[{file_letter(i)}] {f.label}" for i, f in enumerate(files)]
+    prints = [fingerprint(f) for f in files]
+    rows = []
+    for key in FINGERPRINT_KEYS:
+        values = [p[key] or UNAVAILABLE for p in prints]
+        if len(set(values)) > 1:
+            rows.append([key + "*"] + values)
+    if not rows:
+        return [f"context: the same {len(FINGERPRINT_KEYS)} fingerprint keys in every file"]
+    return _table(["context (* differs)"] + labels, rows)
+
+
+def _collapsed_mark(comparison: Comparison, key: BenchmarkKey) -> str:
+    where = [letter for letter, run_file in (("A", comparison.baseline), ("B", comparison.contender))
+             if key in run_file.collapsed]
+    return f" (collapsed in {' and '.join(where)})" if where else ""
+
+
+def _listed(keys, limit: int = 5) -> list[str]:
+    shown = [f"  {key.display}" for key in keys[:limit]]
+    return shown + ([f"  ... and {len(keys) - limit} more"] if len(keys) > limit else [])
+
+
+def summary_lines(comparison: Comparison, letter: str) -> list[str]:
+    """One comparison in a few lines: how far the machine moved, the pace, the verdict counts, the geometric
+    mean, the entries that changed beyond the pace (largest first), what was added, removed or errored."""
+    b = letter
+    noise = comparison.noise_percent
+    out = [f"== {b} ({comparison.contender.label}) against A ({comparison.baseline.label})"]
+    if not set(comparison.baseline.runs) & set(comparison.contender.runs):
+        out.append(f"no entries in common: A ({_tool(comparison.baseline)}) and {b} ({_tool(comparison.contender)}) "
+                   f"name different benchmarks, so nothing is compared")
+    out.append(calibration_move_line(comparison, b))
+    out += pace_note(comparison.baseline, comparison.contender, b)[0]
+    counts = comparison.pace_verdict_counts()
+    called, discovered = comparison.discoveries(comparison.beyond_pace)
+    what = "beyond the pace" if comparison.paced else f"(raw verdicts: pace {UNAVAILABLE})"
+    out.append(f"changed {what}: {counts['slower'] + counts['faster']} of {len(comparison.rows)} "
+               f"({counts['slower']} slower, {counts['faster']} faster; {discovered} of them with Benjamini-Hochberg "
+               f"q < alpha {comparison.alpha:g}); {counts['unsure']} unsure, {counts['within noise']} within noise, "
+               f"{counts['untested']} untested (verdict: the 95% interval of {b}/A against the {noise:g} % noise "
+               "band)")
+    out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
+               f"calibrations apart): {format_number(comparison.geometric_mean, 3)}")
+    for verdict, order in (("slower", True), ("faster", False)):
+        changed = sorted((row for row in comparison.rows if comparison.beyond_pace(row) == verdict),
+                         key=lambda row: (row.beyond_pace_ratio(), row.key.sort_key()), reverse=order)
+        if not changed:
+            continue
+        out.append(f"{verdict} {what if comparison.paced else ''}".rstrip()
+                   + f" ({len(changed)}, {'largest first' if order else 'largest gain first'}):")
+        rows = []
+        for row in changed[:SHOWN_CHANGES]:
+            shown = row.pace if row.pace else row
+            how = (PACE_HOW[row.pace.method] if "serial" not in row.pace.detail else "/ pace serial") if row.pace \
+                else "raw"
+            rows.append([row.key.display + _collapsed_mark(comparison, row.key), format_ns(row.median_a),
+                         format_ns(row.median_b), f"{shown.ratio:.3f}", _interval(shown.interval), how])
+        out += ["  " + line for line in _table(["benchmark", "A median", f"{b} median", f"{b}/A", "95% interval",
+                                                "how"], rows, right={1, 2, 3})]
+        if len(changed) > SHOWN_CHANGES:
+            out.append(f"  ... and {len(changed) - SHOWN_CHANGES} more {verdict} (--all lists every entry)")
+    if comparison.calibrations:
+        verdicts = [comparison.verdict(row) for row in comparison.calibrations]
+        moved = [row.key.display for row in comparison.calibrations if comparison.verdict(row) in ("slower", "faster")]
+        out.append(f"calibrations, compared apart ({len(verdicts)}): "
+                   + ", ".join(f"{verdicts.count(name)} {name}" for name in VERDICTS if verdicts.count(name))
+                   + (f" (moved: {', '.join(moved)})" if moved else ""))
+    for title, keys in ((f"only in A ({comparison.baseline.label}): removed", comparison.removed),
+                        (f"only in {b} ({comparison.contender.label}): added", comparison.added)):
+        out.append(f"{title}: {len(keys)}")
+        out += _listed(keys)
+    out.append(f"errored (not compared): {len(comparison.errored)}")
+    errored = [f"  {key.display} in {where}: {message}" for key, where, message in comparison.errored]
+    out += errored[:5] + ([f"  ... and {len(errored) - 5} more"] if len(errored) > 5 else [])
+    for warning in comparison.warnings:
+        out.append(f"warning: {warning}")
+    return out
+
+
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real",
-                context_files=()) -> str:
-    """`context_files`: results of other kinds (inputs.ContextFile), shown in the fingerprint only, after the
-    run files (so a run file's letter is its place among the compared files)."""
+                context_files=(), everything: bool = False) -> str:
+    """The comparison as text: by default the summary (summary_lines per comparison, the context's differences),
+    everything: every table. `context_files`: results of other kinds (inputs.ContextFile), shown in the
+    fingerprint only, after the run files (so a run file's letter is its place among the compared files)."""
+    if not everything:
+        return render_summary(run_files, comparisons, context_files)
     all_files = list(run_files) + list(context_files)
     out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(all_files))]
     if comparisons:
@@ -836,4 +933,29 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
     if warnings:
         out.append("")
         out += [f"warning: {w}" for w in warnings]
+    return "\n".join(out) + "\n"
+
+
+def render_summary(run_files: list[RunFile], comparisons: list[Comparison], context_files=()) -> str:
+    all_files = list(run_files) + list(context_files)
+    out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(all_files))]
+    if comparisons:
+        noise = comparisons[0].noise_percent
+        out.append(f"noise band: {noise:g} % " + ("(the default; --noise PCT changes it, --help says why 5)"
+                                                   if noise == DEFAULT_NOISE_PERCENT else
+                                                   f"(--noise; the default is {DEFAULT_NOISE_PERCENT:g} %)"))
+    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
+    out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")
+    out += differing_context_lines(all_files)
+    if context_files:
+        out.append("fingerprint only (not benchmark results): " +
+                   ", ".join(f"{f.label} (lockstep {f.kind})" for f in context_files))
+    for index, comparison in enumerate(comparisons, start=1):
+        out.append("")
+        out += summary_lines(comparison, file_letter(index))
+    warnings = [w for f in all_files for w in f.warnings]
+    if warnings:
+        out.append("")
+        out += [f"warning: {w}" for w in warnings]
+    out += ["", ALL_HINT]
     return "\n".join(out) + "\n"

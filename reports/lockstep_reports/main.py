@@ -5,6 +5,7 @@ cannot be written, which is checked before any work."""
 from __future__ import annotations
 
 import argparse
+import difflib
 import json
 import math
 import os
@@ -20,11 +21,66 @@ class UsageError(Exception):
     pass
 
 
+class ParagraphFormatter(argparse.HelpFormatter):
+    """argparse's help with the description's and the epilog's paragraphs (split at blank lines) each filled
+    to the width, and lines that start with two spaces (examples) kept as they are."""
+
+    def _fill_text(self, text, width, indent):
+        paragraphs = []
+        for paragraph in text.split("\n\n"):
+            lines = paragraph.split("\n")
+            if any(line.startswith("  ") for line in lines):
+                paragraphs.append("\n".join(indent + line for line in lines))
+            else:
+                paragraphs.append(super()._fill_text(" ".join(lines), width, indent))
+        return "\n\n".join(paragraphs)
+
+
 class OneLineParser(argparse.ArgumentParser):
-    """argparse, but a bad command line is one line on stderr (and exit 2), like every lockstep command."""
+    """argparse, but a bad command line is one line on stderr (and exit 2), like every lockstep command; an
+    option is written whole (no abbreviations), and a mistyped one gets the closest option named."""
+
+    def __init__(self, **keywords):
+        super().__init__(allow_abbrev=False, formatter_class=ParagraphFormatter, **keywords)
 
     def error(self, message):
         raise UsageError(f"{message} (`lockstep {self.prog.split()[-1]} --help` lists the options)")
+
+    def parse_args(self, args=None, namespace=None):
+        self.check_options(args or [])
+        return super().parse_args(args, namespace)
+
+    def check_options(self, argv: list[str]) -> None:
+        """Every word that looks like an option names one of this tool's: else one line, the closest option
+        suggested ("unknown option --nosie; did you mean --noise?")."""
+        takes_value = {name for action in self._actions if action.option_strings and action.nargs != 0
+                       for name in action.option_strings}
+        known = sorted(self._option_string_actions)
+        expecting_value = False
+        for word in argv:
+            if expecting_value:
+                expecting_value = False
+                continue
+            if word == "--":
+                return
+            if not word.startswith("-") or word == "-" or _is_number(word):
+                continue
+            name = word.split("=", 1)[0]
+            if name in self._option_string_actions:
+                expecting_value = name in takes_value and "=" not in word
+                continue
+            close = difflib.get_close_matches(name, [option for option in known if option.startswith("--")], n=1,
+                                              cutoff=0.6)
+            hint = f"; did you mean {close[0]}?" if close else f" (`{self.prog} --help` lists the options)"
+            raise UsageError(f"unknown option {name}{hint}")
+
+
+def _is_number(word: str) -> bool:
+    try:
+        float(word.rstrip("%"))
+    except ValueError:
+        return False
+    return True
 
 
 def percentage(text: str) -> float:
@@ -41,8 +97,12 @@ def percentage(text: str) -> float:
     return value
 
 
-def tool_parser(tool: str, description: str, files_metavar: str, files_help: str) -> OneLineParser:
-    parser = OneLineParser(prog=f"lockstep {tool}", description=description)
+BAD_INPUT = ("2 bad input: an unusable file, a bad option, or an output that cannot be written (one line on stderr "
+             "naming it, nothing written)")
+
+
+def tool_parser(tool: str, description: str, files_metavar: str, files_help: str, epilog: str) -> OneLineParser:
+    parser = OneLineParser(prog=f"lockstep {tool}", description=description, epilog=epilog)
     parser.add_argument("files", nargs="+", metavar=files_metavar, help=files_help)
     return parser
 
@@ -52,50 +112,72 @@ def compare_parser() -> argparse.ArgumentParser:
 
     parser = tool_parser(
         "compare",
-        "Compare Google Benchmark JSON results of `lockstep run` (or of `lockstep mpi`) across runs "
-        "and machines. "
-                    "The first file is the baseline A; every other file is compared with it. An entry is "
-                    "slower or faster only when the whole exact 95% interval of its ratio lies beyond the noise "
-                    "band, 'within noise' when it lies inside, 'unsure' across an edge; the Mann-Whitney p-values "
-                    "are Benjamini-Hochberg adjusted (false discovery rate). When both files carry the pace trace, "
-                    "every entry also gets a pace-aware verdict (within matching pace modes, or on the time "
-                    "divided by the pace's c2c reading), and the headline counts what changed beyond the pace. "
-                    "rk4/serial, c2c (by its one_way_ns counter), the MPI ping-pong and the overhead "
-                    "pair are compared apart, as calibrations, and the context's calibrations say how far the "
-                    "machine itself moved between the runs.",
-        "RESULT.json", "two or more result files")
+        "Compare the results of `lockstep run` (or of `lockstep mpi --out`) across runs and machines.\n\n"
+        "The first file is the baseline A; every other file is compared with it, entry by entry (matched by "
+        "name). An entry is slower or faster only when the whole exact 95% interval of its ratio B/A lies beyond "
+        "the noise band, 'within noise' when it lies inside, 'unsure' across an edge; the Mann-Whitney p-values "
+        "are Benjamini-Hochberg adjusted (false discovery rate). When both files carry the pace trace, every "
+        "entry also gets a pace-aware verdict (within matching pace modes, or on the time divided by the pace's "
+        "c2c reading), and the summary counts what changed beyond the pace. rk4/serial, c2c (by its one_way_ns "
+        "counter), the MPI ping-pong and the overhead pair are compared apart, as calibrations, and the "
+        "context's calibrations say how far the machine itself moved between the runs. Files of `lockstep c2c`, "
+        "`delay`, `falseshare`, `migrate` and `verify --out` join the machine fingerprint only.\n\n"
+        "By default it prints about 40 lines: the machines' differences, then per comparison the calibrations' "
+        "move, the pace, the verdict counts and the entries that changed beyond the pace (slower and faster, "
+        "largest first), what was added, removed or errored. --all prints every entry with its counters, the "
+        "calibrations, the whole context and the across-machines tables. The same file twice (or two files "
+        "with the same bytes) is one line saying so.",
+        "RESULT.json", "two or more result files, the baseline first",
+        "examples:\n  lockstep compare results/a.json results/b.json\n"
+        "  lockstep compare a.json b.json --noise 2% --fail-above 10 --out comparison.json\n\n"
+        "exit status: 0 done; 1 with --fail-above, a combination slower beyond the limit; " + BAD_INPUT)
     parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
-                        help=f"noise band in percent (default {DEFAULT_NOISE_PERCENT:g}): an entry is slower "
-                             f"only when its whole interval of B/A lies above 1 + PCT/100, faster only when below "
-                             f"1 / (1 + PCT/100), within noise when inside, unsure across an edge. Why "
-                             f"{DEFAULT_NOISE_PERCENT:g}: {NOISE_RATIONALE}".replace("%", "%%"))
+                        help=f"noise band in percent, the %% sign optional (5 or 5%%; default "
+                             f"{DEFAULT_NOISE_PERCENT:g}): an entry is slower only when its whole interval of B/A "
+                             f"lies above 1 + PCT/100, faster only when below 1 / (1 + PCT/100), within noise when "
+                             f"inside, unsure across an edge. Why {DEFAULT_NOISE_PERCENT:g}: "
+                             + NOISE_RATIONALE.replace("%", "%%"))
     parser.add_argument("--fail-above", type=percentage, metavar="PCT",
                         help="exit 1 when a matched combination is slower than A beyond the pace (its whole "
                              "interval above the noise band; pace-aware where both files carry the pace) by more "
-                             "than PCT percent")
-    parser.add_argument("--alpha", type=float, default=0.05,
+                             "than PCT percent (5 or 5%%); each such entry is named on stderr")
+    parser.add_argument("--alpha", type=float, default=0.05, metavar="LEVEL",
                         help="false discovery rate of the Benjamini-Hochberg q-values shown and counted beside "
-                             "the verdicts (default 0.05)")
+                             "the verdicts, between 0 and 1 (default 0.05)")
     parser.add_argument("--time", choices=("real", "cpu"), default="real",
-                        help="which time to compare (default: real, the wall-clock step time)")
+                        help="which time to compare: real, the wall-clock step time (default), or cpu, participant "
+                             "0's CPU time per step")
+    parser.add_argument("--all", action="store_true", dest="everything",
+                        help="print everything: every matched entry with its interval, q, verdicts and counters, "
+                             "the calibrations, the whole context of every file and the across-machines tables "
+                             "(the default is the summary, about 40 lines)")
     # --out, as in every lockstep command that writes a result; --json, its earlier name, still works.
     parser.add_argument("--out", "--json", dest="json", metavar="FILE",
-                        help="also write the comparison as JSON to FILE (atomically; its directory must exist)")
+                        help="also write the whole comparison as JSON to FILE (atomically; its directory must "
+                             "exist; not one of the inputs)")
     return parser
 
 
 def report_parser() -> argparse.ArgumentParser:
     parser = tool_parser(
         "report",
-        "Write a self-contained HTML page and a Markdown file with figures from lockstep's "
-        "result files: `lockstep run` JSON, `lockstep c2c --json`, `lockstep delay --json`, "
-        "`lockstep mpi --out`, `lockstep verify --csv` (recognised by their content).",
-        "RESULT", "result files of any of the five kinds")
+        "Write a self-contained HTML page (report.html), the same as Markdown (report.md) and every figure as "
+        "SVG (figures/) from lockstep's result files, recognised by their content: the JSON of `lockstep run` "
+        "(results/<host>-<time>.json by default) and of `lockstep mpi --out`, `lockstep c2c --out`, "
+        "`lockstep delay --out`, and the trajectory of `lockstep verify --csv`.\n\n"
+        "The page leads with each run's answer (the lines `lockstep run` printed last, verbatim) and where the "
+        "rest is; then one section per result, each opened by a click (the first ones open): step time per "
+        "primitive and layout, each primitive against the best other, false-sharing and migration penalties, "
+        "the pace, every paired ratio, the fastest combinations, core-to-core latency, the paced delay, the "
+        "trajectory, the paper's values; the machines' context last.",
+        "RESULT", "result files of any of the five kinds",
+        "example:\n  lockstep report results/host-20260101T120000Z.json --out host-report\n\n"
+        "exit status: 0 done; " + BAD_INPUT)
     parser.add_argument("--out", default="lockstep-report", metavar="DIR",
                         help="directory for report.html, report.md and figures/ (default: lockstep-report); its "
                              "parent must exist; an earlier report there is replaced whole, any other content "
                              "is refused")
-    parser.add_argument("--title", default="lockstep report", help="the page's title")
+    parser.add_argument("--title", default="lockstep report", help="the page's title (default: lockstep report)")
     return parser
 
 
@@ -118,12 +200,18 @@ def run_compare(argv: list[str]) -> int:
     # only join the machine fingerprint.
     run_files = [f for f in files if isinstance(f, RunFile)]
     context_files = [f for f in files if not isinstance(f, RunFile)]
+    identical = same_bytes(options.files)
+    if identical and not options.json:
+        sys.stdout.write(identical)
+        return EXIT_OK
     comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha, options.noise)
                    for other in run_files[1:]]
-    text = compare.render_text(run_files, comparisons, options.time, context_files)
     if options.json:
         write_file(options.json, comparison_json(comparisons))
-    sys.stdout.write(text)
+    if identical:
+        sys.stdout.write(identical)
+        return EXIT_OK
+    sys.stdout.write(compare.render_text(run_files, comparisons, options.time, context_files, options.everything))
     if options.fail_above is not None:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
         if failures:
@@ -137,6 +225,20 @@ def run_compare(argv: list[str]) -> int:
                                  f"{shown.interval[1]:.3f}] beyond the {options.noise:g}% noise band{q})\n")
             return EXIT_REGRESSION
     return EXIT_OK
+
+
+def same_bytes(paths: list[str]) -> str:
+    """One line when every file holds the same bytes (the same file given twice, or a copy): nothing can have
+    changed, so nothing is compared. "" otherwise."""
+    contents = set()
+    for path in paths:
+        with open(path, "rb") as stream:  # each was read whole a moment ago
+            contents.add(stream.read())
+        if len(contents) > 1:
+            return ""
+    names = " and ".join(dict.fromkeys(paths))
+    what = "is the same file given twice" if len(set(paths)) == 1 else "are identical (the same bytes)"
+    return f"lockstep compare: {names} {what}: nothing changed, nothing to compare\n"
 
 
 def row_json(comparison, row) -> dict:

@@ -1,14 +1,18 @@
 """`lockstep compare` on the fixtures: matching, statistics, listings, machines, exit status."""
 import json
 import os
+import re
+import shutil
+import subprocess
 import tempfile
 import unittest
 
-from support import REPORTS_DIR, fixture, run_tool
+from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import statistics
+from lockstep_reports import compare, statistics
 from lockstep_reports.compare import compare_pair, layout_effects, normalised, rank_tables
 from lockstep_reports.inputs import load_run_file
+from lockstep_reports.main import compare_parser, report_parser
 from lockstep_reports.names import parse_name
 
 FORCED = "rk4/sync:futex_spin/layout:packed/pin:compact/threads:4"
@@ -84,7 +88,7 @@ class SameMachine(unittest.TestCase):
                       if row.key.display == "rk4/sync:std_barrier/layout:packed/pin:compact/threads:2")
         self.assertNotIn("futex_waits_per_step", hidden.counters)
         self.assertIn("csw_vol_per_kstep", hidden.counters)
-        status, out, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
+        status, out, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"), "--all")
         self.assertEqual(status, 0)
         line = next(line for line in out.splitlines()
                     if line.startswith("rk4/sync:std_barrier/layout:packed/pin:compact/threads:2 "))
@@ -340,7 +344,7 @@ class NoiseThreshold(ScratchFiles):
         self.assertEqual(comparison.verdict(self.row(comparison, STEADY)), "within noise")
         self.assertEqual(comparison.verdict_counts(),
                          {"slower": 0, "faster": 0, "unsure": 0, "within noise": 3, "untested": 0})
-        status, out, err = run_tool("compare", a, b, "--fail-above", "1")
+        status, out, err = run_tool("compare", a, b, "--fail-above", "1", "--all")
         self.assertEqual(status, 0, err)  # within noise never fails the gate
         self.assertIn("0 slower, 0 faster, 0 unsure, 3 within noise", out)
         self.assertIn("noise threshold: 5 % (the default", out)
@@ -349,7 +353,7 @@ class NoiseThreshold(ScratchFiles):
         a, b = self.pair(560.0 * 1.03)
         comparison = compare_pair(load_run_file(a), load_run_file(b), noise_percent=1.0)
         self.assertEqual(comparison.verdict(self.row(comparison, SHIFTED)), "slower")
-        status, out, err = run_tool("compare", a, b, "--noise", "1", "--fail-above", "1")
+        status, out, err = run_tool("compare", a, b, "--noise", "1", "--fail-above", "1", "--all")
         self.assertEqual(status, 1)
         self.assertIn(SHIFTED, err)
         self.assertIn("1 slower, 0 faster, 0 unsure, 2 within noise", out)
@@ -452,7 +456,7 @@ class NoiseThreshold(ScratchFiles):
         (base, overhead_a, overhead_b), = comparison.accounting_overheads()
         self.assertAlmostEqual(overhead_a, 1.06)
         self.assertAlmostEqual(overhead_b, 1.06)
-        _, out, _ = run_tool("compare", a, b)
+        _, out, _ = run_tool("compare", a, b, "--all")
         self.assertIn("calibrations (4): the machine and the instrumentation", out)
         self.assertIn("geometric mean of B/A over the 3 matched pairs", out)
         self.assertIn("accounting overhead of " + base.display, out)
@@ -552,7 +556,7 @@ class PowerAndPace(ScratchFiles):
         self.assertEqual(comparison.verdict_counts()["slower"], 3)
         self.assertEqual(comparison.pace_verdict_counts()["slower"], 0)
         self.assertEqual(comparison.regressions_beyond(10), [])
-        status, out, err = run_tool("compare", a, b, "--fail-above", "10")
+        status, out, err = run_tool("compare", a, b, "--fail-above", "10", "--all")
         self.assertEqual(status, 0, err)  # nothing changed beyond the pace
         self.assertIn("the runs ran in different pace modes: no mode in common", out)
         self.assertIn("pace of A: c2c 25 ns (100 %)", out)
@@ -722,6 +726,145 @@ class Models(ScratchFiles):
         self.assertEqual(name, "seqlock/per_thread")
         self.assertAlmostEqual(vs_serial, 900.0 / 45.0)
 
+
+class CompareSummary(Scratch):
+    def test_the_same_file_twice_is_one_line(self):
+        status, out, err = run_tool("compare", fixture(HEADLINE), fixture(HEADLINE))
+        self.assertEqual((status, err), (0, ""))
+        self.assertEqual(out.count("\n"), 1)
+        self.assertIn("the same file given twice", out)
+
+    def test_two_files_with_the_same_bytes_are_one_line(self):
+        copy = os.path.join(self.directory.name, "copy.json")
+        shutil.copy(fixture("machine_a.json"), copy)
+        status, out, err = run_tool("compare", fixture("machine_a.json"), copy, "--fail-above", "0")
+        self.assertEqual((status, err), (0, ""))
+        self.assertEqual(out, f"lockstep compare: {fixture('machine_a.json')} and {copy} are identical (the same "
+                              "bytes): nothing changed, nothing to compare\n")
+
+    def test_a_damaged_file_twice_is_still_refused(self):
+        status, out, err = run_tool("compare", fixture("truncated.json"), fixture("truncated.json"))
+        self.assertEqual((status, out), (2, ""))
+        self.assertEqual(err.count("\n"), 1)
+
+    def test_the_default_is_a_summary_of_about_40_lines(self):
+        status, out, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
+        self.assertEqual(status, 0, err)
+        lines = out.splitlines()
+        self.assertLessEqual(len(lines), 45)
+        self.assertIn("changed (raw verdicts: pace unavailable): 1 of 36 (1 slower, 0 faster", out)
+        slower = lines.index("slower (1, largest first):")
+        self.assertTrue(lines[slower + 3].lstrip().startswith("rk4/sync:futex_spin/layout:packed/pin:compact/threads:4 "))
+        self.assertIn("geometric mean of B/A over the 36 matched pairs", out)
+        self.assertIn("context: the same 21 fingerprint keys in every file", out)
+        self.assertNotIn("Across machines", out)
+        self.assertTrue(lines[-1].startswith("(lockstep compare --all prints every entry"))
+
+    def test_all_prints_everything_it_printed_before(self):
+        _, summary, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_b.json"))
+        status, everything, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_b.json"), "--all")
+        self.assertEqual(status, 0, err)
+        self.assertGreater(len(everything.splitlines()), 3 * len(summary.splitlines()))
+        for text in ("== Across machines", "Rank per machine", "raw verdicts at the 5 % noise band",
+                     "noise threshold: 5 % (the default"):
+            self.assertIn(text, everything)
+        # the machines' differences are in both; the summary lists only the keys that differ
+        self.assertIn("cpu_model*", summary)
+        self.assertNotIn("compiler ", summary)
+        self.assertIn("compiler ", everything)
+
+    def test_the_changed_list_is_capped(self):
+        document = headline_document()
+        collapsed = set(document["lockstep_headline"]["collapsed"])
+        for entry in document["benchmarks"]:
+            if entry["name"].startswith("rk4/sync:") and entry["run_type"] == "iteration":
+                for key in ("real_time", "ns_per_step"):
+                    entry[key] *= 3.0 if entry["name"] in collapsed else 2.0
+        slower = self.write("slower.json", document)
+        status, out, err = run_tool("compare", fixture(HEADLINE), slower)
+        self.assertEqual(status, 0, err)
+        shown = [line for line in out.splitlines() if line.startswith("  rk4/sync:")]
+        self.assertEqual(len(shown), compare.SHOWN_CHANGES)
+        self.assertRegex(out, r"\n  \.\.\. and [0-9]+ more slower \(--all lists every entry\)\n")
+        self.assertLessEqual(len(out.splitlines()), 45)
+        # a collapsed entry is said to be one
+        self.assertIn("(collapsed in A and B)", out)
+
+
+LOCKSTEP_BINARY = os.environ.get("LOCKSTEP", os.path.join(REPORTS_DIR.parent, "build", "dev", "bench", "lockstep"))
+
+
+def tool_help(tool: str) -> str:
+    """`lockstep <tool> --help` as reports/cli.py prints it (argparse exits after printing: a process of its own),
+    its lines joined by single spaces (a wrapped `lockstep verify --csv` reads whole)."""
+    helped = subprocess.run(["/usr/bin/python3", os.path.join(REPORTS_DIR, "cli.py"), tool, "--help"],
+                            capture_output=True, text=True, timeout=60)
+    assert helped.returncode == 0, helped.stderr
+    return " ".join(helped.stdout.split())
+
+
+class CommandLines(Scratch):
+    def test_noise_takes_a_percent_sign_or_not(self):
+        outputs = [run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"), "--noise", value)
+                   for value in ("5", "5%", "5 %")]
+        self.assertEqual({status for status, _, _ in outputs}, {0})
+        self.assertEqual(len({out for _, out, _ in outputs}), 1)
+        self.assertEqual(run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"),
+                                  "--noise=2%")[1],
+                         run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"),
+                                  "--noise", "2")[1])
+
+    def test_a_mistyped_option_names_the_one_meant(self):
+        for argv, expected in (
+                (("compare", "a.json", "b.json", "--nosie", "5"), "unknown option --nosie; did you mean --noise?"),
+                (("compare", "a.json", "b.json", "--fail-abve=3"), "unknown option --fail-abve; did you mean "
+                                                                    "--fail-above?"),
+                (("compare", "a.json", "b.json", "--nois", "5"), "unknown option --nois; did you mean --noise?"),
+                (("report", "a.json", "--ttile", "x"), "unknown option --ttile; did you mean --title?"),
+                (("report", "a.json", "--zzzz"), "unknown option --zzzz (`lockstep report --help` lists the "
+                                                 "options)")):
+            with self.subTest(argv):
+                status, out, err = run_tool(*argv)
+                self.assertEqual((status, out), (2, ""))
+                self.assertEqual(err, f"lockstep {argv[0]}: {expected}\n")
+
+    def test_option_values_and_negative_numbers_are_not_taken_for_options(self):
+        status, _, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"),
+                                  "--noise", "-5")
+        self.assertEqual(status, 2)
+        self.assertIn("--noise", err)
+        self.assertNotIn("unknown option", err)
+        out = os.path.join(self.directory.name, "titled")
+        self.assertEqual(run_tool("report", fixture("verify_a.csv"), "--title=--not-an-option", "--out", out)[0], 0)
+
+    def test_the_help_names_only_options_that_exist(self):
+        for tool, parser in (("compare", compare_parser()), ("report", report_parser())):
+            with self.subTest(tool):
+                out = tool_help(tool)
+                own = set(parser._option_string_actions)
+                # `lockstep X --flag` names another command's option; a bare --flag one of this tool's
+                named = re.findall(r"`lockstep ([a-z]+)((?: --?[a-z-]+)*)", out)
+                others = {(command, flag) for command, flags in named for flag in flags.split()
+                          if command not in ("compare", "report")}
+                for flag in set(re.findall(r"(?<![`\w-])(--[a-z][a-z-]*)", out)) - {flag for _, flag in others}:
+                    self.assertIn(flag, own, f"{tool} --help names {flag}")
+                self.assertNotIn("c2c --json", out)
+                self.assertNotIn("delay --json", out)
+
+    def test_the_other_commands_options_the_help_names_exist(self):
+        if not os.access(LOCKSTEP_BINARY, os.X_OK):
+            self.skipTest(f"no lockstep binary at {LOCKSTEP_BINARY} (build it, or set LOCKSTEP)")
+        for tool in ("compare", "report"):
+            out = tool_help(tool)
+            named = {(command, flag) for command, flags in re.findall(r"`lockstep ([a-z]+)((?: --?[a-z-]+)*)", out)
+                     for flag in flags.split() if command not in ("compare", "report")}
+            self.assertTrue(named, tool)
+            for command, flag in sorted(named):
+                with self.subTest(tool=tool, option=f"lockstep {command} {flag}"):
+                    helped = subprocess.run([LOCKSTEP_BINARY, "help", command], capture_output=True, text=True,
+                                            timeout=60)
+                    self.assertEqual(helped.returncode, 0, helped.stderr)
+                    self.assertRegex(helped.stdout, rf"(^|[\s,]){re.escape(flag)}\b")
 
 if __name__ == "__main__":
     unittest.main()

@@ -205,7 +205,7 @@ class ReadingTheContract(Scratch):
 class ComparingTheContract(Scratch):
     def test_a_against_b_entry_by_entry_with_the_tails_beside(self):
         out_json = os.path.join(self.directory.name, "comparison.json")
-        status, out, err = run_tool("compare", fixture("mpi-a.json"), fixture("mpi-b.json"), "--out", out_json)
+        status, out, err = run_tool("compare", fixture("mpi-a.json"), fixture("mpi-b.json"), "--out", out_json, "--all")
         self.assertEqual(status, 0, err)
         table = out[out.index("benchmark "):out.index("geometric mean")]
         self.assertIn(P2P, table)
@@ -255,7 +255,7 @@ class ComparingTheContract(Scratch):
             self.assertIn("(lockstep mpi)", out)
 
     def test_run_files_compare_as_before(self):
-        status, out, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"))
+        status, out, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"), "--all")
         self.assertEqual(status, 0, err)
         self.assertNotIn("no entries in common", out)
         self.assertNotIn("stage p99 ns", out)
