@@ -105,27 +105,58 @@ def _syncs_layouts(run_file):
     return syncs, layouts
 
 
-def heatmap(run_file, pin: str, threads: int, within_noise=frozenset()) -> str:
-    """Median step time, sync (rows) x layout (columns), for one placement and thread count. within_noise:
-    (sync, layout) cells whose paired comparison (lockstep_pairs) was within noise: hatched, their value
-    marked with "≈"."""
-    syncs, layouts = _syncs_layouts(run_file)
+def ranked_syncs(run_file, pin: str, threads: int, layouts, collapsed=frozenset()) -> list[str]:
+    """The primitives of one placement and thread count, fastest first: by the median of each one's fastest
+    layout there; a primitive with nothing measured but collapsed or unavailable entries comes last."""
+    syncs, _ = _syncs_layouts(run_file)
+
+    def best(sync):
+        values = [run_median(run_file, key) for key in (_rk4_key(run_file, sync, layout, pin, threads)
+                                                         for layout in layouts) if key not in collapsed]
+        values = [value for value in values if value is not None]
+        return (0, min(values), sync) if values else (1, 0.0, sync)
+
+    return sorted(syncs, key=best)
+
+
+def heatmap(run_file, pin: str, threads: int, within_noise=frozenset(), collapsed=frozenset(),
+            recommended: tuple[str, str] | None = None) -> str:
+    """Median step time, primitive (rows, fastest first) x layout (columns), for one placement and thread
+    count; the colour scale is in the cells' unit (a time, on a log scale) and spans the entries that count.
+    within_noise: (sync, layout) cells whose paired false-sharing comparison (lockstep_pairs) was within noise
+    or unsure: hatched, their value marked with "≈". collapsed: entries (keys) that collapsed (the headline's):
+    grey, out of the colour scale. recommended: the (sync, layout) the headline recommends here: outlined."""
+    _, layouts = _syncs_layouts(run_file)
+    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
     grid = np.full((len(syncs), len(layouts)), np.nan)
+    gone = np.zeros((len(syncs), len(layouts)), dtype=bool)
     for row, sync in enumerate(syncs):
         for column, layout in enumerate(layouts):
-            value = run_median(run_file, _rk4_key(run_file, sync, layout, pin, threads))
+            key = _rk4_key(run_file, sync, layout, pin, threads)
+            value = run_median(run_file, key)
             if value is not None:
                 grid[row, column] = value
-    figure, axes = plt.subplots(figsize=(1.3 * len(layouts) + 2.2, 0.42 * len(syncs) + 1.4))
-    finite = grid[np.isfinite(grid)]
-    norm = LogNorm(vmin=float(finite.min()), vmax=float(max(finite.max(), finite.min() * 1.0001))) if finite.size else None
-    image = axes.imshow(np.ma.masked_invalid(grid), cmap="viridis_r", norm=norm, aspect="auto")
+                gone[row, column] = key in collapsed
+    figure, axes = plt.subplots(figsize=(1.0 * len(layouts) + 2.4, 0.36 * len(syncs) + 1.5))
+    counted = grid[np.isfinite(grid) & ~gone]
+    norm = (LogNorm(vmin=float(counted.min()), vmax=float(max(counted.max(), counted.min() * 1.0001)))
+            if counted.size else None)
+    shown = np.where(gone, np.nan, grid)
+    image = axes.imshow(np.ma.masked_invalid(shown), cmap="viridis_r", norm=norm, aspect="auto")
     axes.set_xticks(range(len(layouts)), layouts)
     axes.set_yticks(range(len(syncs)), syncs)
+    axes.set_xlabel("layout")
+    axes.set_ylabel("primitive (fastest first)")
     for row in range(len(syncs)):
         for column in range(len(layouts)):
             value = grid[row, column]
             text = format_ns(value, CELL_DIGITS) if math.isfinite(value) else "n/a"
+            if gone[row, column]:
+                axes.add_patch(matplotlib.patches.Rectangle((column - 0.5, row - 0.5), 1.0, 1.0, facecolor="#eeeeee",
+                                                            hatch="xx", edgecolor="#bbbbbb", lw=0.0))
+                axes.text(column, row, f"collapsed\n{text}", ha="center", va="center", fontsize=7, color="#555555",
+                          linespacing=1.0)
+                continue
             dark = math.isfinite(value) and norm is not None and norm(value) > 0.55
             noisy = (syncs[row], layouts[column]) in within_noise
             if noisy:
@@ -136,8 +167,15 @@ def heatmap(run_file, pin: str, threads: int, within_noise=frozenset()) -> str:
             axes.text(column, row, text, ha="center", va="center", fontsize=8, color="white" if dark else "black",
                       bbox=dict(boxstyle="round,pad=0.2", fc="black" if dark else "white", ec="none", alpha=0.75)
                       if noisy else None)
-    axes.set_title(f"step time (median), pin:{pin} threads:{threads}")
-    figure.colorbar(image, ax=axes, label="ns per step (log)")
+    if recommended and recommended[0] in syncs and recommended[1] in layouts:
+        row, column = syncs.index(recommended[0]), layouts.index(recommended[1])
+        axes.add_patch(matplotlib.patches.Rectangle((column - 0.47, row - 0.47), 0.94, 0.94, fill=False,
+                                                    edgecolor="#d62728", lw=2.2))
+    axes.set_title(f"median step time, pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
+                   + ("\n(red outline: the combination the run recommends)" if recommended else ""), fontsize=9)
+    if norm is not None:
+        colorbar = figure.colorbar(image, ax=axes, label="median step time (log)")
+        duration_axis(colorbar.ax.yaxis)
     return to_svg(figure)
 
 
@@ -154,19 +192,31 @@ def duration_axis(axis, unit_ns: float = 1.0) -> None:
     """A logarithmic axis of durations (its values in units of unit_ns) labelled as people write them
     ("100 ns", "1 us", "10 ms"): at the powers of ten, and at 2 and 5 times them too when the axis spans
     less than two decades (call it after the limits are set)."""
-    low, high = axis.get_view_interval()
-    narrow = low > 0 and high / low < 100.0
-    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=(1.0, 2.0, 5.0) if narrow else (1.0,)))
+    low, high = sorted(axis.get_view_interval())
+    subs = (1.0,)
+    if low > 0 and high / low < 100.0:
+        subs = (1.0, 2.0, 5.0)
+        # Within a factor of a few, 1-2-5 may leave one tick or none: every digit then.
+        decades = range(math.floor(math.log10(low)), math.ceil(math.log10(high)) + 1)
+        if sum(low <= sub * 10.0 ** decade <= high for decade in decades for sub in subs) < 2:
+            subs = tuple(float(digit) for digit in range(1, 10))
+    axis.set_major_locator(matplotlib.ticker.LogLocator(base=10.0, subs=subs))
     axis.set_major_formatter(matplotlib.ticker.FuncFormatter(
         lambda value, _: format_ns(value * unit_ns, 1) if value > 0 else ""))
     axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
-def bars_with_spread(run_file, pin: str, threads: int) -> str:
-    """Per primitive, one bar per layout at the median; the whisker spans the interquartile range
-    and each dot is one repetition. The time axis is logarithmic: the primitives' step times span
-    decades (a spinning barrier's hundreds of ns beside a sleeping one's 100 us)."""
-    syncs, layouts = _syncs_layouts(run_file)
+def bars_with_spread(run_file, pin: str, threads: int, collapsed=frozenset()) -> str:
+    """Per primitive (fastest first), one bar per layout at the median; the whisker spans the interquartile
+    range and each dot is one repetition. The time axis is logarithmic: the primitives' step times span
+    decades (a spinning barrier's hundreds of ns beside a sleeping one's 100 us). collapsed: entries (keys)
+    left out (the headline's collapsed entries), named under the title."""
+    _, layouts = _syncs_layouts(run_file)
+    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
+    left_out = sorted({sync for sync in syncs for layout in layouts
+                       if _rk4_key(run_file, sync, layout, pin, threads) in collapsed})
+    syncs = [sync for sync in syncs if any(_rk4_key(run_file, sync, layout, pin, threads) not in collapsed
+                                           for layout in layouts)]
     figure, axes = plt.subplots(figsize=(min(10.0, max(6.0, 0.62 * len(syncs) + 1.6)), 3.8))
     axes.set_yscale("log")
     width = 0.8 / max(1, len(layouts))
@@ -174,8 +224,9 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
     drawn = []
     for column, layout in enumerate(layouts):
         for row, sync in enumerate(syncs):
-            run = run_file.runs.get(_rk4_key(run_file, sync, layout, pin, threads))
-            if run is None or run.errored:
+            key = _rk4_key(run_file, sync, layout, pin, threads)
+            run = run_file.runs.get(key)
+            if run is None or run.errored or key in collapsed:
                 continue
             times, _ = sample(run)
             if not times:
@@ -193,11 +244,15 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
         axes.set_ylim(log_floor(min(drawn) * 0.9), log_ceiling(max(drawn) * 1.1))
     duration_axis(axes.yaxis)
     axes.set_xticks(range(len(syncs)), syncs, rotation=35, ha="right", rotation_mode="anchor")
-    axes.set_xlim(-0.6, len(syncs) - 0.4)
+    axes.set_xlim(-0.6, max(len(syncs), 1) - 0.4)
+    axes.set_xlabel("primitive (fastest first)")
     axes.set_ylabel("step time (log)")
     axes.grid(axis="y", which="major", color="#dddddd", lw=0.6)
     axes.set_axisbelow(True)
-    axes.set_title(f"step time per primitive, pin:{pin} threads:{threads}")
+    title = f"step time per primitive and layout, pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
+    if left_out:
+        title += f"\ncollapsed, not drawn: {', '.join(left_out)}"
+    axes.set_title(title, fontsize=9)
     handles, labels = axes.get_legend_handles_labels()
     if handles:
         axes.legend(title="layout", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
@@ -207,8 +262,9 @@ def bars_with_spread(run_file, pin: str, threads: int) -> str:
 
 @dataclass(frozen=True)
 class PenaltyRow:
-    """One penalty: kind ("false sharing: packed / padded128"), primitive, thread count, time ratio; from a
-    paired measurement (lockstep_pairs) also its interval and verdict."""
+    """One penalty: kind ("false sharing: packed / padded128"), primitive, placement, thread count, time
+    ratio; from a paired measurement (lockstep_pairs) also its interval and verdict. label: what the bar
+    is, as its figure names it (default: primitive, placement, threads)."""
 
     kind: str
     sync: str
@@ -217,100 +273,173 @@ class PenaltyRow:
     ci_low: float | None = None
     ci_high: float | None = None
     verdict: str | None = None
+    pin: str = "compact"
+    label: str = ""
+
+    @property
+    def shown_label(self) -> str:
+        return self.label or f"{self.sync}, pin:{self.pin}, {self.threads} thread{'s' if self.threads != 1 else ''}"
 
 
-def penalty_rows(run_file) -> list[PenaltyRow]:
-    """False sharing (packed / padded) and migration (migrate or none / compact), per primitive, from the
-    entries' medians (a file without lockstep_pairs)."""
+def penalty_rows(run_file, collapsed=frozenset()) -> list[PenaltyRow]:
+    """False sharing (packed / padded, pinned compactly) and migration (migrate or none / compact), per
+    primitive, from the entries' medians (a file without lockstep_pairs); collapsed entries left out."""
     syncs, layouts = _syncs_layouts(run_file)
     padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
     groups = rk4_groups(run_file)
     threads_list = sorted({threads for _, threads in groups})
     rows = []
+
+    def median_of(sync, layout, pin, threads):
+        key = _rk4_key(run_file, sync, layout, pin, threads)
+        return None if key in collapsed else run_median(run_file, key)
+
     for sync in syncs:
         for threads in threads_list:
             if padded and "packed" in layouts:
-                packed_time = run_median(run_file, _rk4_key(run_file, sync, "packed", "compact", threads))
-                padded_time = run_median(run_file, _rk4_key(run_file, sync, padded, "compact", threads))
+                packed_time = median_of(sync, "packed", "compact", threads)
+                padded_time = median_of(sync, padded, "compact", threads)
                 if packed_time and padded_time:
                     rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads,
-                                           packed_time / padded_time))
+                                           packed_time / padded_time, pin="compact"))
             base_layout = padded or (layouts[0] if layouts else None)
             for moved in ("migrate", "none"):
-                compact = run_median(run_file, _rk4_key(run_file, sync, base_layout, "compact", threads))
-                other = run_median(run_file, _rk4_key(run_file, sync, base_layout, moved, threads))
+                compact = median_of(sync, base_layout, "compact", threads)
+                other = median_of(sync, base_layout, moved, threads)
                 if compact and other:
                     rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
-                                           other / compact))
+                                           other / compact, pin=moved))
     return rows
 
 
-# Where a verdict of a paired ratio is drawn (statistics.VERDICTS): the bar's fill, hatched and pale when the
-# interval reaches into the noise band (within noise: inside it; unsure: across its edge).
+# Where a verdict of a paired ratio is drawn (statistics.VERDICTS): the bar's colour, hatched and pale when the
+# interval reaches into the noise band (within noise: inside it; unsure: across its edge). A ratio of two
+# medians, with no interval and no verdict, is drawn in MEDIANS_COLOR.
 VERDICT_STYLE = {"penalty": {"hatch": None, "alpha": 1.0}, "gain": {"hatch": None, "alpha": 1.0},
                  "within noise": {"hatch": "////", "alpha": 0.35}, "unsure": {"hatch": "xxxx", "alpha": 0.35}}
+VERDICT_COLOR = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c", "unsure": "#dd8452"}
+MEDIANS_COLOR = "#4c72b0"
 
 
-def _ratio_axis(axes, values, noise: float | None) -> None:
-    """A logarithmic ratio axis centred on 1 (a 2x penalty and a 2x gain lie equally far from it), the noise
-    band shaded."""
+def ratio_ticks(low: float, high: float) -> list[float]:
+    """Ticks of a logarithmic ratio axis from low to high that do not crowd each other: fine steps around 1 on a
+    narrow axis, 1-2-5 over a few decades, powers of ten beyond (every other one past six decades)."""
+    decades = math.log10(high / low)
+    powers = range(math.floor(math.log10(low)), math.ceil(math.log10(high)) + 1)
+    if decades <= 0.15:
+        candidates = [0.9, 0.95, 0.98, 1.0, 1.02, 1.05, 1.1]
+    elif decades <= 0.35:
+        candidates = [0.67, 0.8, 0.9, 1.0, 1.1, 1.25, 1.5]
+    elif decades <= 0.7:
+        candidates = [0.5, 0.67, 0.8, 1.0, 1.25, 1.5, 2.0]
+    elif decades <= 2.2:
+        candidates = [digit * 10.0 ** power for power in powers for digit in (1.0, 2.0, 5.0)]
+    else:
+        step = 1 if decades <= 6 else 2
+        candidates = [10.0 ** power for power in powers if power % step == 0]
+    return [tick for tick in candidates if low <= tick <= high]
+
+
+def ratio_text(value: float) -> str:
+    """A tick of a ratio axis: "0.5x", "1x", "20x", "1,000x", "1e-06x"."""
+    if value >= 10:
+        return f"{value:,.0f}x"
+    return f"{value:g}x"
+
+
+def _ratio_axis(axes, values, noise: float | None, margin: float = 0.06) -> None:
+    """A logarithmic ratio axis that covers every value given (bars and whiskers) and always shows 1 and the
+    noise band, shaded; its ticks never crowd (ratio_ticks). margin: room on each side, a share of the span."""
     axes.set_xscale("log")
-    finite = [v for v in values if v and v > 0]
-    reach = max([abs(math.log10(v)) for v in finite] + [math.log10(1.25)]) * 1.15
-    axes.set_xlim(10 ** -reach, 10 ** reach)
+    band = 1.0 + (noise or 0.25)
+    finite = [v for v in values if v and v > 0 and math.isfinite(v)]
+    low, high = min(finite + [1.0 / band]), max(finite + [band])
+    room = (high / low) ** margin
+    low, high = low / room, high * room
+    axes.set_xlim(low, high)
     axes.axvline(1.0, color="black", lw=0.8)
     if noise:
-        axes.axvspan(1.0 / (1.0 + noise), 1.0 + noise, color="#bbbbbb", alpha=0.35, lw=0,
-                     label=f"noise band ±{100 * noise:g} %")
-    ticks = [t for t in ((0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0) if reach > math.log10(2.5) else (0.5, 0.8, 1.0, 1.25, 2.0))
-             if 10 ** -reach <= t <= 10 ** reach]
-    axes.set_xticks(ticks, [f"{t:g}x" for t in ticks])
-    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        axes.axvspan(1.0 / (1.0 + noise), 1.0 + noise, color="#bbbbbb", alpha=0.35, lw=0)
+    ticks = ratio_ticks(low, high)
+    axes.xaxis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+    axes.xaxis.set_major_formatter(matplotlib.ticker.FixedFormatter([ratio_text(t) for t in ticks]))
+    axes.xaxis.set_minor_locator(matplotlib.ticker.NullLocator())
     axes.grid(axis="x", which="major", color="#dddddd", lw=0.6)
     axes.set_axisbelow(True)
 
 
+def _ratio_bars(axes, rows: list[PenaltyRow], noise: float | None) -> None:
+    """One horizontal bar per row from 1 to its ratio, top to bottom in the order given, named on the y axis,
+    coloured by its verdict (hatched when within noise or unsure), its interval as a whisker."""
+    _ratio_axis(axes, [row.ratio for row in rows] + [v for row in rows for v in (row.ci_low, row.ci_high) if v], noise,
+                margin=0.16)
+    for y, row in enumerate(rows):
+        style = VERDICT_STYLE.get(row.verdict, VERDICT_STYLE["penalty"])
+        color = VERDICT_COLOR.get(row.verdict, MEDIANS_COLOR)
+        axes.barh(y, row.ratio - 1.0, 0.7, left=1.0, color=color, alpha=style["alpha"], hatch=style["hatch"],
+                  edgecolor=color if style["hatch"] else None, lw=0.0)
+        reach = [row.ratio]
+        if row.ci_low is not None and row.ci_high is not None:
+            axes.errorbar(row.ratio, y, xerr=[[row.ratio - row.ci_low], [row.ci_high - row.ratio]], color="black",
+                          capsize=2, lw=0.8)
+            reach += [row.ci_low, row.ci_high]
+        # The ratio written beyond the bar's end (and its whisker's), on the side it points to.
+        if row.ratio >= 1.0:
+            axes.annotate(f"{row.ratio:.2f}x", (max(reach), y), xytext=(3, 0), textcoords="offset points",
+                          ha="left", va="center", fontsize=6, color="#333333")
+        else:
+            axes.annotate(f"{row.ratio:.2f}x", (min(reach), y), xytext=(-3, 0), textcoords="offset points",
+                          ha="right", va="center", fontsize=6, color="#333333")
+    axes.set_yticks(range(len(rows)), [row.shown_label for row in rows], fontsize=7)
+    axes.set_ylim(len(rows) - 0.5, -0.5)
+
+
+def _verdict_legend(axes, rows: list[PenaltyRow], noise: float | None, note: str = "") -> None:
+    handles = [matplotlib.patches.Patch(facecolor=color, alpha=VERDICT_STYLE[verdict]["alpha"],
+                                        hatch=VERDICT_STYLE[verdict]["hatch"], edgecolor=color, label=verdict)
+               for verdict, color in VERDICT_COLOR.items() if any(row.verdict == verdict for row in rows)]
+    if any(row.verdict not in VERDICT_COLOR for row in rows):
+        handles.append(matplotlib.patches.Patch(color=MEDIANS_COLOR, label="ratio of medians (no interval)"))
+    if noise:
+        handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise band ±{100 * noise:g} %"))
+    if note:
+        handles.append(matplotlib.patches.Patch(color="none", label=note))
+    axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+
+
+def _bars_height(count: int) -> float:
+    return 0.24 * count + 0.9
+
+
 def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
-    """The penalties as horizontal bars from 1 (primitive names read across, never into each other): one
-    panel per kind, one bar per primitive and thread count, on a logarithmic ratio axis; a paired row
-    carries its confidence interval as a whisker and is hatched when that interval is within noise."""
-    syncs = sorted({row.sync for row in rows})
-    threads_list = sorted({row.threads for row in rows})
+    """The penalties as horizontal bars from 1, one panel per kind (false sharing, migration), one bar per
+    primitive, placement and thread count, each named on its own line (never two bars on one line), on a
+    logarithmic ratio axis that covers them all; a paired row carries its interval as a whisker and is
+    coloured by its verdict."""
     kinds = sorted({row.kind for row in rows})
-    height = max(2.6, 0.24 * len(syncs) * max(1, len(threads_list)) ** 0.6 + 1.3)
-    figure, axes_list = plt.subplots(1, len(kinds), figsize=(4.3 * len(kinds) + 2.2, height), squeeze=False,
-                                     sharey=True)
-    colors = plt.get_cmap("tab10")
-    span = [row.ratio for row in rows] + [v for row in rows for v in (row.ci_low, row.ci_high) if v]
-    for panel, (axes, kind) in enumerate(zip(axes_list[0], kinds)):
-        _ratio_axis(axes, span, noise)
-        height_each = 0.8 / max(1, len(threads_list))
-        for index, threads in enumerate(threads_list):
-            for row in rows:
-                if row.kind != kind or row.threads != threads:
-                    continue
-                y = syncs.index(row.sync) + (index - (len(threads_list) - 1) / 2) * height_each
-                style = VERDICT_STYLE.get(row.verdict, VERDICT_STYLE["penalty"])
-                axes.barh(y, row.ratio - 1.0, height_each * 0.9, left=1.0, color=colors(index), alpha=style["alpha"],
-                          hatch=style["hatch"], edgecolor=colors(index) if style["hatch"] else None, lw=0.0)
-                if row.ci_low is not None and row.ci_high is not None:
-                    axes.errorbar(row.ratio, y, xerr=[[row.ratio - row.ci_low], [row.ci_high - row.ratio]],
-                                  color="black", capsize=2, lw=0.8)
-        axes.set_yticks(range(len(syncs)), syncs)
-        axes.set_ylim(len(syncs) - 0.5, -0.5)
-        axes.set_xlabel("time ratio (log; > 1: penalty, < 1: gain)")
+    by_kind = [sorted((row for row in rows if row.kind == kind), key=lambda row: (row.threads, row.pin, row.sync))
+               for kind in kinds]
+    heights = [_bars_height(len(members)) for members in by_kind]
+    figure, axes_list = plt.subplots(len(kinds), 1, figsize=(7.6, sum(heights) + 0.5), squeeze=False,
+                                     gridspec_kw={"height_ratios": heights})
+    for axes, kind, members in zip(axes_list[:, 0], kinds, by_kind):
+        _ratio_bars(axes, members, noise)
         axes.set_title(kind, fontsize=9)
-        if panel == 0:
-            handles = [matplotlib.patches.Patch(color=colors(index), label=f"threads:{threads}")
-                       for index, threads in enumerate(threads_list)]
-            if noise:
-                handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
-            for verdict in ("within noise", "unsure"):
-                if any(row.verdict == verdict for row in rows):
-                    handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="gray",
-                                                            hatch=VERDICT_STYLE[verdict]["hatch"], label=verdict))
-            axes_list[0][-1].legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0),
-                                    frameon=False)
+    axes_list[-1, 0].set_xlabel("time ratio (log; > 1: penalty, < 1: gain)")
+    _verdict_legend(axes_list[0, 0], rows, noise)
+    figure.tight_layout()
+    return to_svg(figure)
+
+
+def paired_ratios(rows: list[PenaltyRow], title: str, noise: float | None = None, note: str = "") -> str:
+    """Paired ratios (lockstep_pairs) as horizontal bars from 1 on a logarithmic ratio axis, one named line per
+    bar in the order given: the median per adjacent pair, the whisker its confidence interval, the noise band
+    shaded, a bar within noise or unsure hatched and pale. note: a line added to the legend."""
+    figure, axes = plt.subplots(figsize=(7.6, _bars_height(len(rows)) + 0.4))
+    _ratio_bars(axes, rows, noise)
+    axes.set_xlabel("paired time ratio a / b (log; median per adjacent pair, whisker: confidence interval)")
+    _verdict_legend(axes, rows, noise, note)
+    axes.set_title(title, fontsize=9)
     return to_svg(figure)
 
 
@@ -566,35 +695,6 @@ def pace_trace(readings, modes, title: str) -> str:
     return to_svg(figure)
 
 
-def paired_ratios(pairs, title: str) -> str:
-    """Paired ratios (lockstep_pairs) as horizontal bars from 1 on a logarithmic ratio axis: the median per
-    adjacent pair, the whisker its confidence interval, the noise band shaded, a bar within noise hatched
-    and pale. pairs: objects with group, median, ci_low, ci_high, noise, verdict."""
-    pairs = list(pairs)
-    figure, axes = plt.subplots(figsize=(7.2, 0.26 * len(pairs) + 1.3))
-    noise = max((p.noise for p in pairs if p.noise is not None), default=None)
-    _ratio_axis(axes, [v for p in pairs for v in (p.median, p.ci_low, p.ci_high)], noise)
-    verdict_color = {"penalty": "#c44e52", "gain": "#55a868", "within noise": "#8c8c8c", "unsure": "#dd8452"}
-    for y, pair in enumerate(pairs):
-        style = VERDICT_STYLE.get(pair.verdict, VERDICT_STYLE["penalty"])
-        color = verdict_color.get(pair.verdict, "#4c72b0")
-        axes.barh(y, pair.median - 1.0, 0.7, left=1.0, color=color, alpha=style["alpha"], hatch=style["hatch"],
-                  edgecolor=color if style["hatch"] else None, lw=0.0)
-        axes.errorbar(pair.median, y, xerr=[[pair.median - pair.ci_low], [pair.ci_high - pair.median]],
-                      color="black", capsize=2, lw=0.8)
-    axes.set_yticks(range(len(pairs)), [p.group for p in pairs], fontsize=7)
-    axes.set_ylim(len(pairs) - 0.5, -0.5)
-    axes.set_xlabel("paired time ratio a / b (log; median per adjacent pair, whisker: confidence interval)")
-    handles = [matplotlib.patches.Patch(color=color, alpha=VERDICT_STYLE[verdict]["alpha"],
-                                        hatch=VERDICT_STYLE[verdict]["hatch"], label=verdict)
-               for verdict, color in verdict_color.items() if any(p.verdict == verdict for p in pairs)]
-    if noise:
-        handles.append(matplotlib.patches.Patch(color="#bbbbbb", alpha=0.35, label=f"noise ±{100 * noise:g} %"))
-    axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
-    axes.set_title(title, fontsize=9)
-    return to_svg(figure)
-
-
 def scaling_curve(curve) -> str:
     """`lockstep run --scaling`: the curve's counter against threads on log-log axes, one line per primitive on
     its best layout at each count (a bar: the min..max over repetitions), hollow markers where the threads
@@ -641,7 +741,7 @@ def scaling_curve(curve) -> str:
 
 
 def mpi_distributions(exchanges, field: str, keys, title: str, reference_ns: float | None = None,
-                      reference_label: str = "") -> str:
+                      reference_label: str = "", ylabel: str = "") -> str:
     """Grouped bars on a log axis: one group per exchange of a `lockstep mpi` file (inputs.MpiExchange),
     one bar per statistic of its `field` distribution (stage, skew); a dashed line at reference_ns."""
     labels = [exchange.label for exchange in exchanges]
@@ -662,6 +762,9 @@ def mpi_distributions(exchanges, field: str, keys, title: str, reference_ns: flo
         axes.set_ylim(log_floor(min(positive)), log_ceiling(max(positive)) * 1.5)
     duration_axis(axes.yaxis)
     axes.set_xticks(range(len(labels)), labels, fontsize=8, rotation=15, ha="right")
+    axes.set_xlabel("exchange")
+    if ylabel:
+        axes.set_ylabel(ylabel)
     axes.set_title(title, fontsize=10)
     axes.legend(fontsize=7, ncol=len(keys) + 1)
     figure.tight_layout()

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import os
+import re
 from dataclasses import dataclass, field
 
 import jinja2
@@ -26,7 +27,8 @@ from .compare import calibration, fingerprint, layout_effects, rank_tables, run_
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER, SERIAL_CONTEXT,
                      UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
-from .inputs import C2cFile, DelayExtras, DelayFile, RunFile, VerifyFile, load_any, unique_labels
+from .inputs import (C2cFile, DelayExtras, DelayFile, RunFile, VerifyFile, against_best_other_views, load_any,
+                     unique_labels)
 from .names import parse_name
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
@@ -53,32 +55,92 @@ class Section:
     paragraphs: list[str] = field(default_factory=list)
     tables: list[Table] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
+    open: bool = False  # shown open in the HTML page (the first sections); the others open on a click
+
+
+@dataclass
+class Answer:
+    """What the page shows first for one `lockstep run` file: its headline's lines verbatim (lines empty: the
+    file has none, and `note` says so in one line), and where the rest is."""
+    label: str
+    lines: list[str]
+    note: str = ""
 
 
 # ---------------------------------------------------------------- sections
 
-def inputs_section(loaded) -> Section:
+def inputs_table(loaded) -> Table:
     kinds = {RunFile: "benchmark results (`lockstep run`)", C2cFile: "core-to-core latency (`lockstep c2c`)",
              DelayFile: "paced delay run (`lockstep delay`)", VerifyFile: "trajectory (`lockstep verify --csv`)"}
     rows = [[item.label, "the step across MPI ranks (`lockstep mpi`)" if getattr(item, "mpi", None) else
              kinds[type(item)]] for item in loaded]
-    return Section("Inputs", tables=[Table(["file", "kind"], rows)])
+    return Table(["file", "kind"], rows, caption="The inputs of this report")
 
 
-def machines_section(run_files: list[RunFile]) -> Section | None:
-    if not run_files:
-        return None
-    prints = [fingerprint(f) for f in run_files]
-    rows = [[key] + [p[key] or UNAVAILABLE for p in prints] for key in FINGERPRINT_KEYS]
-    tables = [Table(["context"] + [f.label for f in run_files], rows)]
+def machines_section(loaded, run_files: list[RunFile]) -> Section:
+    """The inputs and each result file's context (the raw fingerprint table): what a comparison across machines
+    needs, kept at the end of the page."""
+    tables = [inputs_table(loaded)]
+    paragraphs = ["The inputs of this report, and each result file's context: what a comparison across machines "
+                  "needs. `lockstep compare` tests the differences."]
+    if run_files:
+        prints = [fingerprint(f) for f in run_files]
+        rows = [[key] + [p[key] or UNAVAILABLE for p in prints] for key in FINGERPRINT_KEYS]
+        tables.append(Table(["context"] + [f.label for f in run_files], rows))
     if len(run_files) > 1:
         effects = [[sync, pin, str(threads), layout] + [format_number(s, 2, "x") for s in speedups]
                    for sync, pin, threads, layout, speedups in layout_effects(run_files)]
         tables.append(Table(["sync", "pin", "threads", "layout"] + [f"{f.label}: vs packed" for f in run_files],
                             effects, caption="Each layout's speed-up over packed (packed time / layout time), "
                                              "on each machine: the false-sharing effect read side by side."))
-    return Section("Machines", paragraphs=["Each result file's context: what a comparison across machines needs. "
-                                           "`lockstep compare` tests the differences."], tables=tables)
+    return Section("Machines and inputs", paragraphs=paragraphs, tables=tables)
+
+
+# Where the rest is, said under the answers: on the page, and in the Markdown file.
+WHERE_THE_RESULTS_ARE = {
+    "html": "The full results: the sections below, each opened by a click on its title (the first ones are open); "
+            "the inputs, the machines' context and the raw tables in the last sections. report.md beside this page "
+            "holds the same in Markdown, figures/ each figure as SVG, and the result files every number "
+            "(`lockstep run --verbose` prints every table).",
+    "markdown": "The full results: the sections below; the inputs, the machines' context and the raw tables in the "
+                "last sections. report.html beside this file holds the same as one page, figures/ each figure as "
+                "SVG, and the result files every number (`lockstep run --verbose` prints every table).",
+}
+
+
+def answer_of(run_file: RunFile) -> Answer:
+    """The run's answer as its terminal printed it (lockstep_headline.lines, verbatim), or one line saying the
+    file has none."""
+    if run_file.headline is None:
+        return Answer(run_file.label, [], f"{run_file.label} has no headline (the run's answer, lockstep_headline, "
+                                          f"is {UNAVAILABLE}: its `lockstep run` is older than the saved answer); its "
+                                          "results are in the sections below.")
+    return Answer(run_file.label, list(run_file.headline.lines))
+
+
+def collapsed_line(run_file: RunFile) -> str:
+    """One line naming the entries the run found collapsed (its headline's), with the range of their medians;
+    "" when none did."""
+    keys = sorted(run_file.collapsed, key=lambda key: key.sort_key())
+    if not keys:
+        return ""
+    syncs = sorted({key.get("sync") or key.display for key in keys})
+    threads = sorted({key.threads for key in keys if key.threads is not None})
+    medians = [value for value in (run_median(run_file, key) for key in keys) if value is not None]
+    units = sorted({"an episode" if key.family == "barrier" else "a step" for key in keys})
+    spread = (f"{format_ns(min(medians), 3)}-{format_ns(max(medians), 3)} {' or '.join(units)}" if medians
+              else f"their times {UNAVAILABLE} in this file")
+    at = f" (at {', '.join(f'{count} threads' for count in threads)})" if threads else ""
+    return (f"Collapse when threads outnumber CPUs: {', '.join(syncs)}{at}, {spread}; left out of the rankings, "
+            "ratios and colour scales below (the run's headline lists them).")
+
+
+def recommended_cell(run_file: RunFile, pin: str, threads: int) -> tuple[str, str] | None:
+    """(sync, layout) the run's headline recommends at this placement and thread count, if it has one."""
+    if run_file.headline is None:
+        return None
+    return next(((item.sync, item.layout) for item in run_file.headline.recommendations
+                 if item.pin == pin and item.threads == threads), None)
 
 
 def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
@@ -87,32 +149,44 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     if not groups:
         return [Section(f"Results: {run_file.label}",
                         paragraphs=["No `rk4/sync:.../layout:.../pin:.../threads:...` entries in this file."])]
+    collapsed = run_file.collapsed
     heat = Section(f"Step time, sync x layout: {run_file.label}",
-                   paragraphs=["Median step time of each synchronisation primitive (rows) with each data layout "
-                               "(columns), one map per placement and thread count. Darker is slower; n/a: the "
-                               "combination was not run or errored."])
+                   paragraphs=["Median step time of each synchronisation primitive (rows, fastest first) with each "
+                               "data layout (columns), one map per placement (pin) and thread count. Darker is "
+                               "slower; n/a: the combination was not run or errored."])
+    if any(recommended_cell(run_file, pin, threads) for pin, threads in groups):
+        heat.paragraphs.append("Outlined in red: the combination the run recommends there (its headline).")
     bars = Section(f"Spread per primitive: {run_file.label}",
-                   paragraphs=["Bars at the median over repetitions, whiskers over the interquartile range, one "
-                               "dot per repetition."])
+                   paragraphs=["Per primitive (fastest first), one bar per layout at the median over repetitions, "
+                               "whiskers over the interquartile range, one dot per repetition."])
+    left_out = collapsed_line(run_file)
+    if left_out:
+        heat.paragraphs.append(left_out + " Their cells are grey.")
+        bars.paragraphs.append(left_out)
     noisy_cells = within_noise_cells(run_file)
     if noisy_cells:
         heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
                                "padded layout was within noise or unsure (its confidence interval lies inside the "
                                "noise band, or straddles its edge): the two cells do not differ measurably.")
     for pin, threads in groups:
-        heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
+        heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.heatmap(run_file, pin, threads,
-                                                   noisy_cells.get((pin, threads), frozenset()))))
-        bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin} threads:{threads}",
-                                   figures.bars_with_spread(run_file, pin, threads)))
+                                                   noisy_cells.get((pin, threads), frozenset()), collapsed,
+                                                   recommended_cell(run_file, pin, threads))))
+        bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
+                                   figures.bars_with_spread(run_file, pin, threads, collapsed)))
     sections += [heat, bars]
+    if run_file.pairs:
+        best_other = best_other_section(run_file, counter)
+        if best_other:
+            sections.append(best_other)
+    penalty = penalty_section(run_file, counter)
+    if penalty:
+        sections.append(penalty)
     if run_file.scaling is not None and len(run_file.scaling.threads) >= 2:
         sections.append(scaling_section(run_file, counter))
     if run_file.pace is not None:
         sections.append(pace_section(run_file, counter))
-    penalty = penalty_section(run_file, counter)
-    if penalty:
-        sections.append(penalty)
     if run_file.pairs:
         sections.append(pairs_section(run_file, counter))
     rank_rows = []
@@ -120,9 +194,11 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         for rank, (name, step, vs_serial) in enumerate(per_file[0], start=1):
             rank_rows.append([f"pin:{pin} threads:{threads}", str(rank), name, format_ns(step),
                               format_number(vs_serial, 2, "x")])
-    sections.append(Section(f"Fastest combinations: {run_file.label}",
-                            paragraphs=["The five fastest sync/layout pairs per placement and thread count; x serial "
-                                        "is the step time over this run's serial RK4 step."],
+    paragraphs = ["The five fastest sync/layout pairs per placement and thread count; x serial is the step time over "
+                  "this run's serial RK4 step."]
+    if left_out:
+        paragraphs.append("Collapsed entries are not ranked.")
+    sections.append(Section(f"Fastest combinations: {run_file.label}", paragraphs=paragraphs,
                             tables=[Table(["group", "rank", "sync/layout", "step (median)", "x serial"], rank_rows)]))
     counter[0] += 1
     return sections
@@ -151,10 +227,11 @@ def mpi_section(run_file: RunFile, counter: list[int]) -> Section:
     latency = Figure(f"mpi-latency-{counter[0]}", f"per-stage exchange latency, {run_file.label}",
                      figures.mpi_distributions(mpi.exchanges, "stage", ("p50", "p99", "p999", "max"),
                                                f"per-stage exchange latency ({title})", pingpong,
-                                               f"ping-pong one-way {pingpong_what}"))
+                                               f"ping-pong one-way {pingpong_what}", "latency of a stage (log)"))
     skew = Figure(f"mpi-skew-{counter[0]}", f"per-stage arrival skew, {run_file.label}",
                   figures.mpi_distributions(mpi.exchanges, "skew", ("p50", "p99", "max"),
-                                            f"arrival skew per stage: latest minus earliest rank ({title})"))
+                                            f"arrival skew per stage: latest minus earliest rank ({title})",
+                                            ylabel="arrival skew (log)"))
     rows = []
     for exchange in mpi.exchanges:
         run = run_file.runs.get(parse_name(exchange.name))
@@ -218,27 +295,18 @@ def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
 
 
 def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
-    """One line per primitive and thread count, one column per kind of penalty (a paired row with its
-    interval and verdict)."""
-    kinds = sorted({row.kind for row in rows})
-    by_place = {(row.sync, row.threads, row.kind): row for row in rows}
+    """One line per bar of the penalties figure: what it compares, for which primitive, placement and thread
+    count, its ratio and (a paired one) its interval and verdict."""
     lines = []
-    for sync, threads in sorted({(row.sync, row.threads) for row in rows}):
-        cells = [sync, str(threads)]
-        for kind in kinds:
-            row = by_place.get((sync, threads, kind))
-            if row is None:
-                cells.append("")
-            elif row.ci_low is not None and row.ci_high is not None:
-                cells.append(f"{format_number(row.ratio, 2, 'x')} [{format_number(row.ci_low, 2)}, "
-                             f"{format_number(row.ci_high, 2)}] {row.verdict or ''}".rstrip())
-            else:
-                cells.append(format_number(row.ratio, 2, "x"))
-        lines.append(cells)
-    return Table(["sync", "threads"] + kinds, lines)
+    for row in sorted(rows, key=lambda row: (row.kind, row.threads, row.pin, row.sync)):
+        paired = row.ci_low is not None and row.ci_high is not None
+        lines.append([row.kind, row.sync, row.pin, str(row.threads), format_number(row.ratio, 2, "x"),
+                      f"[{format_number(row.ci_low, 2)}, {format_number(row.ci_high, 2)}]" if paired else "",
+                      row.verdict or ("" if paired else "ratio of medians")])
+    return Table(["comparison", "primitive", "placement", "threads", "ratio", "interval", "verdict"], lines)
 
 
-PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): packed / padded",
+PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): shared lines / isolated",
                     "migration": "migration (paired): pin:{pin} / pin:compact"}
 
 
@@ -253,6 +321,27 @@ def within_noise_cells(run_file: RunFile) -> dict[tuple[str, int], frozenset]:
     return {group: frozenset(members) for group, members in cells.items()}
 
 
+def _threads_words(threads) -> str:
+    return f"{threads} thread{'s' if threads != 1 else ''}"
+
+
+def pair_label(pair) -> str:
+    """What a paired bar compares, in a few words: the primitive(s) first, then what differs and where
+    ("seqlock vs mailbox (step, pin:compact, 4 threads)", "futex_spin, pin:none, 2 threads: packed vs
+    padded128")."""
+    a, b = pair.a_key, pair.b_key
+    threads = _threads_words(a.threads) if a.threads is not None else ""
+    if pair.comparison == "against_best_other":
+        what = "episode" if a.family == "barrier" else "step"
+        where = ", ".join(part for part in (what, f"pin:{a.get('pin')}" if a.get("pin") else "", threads) if part)
+        return f"{a.get('sync') or a.display} vs {b.get('sync') or b.display} ({where})"
+    if pair.comparison == "false_sharing":
+        return (f"{a.get('sync')}, pin:{a.get('pin')}, {threads}: {a.get('layout')} vs {b.get('layout')}")
+    if pair.comparison == "migration":
+        return f"{a.get('sync')}, {threads} ({a.get('layout')}): pin:{a.get('pin')} vs pin:{b.get('pin')}"
+    return _difference(a, b).replace(" / ", " vs ")
+
+
 def paired_penalty_rows(run_file: RunFile) -> list[figures.PenaltyRow]:
     """The false-sharing and migration penalties measured as pairs (lockstep_pairs), with their intervals."""
     rows = []
@@ -260,22 +349,38 @@ def paired_penalty_rows(run_file: RunFile) -> list[figures.PenaltyRow]:
         if pair.comparison in PAIRED_PENALTIES and pair.a_key.get("sync") and pair.a_key.threads is not None:
             kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"))
             rows.append(figures.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
-                                           pair.ci_low, pair.ci_high, pair.verdict))
+                                           pair.ci_low, pair.ci_high, pair.verdict, pin=pair.a_key.get("pin") or "",
+                                           label=pair_label(pair)))
     return rows
+
+
+def _pins_words(pins) -> str:
+    return ", ".join(f"pin:{pin}" for pin in figures.ordered(pins, figures.PIN_ORDER))
 
 
 def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
     paired = paired_penalty_rows(run_file)
     # A kind of penalty the file measured as pairs is drawn from its pairs; the others from the medians.
-    covered = {row.kind.split(" (paired)")[0] for row in paired}
-    rows = paired + [row for row in figures.penalty_rows(run_file)
+    covered = {"false sharing" if row.kind.startswith("false sharing") else "migration" for row in paired}
+    rows = paired + [row for row in figures.penalty_rows(run_file, run_file.collapsed)
                      if not any(row.kind.startswith(kind) for kind in covered)]
     if not rows:
         return None
-    paragraphs = ["False sharing: the packed layout's step time over the padded one's, threads pinned compactly. "
-                  "Migration: the step time when threads are moved on purpose (pin:migrate) or left to the OS "
-                  "(pin:none), over compact pinning. 1.0x is no penalty; the ratio axis is logarithmic, so a 2x "
-                  "penalty and a 2x gain lie equally far from 1."]
+    sharing = [row for row in rows if row.kind.startswith("false sharing")]
+    moving = [row for row in rows if row.kind.startswith("migration")]
+    paragraphs = []
+    if sharing:
+        paragraphs.append("False sharing: the step time of the layout whose writers share cache lines (packed) over "
+                          "the layout that keeps them apart, per primitive at each placement measured: "
+                          f"{_pins_words({row.pin for row in sharing})}.")
+    if moving:
+        paragraphs.append("Migration: the step time with the threads "
+                          + " or ".join(sorted({"left to the OS (pin:none)" if row.pin == "none" else
+                                                "moved on purpose (pin:migrate)" for row in moving}))
+                          + " over the same entry pinned compactly (pin:compact).")
+    paragraphs.append("One bar per primitive, placement and thread count, named on its line. 1.0x is no penalty; "
+                      "the ratio axis is logarithmic (a 2x penalty and a 2x gain lie equally far from 1) and covers "
+                      "every bar.")
     noise = None
     if run_file.pace is not None and not paired:
         paragraphs.append(f"Paired ratios {UNAVAILABLE}: this file has a pace trace but no false-sharing or "
@@ -288,8 +393,11 @@ def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
                           f"the bar is the median ratio, the whisker its {100 * confidence:g} % bootstrap interval, "
                           f"[low, high] in the table. Hatched: within noise (the interval inside the "
                           f"±{100 * noise:g} % band shaded grey) or unsure (the interval across its edge).")
+    if run_file.collapsed:
+        paragraphs.append("Collapsed entries are in no comparison.")
     return Section(f"False-sharing and migration penalties: {run_file.label}", paragraphs=paragraphs,
-                   figures=[Figure(f"penalties-{counter[0]}", "penalties", figures.penalties(rows, noise))],
+                   figures=[Figure(f"penalties-{counter[0]}", "penalties, one bar per primitive, placement and "
+                                                              "thread count", figures.penalties(rows, noise))],
                    tables=[penalty_table(rows)])
 
 
@@ -297,15 +405,55 @@ COMPARISON_TITLES = {"false_sharing": "false sharing: packed against its best pa
                      "migration": "migration: unpinned against pinned compactly",
                      "against_best_other": "each primitive against the best other primitive",
                      "overhead": "the harness's own cost (accounting on against off)"}
+# The kinds the pairs section draws: the penalties section draws false sharing and migration, the best-other
+# section each primitive against the best other.
+PAIRS_DRAWN = ("overhead",)
+INVERTED_NOTE = "*: the leader, its pair with the runner-up inverted"
+
+
+def best_other_section(run_file: RunFile, counter: list[int]) -> Section | None:
+    """Each primitive against the best other, per kind of entry, placement and thread count: the pairs as
+    measured, the leader's line its pair with the runner-up read the other way round."""
+    views = against_best_other_views(run_file.pairs)
+    if not views:
+        return None
+    noise = max(pair.noise for pair in views)
+    rows = [figures.PenaltyRow("against_best_other", pair.a_key.get("sync") or "", pair.a_key.threads or 0,
+                               pair.median, pair.ci_low, pair.ci_high, pair.verdict, pin=pair.a_key.get("pin") or "",
+                               label=pair_label(pair) + (" *" if pair.inverted else ""))
+             for pair in views]
+    table = Table(["primitive vs best other", "median", "interval", "verdict", "pairs", "measured as"],
+                  [[pair_label(pair), format_number(pair.median, 3, "x"),
+                    f"[{format_number(pair.ci_low, 3)}, {format_number(pair.ci_high, 3)}]", pair.verdict,
+                    format_count(len(pair.ratios)),
+                    "the runner-up's pair, inverted" if pair.inverted else "its own pair"] for pair in views])
+    paragraphs = ["Each primitive's step (or bare episode) on its best layout against the best other primitive's, "
+                  "measured side by side (a / b > 1: a is slower). Each comparison is measured once: the fastest "
+                  "primitive of a group (the leader) has no pair of its own, and its line (marked *) is its pair "
+                  "with the runner-up read the other way round (the ratio and the interval's ends inverted, penalty "
+                  "and gain swapped)."]
+    if run_file.collapsed:
+        paragraphs.append("Collapsed entries are in no comparison.")
+    figure = Figure(f"best-other-{counter[0]}", COMPARISON_TITLES["against_best_other"],
+                    figures.paired_ratios(rows, COMPARISON_TITLES["against_best_other"], noise,
+                                          INVERTED_NOTE if any(pair.inverted for pair in views) else ""))
+    return Section(f"Each primitive against the best other: {run_file.label}", paragraphs=paragraphs,
+                   figures=[figure], tables=[table])
 
 
 def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
-    """Every paired ratio of the file (lockstep_pairs): one figure per kind of comparison, one table."""
+    """Every paired ratio of the file (lockstep_pairs) as measured: one table; the kinds no other section draws
+    (the harness's overhead) as a figure."""
     kinds = [kind for kind in COMPARISON_TITLES if any(pair.comparison == kind for pair in run_file.pairs)]
-    section_figures = [Figure(f"pairs-{counter[0]}-{_slug(kind)}", COMPARISON_TITLES[kind],
-                              figures.paired_ratios([p for p in run_file.pairs if p.comparison == kind],
-                                                    COMPARISON_TITLES[kind]))
-                       for kind in kinds]
+    section_figures = []
+    for kind in kinds:
+        if kind in PAIRS_DRAWN:
+            members = [p for p in run_file.pairs if p.comparison == kind]
+            rows = [figures.PenaltyRow(kind, "", 0, p.median, p.ci_low, p.ci_high, p.verdict, label=pair_label(p))
+                    for p in members]
+            section_figures.append(Figure(f"pairs-{counter[0]}-{_slug(kind)}", COMPARISON_TITLES[kind],
+                                          figures.paired_ratios(rows, COMPARISON_TITLES[kind],
+                                                                max(p.noise for p in members))))
     rows = []
     for kind in kinds:
         for pair in (p for p in run_file.pairs if p.comparison == kind):
@@ -316,12 +464,14 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
                          format_number(pair.block_ms, 1, " ms"),
                          ", ".join(str(mode) for mode in modes) if modes else UNAVAILABLE])
     block = statistics.median([pair.block_ms for pair in run_file.pairs])
+    drawn = ("False sharing and migration are drawn in their section above, each primitive against the best other "
+             "in its own" + ("; the harness's overhead below." if section_figures else "."))
     return Section(f"Paired ratios: {run_file.label}",
-                   paragraphs=["Each ratio the summary prints, measured as a pair: a and b run in alternating short "
-                               f"blocks (median block {format_number(block, 1, ' ms')}), one ratio "
-                               "a / b per adjacent pair of blocks; the median ratio with its bootstrap interval, and "
-                               "the verdict: penalty (the interval above the noise band), gain (below it), within "
-                               "noise (inside it) or unsure (across an edge of it)."],
+                   paragraphs=["Every ratio the summary prints, measured as a pair, as the file holds it: a and b run "
+                               f"in alternating short blocks (median block {format_number(block, 1, ' ms')}), one "
+                               "ratio a / b per adjacent pair of blocks; the median ratio with its bootstrap interval, "
+                               "and the verdict: penalty (the interval above the noise band), gain (below it), within "
+                               "noise (inside it) or unsure (across an edge of it). " + drawn],
                    figures=section_figures,
                    tables=[Table(["comparison", "group", "a / b", "pairs", "median a/b", "interval", "verdict",
                                   "block", "pace modes"], rows)])
@@ -628,13 +778,17 @@ def paper_section(run_files: list[RunFile]) -> Section:
                    tables=[roots, equations])
 
 
-def build_sections(loaded) -> list[Section]:
+# How many sections the HTML page shows open (after the answers): the page opens a few screens long.
+OPEN_SECTIONS = 2
+
+
+def build_sections(loaded) -> tuple[list[Answer], list[Section]]:
+    """The answers (one per `lockstep run` file, shown first) and the sections after them: the results, then
+    the paper's values, the inputs and machines, and the warnings; the first OPEN_SECTIONS open."""
     run_files = [item for item in loaded if isinstance(item, RunFile)]
+    answers = [answer_of(item) for item in run_files if not item.mpi]
     counter = [0]
-    sections = [inputs_section(loaded)]
-    machines = machines_section(run_files)
-    if machines:
-        sections.append(machines)
+    sections = []
     for item in loaded:
         if isinstance(item, RunFile):
             sections += [mpi_section(item, counter)] if item.mpi else run_sections(item, counter)
@@ -648,10 +802,13 @@ def build_sections(loaded) -> list[Section]:
         if isinstance(item, VerifyFile):
             sections.append(trajectory_section(item, counter))
     sections.append(paper_section(run_files))
+    sections.append(machines_section(loaded, run_files))
     warnings = [w for f in run_files for w in f.warnings]
     if warnings:
-        sections.append(Section("Warnings", paragraphs=warnings))
-    return sections
+        sections.append(Section(f"Warnings ({len(warnings)})", paragraphs=warnings))
+    for section in sections[:OPEN_SECTIONS]:
+        section.open = True
+    return answers, sections
 
 
 # ---------------------------------------------------------------- rendering
@@ -677,14 +834,22 @@ def _templates() -> jinja2.Environment:
     return environment
 
 
-def render_html(title: str, sections: list[Section]) -> str:
+def _fence(lines: list[str]) -> str:
+    """A Markdown code fence longer than any run of backticks in the lines, so that none can close it."""
+    longest = max((len(run) for line in lines for run in re.findall(r"`+", line)), default=0)
+    return "`" * max(3, longest + 1)
+
+
+def render_html(title: str, answers: list[Answer], sections: list[Section]) -> str:
     anchored = [(f"s{index}-{_slug(section.title)}", section) for index, section in enumerate(sections)]
-    return _templates().get_template("report.html.j2").render(title=title, sections=anchored)
+    return _templates().get_template("report.html.j2").render(title=title, answers=answers, sections=anchored,
+                                                              where=WHERE_THE_RESULTS_ARE["html"])
 
 
-def render_markdown(title: str, sections: list[Section]) -> str:
-    text = _templates().get_template("report.md.j2").render(title=title, sections=sections,
-                                                            figures_directory=FIGURES_DIRECTORY)
+def render_markdown(title: str, answers: list[Answer], sections: list[Section]) -> str:
+    text = _templates().get_template("report.md.j2").render(
+        title=title, answers=[(answer, _fence(answer.lines)) for answer in answers], sections=sections,
+        figures_directory=FIGURES_DIRECTORY, where=WHERE_THE_RESULTS_ARE["markdown"])
     return text.rstrip("\n") + "\n"
 
 
@@ -693,10 +858,10 @@ def write_report(paths: list[str], out_dir: str, title: str = "lockstep report")
     with output.check_directory_target first). Returns the pages written."""
     labels = unique_labels(paths)
     loaded = [load_any(path, label) for path, label in zip(paths, labels)]
-    sections = build_sections(loaded)
+    answers, sections = build_sections(loaded)
     files = {os.path.join(FIGURES_DIRECTORY, f"{figure.slug}.svg"): figure.svg
              for section in sections for figure in section.figures}
-    files[HTML_PAGE] = render_html(title, sections)
-    files[MARKDOWN_PAGE] = render_markdown(title, sections)
+    files[HTML_PAGE] = render_html(title, answers, sections)
+    files[MARKDOWN_PAGE] = render_markdown(title, answers, sections)
     write_directory(out_dir, files)
     return [os.path.join(out_dir, page) for page in PAGES]

@@ -1,8 +1,10 @@
 """The HTML report in a real browser: headless Chromium opens a report made from
 the fixtures (through the lockstep binary when --lockstep is given) and the
-test checks that the page loaded, raised no script error, fetched nothing, and
-laid out every one of its figures at a visible size. A screenshot is taken too
-and must be a non-empty PNG.
+test checks that the page loaded, raised no script error, fetched nothing, and,
+opened at #all (every section open), laid out every one of its figures at a
+visible size; opened as a user opens it, that the answer comes first and only
+the first sections are open. A screenshot 1400 px wide is taken too and must be
+a non-empty PNG.
 
     /usr/bin/python3 reports/tests/browser_check.py [--lockstep build/dev/bench/lockstep] [--keep DIR]
 
@@ -26,6 +28,10 @@ INPUTS = [os.path.join(FIXTURES, name)
 # the pace keys (docs/pace.md) and the delay keys of --per-cpu and --find-period
 PACED_INPUTS = [os.path.join(FIXTURES, name)
                 for name in ("paced_every_pair.json", "delay_per_cpu.json", "delay_find_period.json")]
+# a run file with the run's answer (lockstep_headline), collapsed entries and pairs measured once
+HEADLINE_INPUTS = [os.path.join(FIXTURES, "headline.json")]
+# The sections the page opens with (report.OPEN_SECTIONS).
+OPEN_SECTIONS = "2"
 SAMPLES = [os.path.join(REPORTS_DIR, "samples", name) for name in ("run.json", "c2c.json", "delay.json", "verify.csv")]
 
 
@@ -69,7 +75,15 @@ def check_page(work: str, inputs: list[str], options) -> list[str]:
     profile = os.path.join(work, "profile")
     shutil.rmtree(profile, ignore_errors=True)
     url = "file://" + os.path.abspath(page)
-    dumped = chromium(profile, "--dump-dom", url)
+    as_opened = chromium(profile, "--dump-dom", url).stdout
+    opened = attribute(as_opened, "body", "data-sections-open")
+    if opened != OPEN_SECTIONS:
+        failures.append(f"the page opens with {opened} sections open, not {OPEN_SECTIONS}")
+    body = as_opened[as_opened.find("<body"):]
+    if 'class="answer"' in source and body.find('class="answer"') > body.find("<details"):
+        failures.append("the answer is not the first thing on the page")
+    shutil.rmtree(profile, ignore_errors=True)
+    dumped = chromium(profile, "--dump-dom", url + "#all")
     dom = dumped.stdout
     if dumped.returncode != 0 or "<body" not in dom:
         failures.append(f"chromium --dump-dom failed ({dumped.returncode}): {dumped.stderr.strip()[-400:]}")
@@ -95,7 +109,7 @@ def check_page(work: str, inputs: list[str], options) -> list[str]:
 
     shutil.rmtree(profile, ignore_errors=True)
     screenshot = os.path.join(work, "report.png")
-    shot = chromium(profile, f"--screenshot={screenshot}", "--window-size=1280,2400", url)
+    shot = chromium(profile, f"--screenshot={screenshot}", "--window-size=1400,2400", url)
     if shot.returncode != 0 or not os.path.exists(screenshot):
         failures.append(f"chromium --screenshot failed ({shot.returncode}): {shot.stderr.strip()[-400:]}")
     else:
@@ -120,7 +134,7 @@ def main() -> int:
     work = options.keep or tempfile.mkdtemp(prefix="lockstep-browser-")
     os.makedirs(work, exist_ok=True)
     failures = []
-    input_sets = [("fixtures", INPUTS), ("paced", PACED_INPUTS)]
+    input_sets = [("fixtures", INPUTS), ("paced", PACED_INPUTS), ("headline", HEADLINE_INPUTS)]
     if all(os.path.exists(path) for path in SAMPLES):  # reports/samples/, once make_samples.sh has run
         input_sets.append(("samples", SAMPLES))
     try:

@@ -18,7 +18,8 @@ Every run must end in one of:
   reported     exit 0 or 1 with more "unavailable" / "left out" in the output than the unmutated file
                gives (a NaN the format allows, an optional field missing);
   other value  only where the mutation makes another valid file: a negative value of a field that may be
-               negative (fields.SIGNED_COUNTERS, a displacement), a trajectory cut at a row's end.
+               negative (fields.SIGNED_COUNTERS, a displacement), a trajectory cut at a row's end, a list of
+               the run's headline (lockstep_headline) emptied or with an entry twice.
 A mutation the format allows (an extra key, an unknown context key, reordered benchmarks or c2c pairs)
 must give "same"; a cut, non-UTF-8 bytes and another tool's file must give "rejected". Never a traceback,
 a hang (each run has a 20 s alarm), a warning from numpy or matplotlib, or NaN / Infinity / None / an
@@ -72,6 +73,7 @@ RUN_BASES = (  # (base, partner): the partner is the unmutated file of the compa
     (SAMPLES / "pair-a.json", SAMPLES / "pair-b.json"),
     (SAMPLES / "run.json", SAMPLES / "pair-a.json"),
     (FIXTURES / "paced_a.json", FIXTURES / "paced_b.json"),  # the pace trace and pairs
+    (FIXTURES / "headline.json", FIXTURES / "paced_b.json"),  # the run's answer (lockstep_headline)
     (FIXTURES / "mpi-a.json", FIXTURES / "mpi-b.json"),  # `lockstep mpi` files: the contract by hand
     (FIXTURES / "mpi.json", FIXTURES / "mpi-b.json"),  # and as lockstep mpi writes it
 )
@@ -345,7 +347,10 @@ def mutate_json(rng, kind, base):
     # A negative value a field may hold: a signed counter's, or a mode's -1 (outlier, straddling, unknown).
     signed = kind == "negative number" and (path[-1] in fields.SIGNED_COUNTERS or path[-1] in fields.MODE_KEYS
                                             or (len(path) > 1 and path[-2] in fields.MODE_KEYS))
-    return Mutation(kind, text, "/".join(str(p) for p in path), other_value_allowed=signed)
+    # The run's answer with a list emptied or an entry twice (a line, a recommendation) is another answer a run
+    # may give: its lines are shown as they are.
+    headline = kind in ("empty list", "duplicated entry") and bool(path) and path[0] == fields.HEADLINE_KEY
+    return Mutation(kind, text, "/".join(str(p) for p in path), other_value_allowed=signed or headline)
 
 
 def mutate_csv(rng, kind, text):
@@ -412,7 +417,8 @@ def _alarm(signum, frame):
 def drawing_replaced():
     """Every figure's drawing replaced by a stand-in SVG: the report's data, tables, pages and writing run,
     matplotlib does not."""
-    names = ("heatmap", "bars_with_spread", "penalties", "c2c_heatmap", "delay_histogram", "trajectory")
+    names = ("heatmap", "bars_with_spread", "penalties", "paired_ratios", "c2c_heatmap", "delay_histogram",
+             "trajectory")
     saved = {name: getattr(figures, name) for name in names}
     for name in names:
         setattr(figures, name, lambda *args, _name=name, **kwargs: f'<svg id="{_name}"><path d="M0 0"/></svg>')

@@ -1,15 +1,17 @@
 """`lockstep report`: the HTML and Markdown it writes, their figures and tables, and their determinism."""
 import hashlib
 import json
+import math
 import os
 import re
 import tempfile
 import unittest
+from unittest import mock
 
-from support import fixture, run_tool
+from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
 from lockstep_reports import figures, paper
-from lockstep_reports.inputs import load_any
+from lockstep_reports.inputs import load_any, load_run_file
 
 ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "delay_a.json", "verify_a.csv"]
 
@@ -154,11 +156,14 @@ class PaceAndDelayReport(unittest.TestCase):
 
     def test_paired_penalties_carry_their_interval_and_verdict(self):
         # Its interval straddles the band's upper edge: unsure (platform/statistics.hpp), not within noise.
-        self.assertRegex(self.markdown, r"\| seqlock \| 2 \| 1\.0[0-9]x \[0\.9[0-9]+, 1\.[0-9]+\] unsure \|")
-        self.assertIn("false sharing (paired): packed / padded", self.markdown)
-        self.assertIn("migration (paired): pin:migrate / pin:compact", self.markdown)
-        for kind in ("false-sharing", "migration", "against-best-other", "overhead"):
-            self.assertIn(f'<figure id="pairs-0-{kind}"', self.html)
+        self.assertRegex(self.markdown, r"\| false sharing \(paired\): shared lines / isolated \| seqlock \| compact \| 2 \| "
+                                        r"1\.0[0-9]x \| \[0\.9[0-9]+, 1\.[0-9]+\] \| unsure \|")
+        self.assertIn("| migration (paired): pin:migrate / pin:compact | std_barrier | migrate | 4 | 1.60x |", self.markdown)
+        # Each kind drawn once: false sharing and migration in the penalties, each primitive against the best other
+        # in its section, the harness's overhead with the table of every pair.
+        for slug in ("penalties-0", "best-other-0", "pairs-0-overhead"):
+            self.assertIn(f'<figure id="{slug}"', self.html)
+        self.assertEqual(self.html.count('<figure id="pairs-'), 1)
 
     def test_within_noise_cells_are_said(self):
         self.assertIn("Hatched, marked ≈", self.markdown)
@@ -267,6 +272,140 @@ class Pieces(unittest.TestCase):
         self.assertAlmostEqual(float(x1[0]), 2.0)
         self.assertAlmostEqual(float(x2[0]), -3.0)
 
+
+class LeaderLineInTheReport(unittest.TestCase):
+    def test_the_report_names_every_bars_primitive_and_marks_the_leader(self):
+        with tempfile.TemporaryDirectory() as directory:
+            out = os.path.join(directory, "report")
+            status, _, err = run_tool("report", fixture(HEADLINE), "--out", out)
+            self.assertEqual(status, 0, err)
+            with open(os.path.join(out, "report.md"), encoding="utf-8") as stream:
+                markdown = stream.read()
+        self.assertRegex(markdown, r"\| ck_tas vs seqlock \(step, pin:compact, 2 threads\) \| 0\.[0-9]+x \| "
+                                   r"\[0\.[0-9]+, 0\.[0-9]+\] \| gain \| 12 \| the runner-up's pair, inverted \|")
+        self.assertRegex(markdown, r"\| seqlock vs ck_tas \(step, pin:compact, 2 threads\) \| 1\.[0-9]+x \| .* \| "
+                                   r"penalty \| 12 \| its own pair \|")
+        self.assertIn("| ck_tas vs seqlock (episode, pin:compact, 2 threads) |", markdown)
+        self.assertNotIn("| RK4 step pin:compact threads:2 |", markdown.split("## Paired ratios")[0])
+
+
+class AnswerFirst(Scratch):
+    def test_the_headline_comes_first_verbatim_then_where_the_rest_is(self):
+        html, markdown = self.report(fixture(HEADLINE))
+        lines = headline_document()["lockstep_headline"]["lines"]
+        body = html[html.index("<body>"):]
+        answer = body.index('<section class="answer"')
+        self.assertLess(answer, body.index("<details"))
+        shown = re.search(r'<pre class="headline">(.*?)</pre>', body, re.S).group(1)
+        self.assertEqual(shown.replace("&#39;", "'").replace("&lt;", "<").replace("&gt;", ">")
+                         .replace("&amp;", "&").split("\n"), lines)
+        self.assertLess(body.index("The full results: the sections below"), body.index("<details"))
+        # Markdown: the same lines first, in a fence
+        self.assertTrue(markdown.startswith("# lockstep report\n\n## The answer: headline.json\n\n```\n"
+                                            + "\n".join(lines) + "\n```\n"))
+
+    def test_every_section_folds_and_only_the_first_two_are_open(self):
+        html, _ = self.report(fixture(HEADLINE))
+        sections = re.findall(r"<details id=\"[^\"]+\"( open)?>\s*<summary><h2>([^<]+)</h2>", html)
+        self.assertEqual([title for opened, title in sections if opened],
+                         ["Step time, sync x layout: headline.json", "Spread per primitive: headline.json"])
+        self.assertGreater(len(sections), 6)
+        titles = [title for _, title in sections]
+        # the raw context table moved down, behind a fold
+        self.assertEqual(titles[-1], "Machines and inputs")
+        self.assertNotIn("<details open", html[html.index("Machines and inputs") - 200:])
+
+    def test_a_file_without_a_headline_says_so_in_one_line(self):
+        html, markdown = self.report(fixture("machine_a.json"))
+        notes = [line for line in markdown.splitlines() if "has no headline" in line]
+        self.assertEqual(len(notes), 1)
+        self.assertTrue(notes[0].startswith("machine_a.json has no headline"))
+        self.assertNotIn('<section class="answer"', html)
+        self.assertIn("## Step time, sync x layout: machine_a.json", markdown)
+
+    def test_a_backtick_run_in_a_line_cannot_close_the_markdown_fence(self):
+        document = headline_document()
+        document["lockstep_headline"]["lines"][1] = "a line with ``` and ```` in it"
+        _, markdown = self.report(self.write("ticks.json", document))
+        self.assertIn("\n`````\nThe answer on this machine", markdown)
+
+    def test_collapsed_entries_are_said_once_and_left_out_of_rankings(self):
+        _, markdown = self.report(fixture(HEADLINE))
+        said = [line for line in markdown.splitlines() if line.startswith("Collapse when threads outnumber CPUs")]
+        self.assertEqual(len(said), 2)  # the heat maps' and the bars' sections, the same line
+        self.assertEqual(said[0].split(" Their cells")[0], said[1])
+        self.assertRegex(said[1], r"^Collapse when threads outnumber CPUs: ck_tas, seqlock \(at 4 threads\), "
+                                  r"[0-9.]+ ms-[0-9.]+ ms a step; left out")
+        ranking = markdown.split("## Fastest combinations: headline.json")[1].split("\n## ")[0]
+        four = [line for line in ranking.splitlines() if "threads:4 |" in line]
+        self.assertEqual(len(four), 10)  # 5 per placement
+        self.assertFalse(any("ck_tas" in line or "seqlock" in line for line in four))
+        pairs = markdown.split("## Paired ratios: headline.json")[1].split("\n## ")[0]
+        self.assertNotIn("sync:ck_tas pin:compact threads:4", pairs)
+
+    def test_the_false_sharing_table_says_its_placements(self):
+        _, markdown = self.report(fixture(HEADLINE))
+        section = markdown.split("## False-sharing and migration penalties: headline.json")[1].split("\n## ")[0]
+        self.assertIn("at each placement measured: pin:compact, pin:none.", section)
+        self.assertNotIn("pinned compactly", section.split("Migration:")[0])
+        rows = [line for line in section.splitlines() if line.startswith("| false sharing")]
+        self.assertEqual({line.split(" | ")[2] for line in rows}, {"compact", "none"})
+
+
+class Figures(unittest.TestCase):
+    """What the figures draw, read from matplotlib's figure before it becomes SVG."""
+
+    def drawn(self, function, *arguments):
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            function(*arguments)
+        self.assertEqual(len(captured), 1)
+        return captured[0]
+
+    def test_the_heat_map_ranks_its_rows_and_keeps_collapsed_cells_out_of_its_scale(self):
+        run_file = load_run_file(fixture(HEADLINE))
+        figure = self.drawn(figures.heatmap, run_file, "compact", 4, frozenset(), run_file.collapsed,
+                            ("futex_spin", "padded128"))
+        axes = figure.axes[0]
+        rows = [label.get_text() for label in axes.get_yticklabels()]
+        self.assertEqual(rows, ["futex_spin", "std_barrier", "ck_tas", "seqlock"])  # fastest first, collapsed last
+        norm = axes.images[0].norm
+        self.assertLess(norm.vmax, 1e5)  # the collapsed cells' milliseconds are not on the scale
+        self.assertGreater(norm.vmax, 1e4)  # std_barrier's packed step is
+        colorbar_labels = [label.get_text() for label in figure.axes[1].get_yticklabels()]
+        self.assertTrue(any(label.endswith(" us") for label in colorbar_labels), colorbar_labels)
+        self.assertEqual(axes.get_xlabel(), "layout")
+
+    def test_penalty_bars_each_have_a_line_and_the_axis_covers_them(self):
+        rows = [figures.PenaltyRow("false sharing", "mailbox", 4, 1.3, 1.2, 1.4, "penalty", pin="compact"),
+                figures.PenaltyRow("false sharing", "mailbox", 4, 0.97, 0.9, 1.02, "unsure", pin="none"),
+                figures.PenaltyRow("false sharing", "ck_tas", 4, 3500.0, pin="compact")]
+        figure = self.drawn(figures.penalties, rows, 0.05)
+        axes = figure.axes[0]
+        labels = [label.get_text() for label in axes.get_yticklabels()]
+        self.assertEqual(len(set(labels)), 3)  # compact and none on lines of their own, named
+        self.assertIn("mailbox, pin:none, 4 threads", labels)
+        low, high = axes.get_xlim()
+        self.assertGreater(high, 3500.0)
+        self.assertLess(low, 0.9)
+        ticks = [tick for tick in axes.get_xticks() if low <= tick <= high]
+        self.assertLessEqual(len(ticks), 8)
+        gaps = [math.log10(b / a) for a, b in zip(ticks, ticks[1:])]
+        self.assertGreaterEqual(min(gaps), 0.9 * max(gaps) / 3)  # evenly spread, none crowded
+        legend = [text.get_text() for text in axes.get_legend().get_texts()]
+        self.assertIn("ratio of medians (no interval)", legend)
+
+    def test_ratio_ticks_never_crowd(self):
+        for low, high in ((0.9, 1.1), (0.8, 1.6), (0.3, 2.6), (0.2, 12.0), (0.5, 3500.0), (1e-4, 3500.0),
+                          (1e-7, 1e9)):
+            with self.subTest(low=low, high=high):
+                ticks = figures.ratio_ticks(low, high)
+                self.assertGreaterEqual(len(ticks), 2)
+                self.assertLessEqual(len(ticks), 8)
+                self.assertIn(1.0, ticks)
+                self.assertTrue(all(low <= tick <= high for tick in ticks))
+        self.assertEqual([figures.ratio_text(t) for t in figures.ratio_ticks(0.5, 3500.0)],
+                         ["1x", "10x", "100x", "1,000x"])
 
 if __name__ == "__main__":
     unittest.main()
