@@ -28,6 +28,16 @@ std::string short_list(const std::vector<std::string>& names, std::size_t shown 
   return text;
 }
 
+// A line cut to the headline's width at a word, marked; the whole text
+// stays where it came from (lockstep run --verbose, the report's tables).
+constexpr std::size_t kLineWidth = 120;
+std::string fitted(std::string line) {
+  if (line.size() <= kLineWidth) return line;
+  const std::size_t cut = line.rfind(' ', kLineWidth - 4);
+  line.resize(cut == std::string::npos ? kLineWidth - 4 : cut);
+  return line + " ...";
+}
+
 std::string ratio_text(const ratio_estimate& estimate, ratio_verdict verdict) {
   return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {}", estimate.median, estimate.low, estimate.high, to_string(verdict));
 }
@@ -218,14 +228,14 @@ void left_out_lines(std::vector<std::string>& lines, const run_book& book) {
       slowest = std::max(slowest, *time);
     }
     std::vector<std::string> thread_list(threads.begin(), threads.end());
-    lines.push_back(fmt::format("Collapsed when threads outnumber CPUs ({} entries at {}, {}..{} a step or episode, "
-                                "left out of rankings): {}",
-                                book.collapsed.size(), short_list(thread_list), format_ns(fastest), format_ns(slowest),
-                                short_list(syncs, 5)));
+    lines.push_back(fitted(fmt::format("Collapsed when threads outnumber CPUs ({} entries at {}, {}..{} a step or "
+                                       "episode, left out of rankings): {}",
+                                       book.collapsed.size(), short_list(thread_list), format_ns(fastest),
+                                       format_ns(slowest), short_list(syncs, 5))));
   }
   std::map<std::string, std::size_t> reasons;
   for (const auto& skipped : book.not_applicable) ++reasons[skipped.reason];
-  for (const auto& [reason, count] : reasons) lines.push_back(fmt::format("Not applicable ({}): {}", count, reason));
+  for (const auto& [reason, count] : reasons) lines.push_back(fitted(fmt::format("Not applicable ({}): {}", count, reason)));
   std::size_t stalled = 0;
   for (const auto& entry : book.entries()) stalled += entry.error.empty() ? 0 : 1;
   if (stalled > 0) lines.push_back(fmt::format("Stalled or skipped: {} entries (lockstep run --verbose lists them)", stalled));
