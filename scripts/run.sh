@@ -5,7 +5,7 @@
 # Arguments go to `lockstep run` (e.g. --quick, --sync futex_spin, --out FILE,
 # --verbose). The JSON goes to results/<host>-<timestamp>.json unless --out
 # says otherwise, the report to the same name with -report in place of .json
-# (index.html inside); the run ends with its answer and both paths.
+# (report.html inside); the run ends with its answer and both paths.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -36,7 +36,7 @@ fi
 "$lockstep" run "${arguments[@]}"
 report="${out%.json}-report"
 if "$lockstep" report "$out" --out "$report" >/dev/null; then
-  echo "The report is written: $report/index.html (the answer first; open it in a browser)"
+  echo "The report is written: $report/report.html (the answer first; open it in a browser)"
 else
   echo "lockstep report could not write $report: the results are in $out" >&2
   exit 1
