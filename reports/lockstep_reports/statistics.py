@@ -14,7 +14,7 @@ holds both to the same answers: tests/platform/statistics_golden_test.cpp, repor
   index after index. lockstep run draws its pairs' intervals the same way (PAIR_RESAMPLES resamples from
   PAIR_SEED), so bootstrap_median(ratios, confidence, PAIR_RESAMPLES, PAIR_SEED) recomputes a run file's interval
   from its ratios: the same integers, the same IEEE expressions in the same order, the same bits on x86-64
-  (the golden tests allow 1 ulp for a C++ compiler that fuses a multiply-add).
+  (reports/tests/test_run_fixture.py; the golden tests allow 1 ulp for a C++ compiler that fuses a multiply-add).
 - verdict of a ratio's interval [low, high] against the noise band [1 / (1 + noise), 1 + noise]: penalty (the
   whole interval above the band), gain (wholly below it), within noise (wholly inside it, an end on an edge
   counting as inside), unsure (anything else: it straddles an edge). compare.py says "slower" / "faster" for
@@ -61,7 +61,7 @@ MIN_REPETITIONS = 5
 MAX_EXACT = 200
 BASE_SEED = 20260101
 # The resamples and seed of a run file's pair intervals: bench/harness/paired_ratio.hpp's kBootstrapResamples and
-# kBootstrapSeed (the file does not carry them).
+# kBootstrapSeed (the file does not carry them; tests/fixtures/run/quick-pairs.json pins both sides to them).
 PAIR_RESAMPLES = 4000
 PAIR_SEED = 0x5EED1234
 
@@ -194,11 +194,12 @@ def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     if len(a) < 2 or len(b) < 2:
         return None
     outputs = _splitmix64(BASE_SEED + zlib.crc32(name.encode("utf-8")))
-    medians_a = [median([a[index] for index in indices]) for indices in _resamples_from(outputs, len(a),
-                                                                                          BOOTSTRAP_RESAMPLES)]
-    medians_b = [median([b[index] for index in indices]) for indices in _resamples_from(outputs, len(b),
-                                                                                          BOOTSTRAP_RESAMPLES)]
-    ratios = [of_b / of_a for of_a, of_b in zip(medians_a, medians_b) if of_a != 0.0 and math.isfinite(of_b / of_a)]
+    resamples_a = _resamples_from(outputs, len(a), BOOTSTRAP_RESAMPLES)
+    resamples_b = _resamples_from(outputs, len(b), BOOTSTRAP_RESAMPLES)
+    medians_a = [median([a[index] for index in indices]) for indices in resamples_a]
+    medians_b = [median([b[index] for index in indices]) for indices in resamples_b]
+    ratios = [of_b / of_a for of_a, of_b in zip(medians_a, medians_b) if of_a != 0.0]
+    ratios = [ratio for ratio in ratios if math.isfinite(ratio)]
     if not ratios:
         return None
     return percentile_interval(ratios)
