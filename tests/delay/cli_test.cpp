@@ -230,7 +230,13 @@ void expect_delay_json(const nlohmann::json& document, int periods, int threads)
     EXPECT_TRUE(document["wakeup_latency_ns"][key].is_number()) << key;
     EXPECT_TRUE(document["completion_ns"][key].is_number()) << key;
   }
-  EXPECT_LE(document["deadline_misses"].get<int>(), periods);
+  // A miss is a completion above the period: there are some exactly when the
+  // longest completion is above it, and every period missed exactly when the
+  // shortest is.
+  const int misses = document["deadline_misses"].get<int>();
+  const double period = document["settings"]["period_ns"].get<double>();
+  EXPECT_EQ(misses > 0, document["completion_ns"]["max"].get<double>() > period) << misses;
+  EXPECT_EQ(misses == periods, document["completion_ns"]["min"].get<double>() > period) << misses;
   EXPECT_EQ(document["periods_measured"], periods);
   // The idle setting in force, in the context (strings) and in "idle".
   for (const char* key : {"dma_latency", "dma_latency_in_force_us", "cpuidle_driver", "cpuidle_governor", "clocksource"})
@@ -373,7 +379,8 @@ lockstep::testing::command_result run_without(int capability, int resource, cons
 }
 
 TEST(DelayCommand, WithoutFifoPermissionExitsTwoAndSaysHowToRunWithout) {
-  lockstep::testing::watchdog guard(std::chrono::seconds(60), "delay without CAP_SYS_NICE");
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown),
+                                    "delay without CAP_SYS_NICE");
   const auto result = run_without(CAP_SYS_NICE, RLIMIT_RTPRIO, {"delay", "--fifo", "50", "--duration", "10ms"});
   EXPECT_EQ(result.exit_status, 2) << result.err;
   EXPECT_EQ(count_lines(result.err), 1) << result.err;
@@ -382,7 +389,8 @@ TEST(DelayCommand, WithoutFifoPermissionExitsTwoAndSaysHowToRunWithout) {
 }
 
 TEST(DelayCommand, WithoutMlockPermissionExitsTwoAndSaysHowToRunWithout) {
-  lockstep::testing::watchdog guard(std::chrono::seconds(60), "delay without CAP_IPC_LOCK");
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown),
+                                    "delay without CAP_IPC_LOCK");
   const auto result = run_without(CAP_IPC_LOCK, RLIMIT_MEMLOCK, {"delay", "--mlock", "--duration", "10ms"});
   EXPECT_EQ(result.exit_status, 2) << result.err;
   EXPECT_EQ(count_lines(result.err), 1) << result.err;
@@ -395,7 +403,15 @@ TEST(DelayCommand, FifoAndMlockWhenPermitted) {
   const auto path = temp_json("delay-fifo");
   const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "1", "--duration", "10ms", "--fifo", "10",
                                    "--mlock", "--out", path});
-  if (result.exit_status == 2) GTEST_SKIP() << "not permitted here: " << result.err;
+  // Skipped only where the permission is missing, as the Without*Permission
+  // tests above word it (platform/scheduling.cpp): any other refusal of
+  // these options is a failure.
+  const bool not_permitted = result.exit_status == 2 && count_lines(result.err) == 1 &&
+                             (result.err.find("SCHED_FIFO priority 10 not permitted (EPERM") != std::string::npos ||
+                              result.err.find("mlockall not permitted (EPERM") != std::string::npos ||
+                              result.err.find("mlockall not permitted (ENOMEM") != std::string::npos ||
+                              result.err.find("mlockall not permitted (EAGAIN") != std::string::npos);
+  if (not_permitted) GTEST_SKIP() << "not permitted here: " << result.err;
   ASSERT_EQ(result.exit_status, 0) << result.err;
   const auto document = read_json(path);
   expect_delay_json(document, 10, 1);
@@ -552,7 +568,7 @@ TEST(DelayCommand, HistogramFileReadsBackAsCyclictestsFormat) {
 // cyclictest's own file too (when cyclictest is here and may run).
 TEST(CyclictestHistogram, TheReaderReadsCyclictestsOwnFile) {
   if (::access("/usr/bin/cyclictest", X_OK) != 0) GTEST_SKIP() << "cyclictest is not installed";
-  lockstep::testing::watchdog guard(std::chrono::seconds(60), "cyclictest -h");
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "cyclictest -h");
   const std::string histogram = temp_json("cyclictest-histogram");
   const auto result = run_command({"/usr/bin/cyclictest", "-q", "-t", "2", "-i", "1000", "-l", "50", "-h", "30",
                                    "--histfile=" + histogram});
@@ -624,15 +640,14 @@ TEST(DelayCommand, FindPeriodRecordsTheSearch) {
   for (const char* key : {"budget_cut", "stopped_because", "elapsed_s", "rule", "confidence"})
     EXPECT_TRUE(search.contains(key)) << key;
   // Whether stalls, not the step, set the answer: said in the JSON and, only
-  // then, in one line of the output.
+  // then, in one line of the output (the rule's known answers at its edge are
+  // delay_output_test's SetByStalls).
   ASSERT_TRUE(search["set_by_stalls"].is_boolean());
   double largest_p99 = 0;
   for (const auto& trial : search["trials"]) largest_p99 = std::max(largest_p99, trial["completion_p99_ns"].get<double>());
   EXPECT_DOUBLE_EQ(search["largest_completion_p99_ns"].get<double>(), largest_p99);
-  const bool set_by_stalls = search["found_period_ns"].is_number() && largest_p99 > 0 &&
-                             search["found_period_ns"].get<double>() > 10.0 * largest_p99;
-  EXPECT_EQ(search["set_by_stalls"].get<bool>(), set_by_stalls);
-  EXPECT_EQ(result.out.find("set by stalls: ") != std::string::npos, set_by_stalls) << result.out;
+  EXPECT_EQ(result.out.find("set by stalls: ") != std::string::npos, search["set_by_stalls"].get<bool>())
+      << result.out;
   if (search["found_period_ns"].is_number()) {
     ASSERT_TRUE(search["confirm"].is_object());
     EXPECT_EQ(search["confirm"]["period_ns"], search["found_period_ns"]);
@@ -673,7 +688,7 @@ TEST(VsCyclictestScript, BadInputExitsTwoWithOneLine) {
 TEST(VsCyclictestScript, PrintsBothDistributions) {
   if (::access("/usr/bin/cyclictest", X_OK) != 0) GTEST_SKIP() << "cyclictest is not installed";
   if (::geteuid() != 0) GTEST_SKIP() << "SCHED_FIFO and mlock need root here";
-  lockstep::testing::watchdog guard(std::chrono::seconds(120), "vs_cyclictest.sh");
+  lockstep::testing::watchdog guard(std::chrono::seconds(120 * lockstep::testing::kSlowdown), "vs_cyclictest.sh");
   const auto result = run_command({kScript, "--lockstep", LOCKSTEP_BINARY, "--duration-s", "1", "--cpu", "0",
                                    "--period-us", "2000", "--rounds", "2"});
   ASSERT_EQ(result.exit_status, 0) << result.err;

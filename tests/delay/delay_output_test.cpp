@@ -1,18 +1,21 @@
 // delay's histograms, noisiest CPU and idle-state hold, without running a
 // paced step: the cyclictest text format read back by a reader written from
 // cyclictest's documentation, the logarithmic terminal view, the noisiest-CPU
-// rule, and the PM QoS hold on files that stand in for /dev/cpu_dma_latency.
+// rule, the search's set-by-stalls rule at its edge, and the PM QoS hold on
+// files that stand in for /dev/cpu_dma_latency.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "bench/harness/delay_output.hpp"
+#include "bench/harness/delay_report.hpp"
 #include "bench/probes/latency_histogram.hpp"
 #include "platform/idle_states.hpp"
 #include "tests/delay/cyclictest_histogram_parser.hpp"
@@ -122,6 +125,36 @@ TEST(NoisiestCpu, HighestP99ThenHighestMaxThenLowestCpu) {
   EXPECT_EQ(lockstep::bench::noisiest_cpu({{0, 10, 50}, {1, 20, 30}, {2, 15, 900}}), 1u);
   EXPECT_EQ(lockstep::bench::noisiest_cpu({{0, 20, 50}, {1, 20, 60}}), 1u);
   EXPECT_EQ(lockstep::bench::noisiest_cpu({{3, 20, 60}, {1, 20, 60}}), 1u);
+}
+
+// The search's answer was set by the machine's stalls when it is more than
+// kStallDominatedFactor (10) times the largest completion p99 of its trials:
+// at exactly 10 times it was not, one nanosecond above it was; no answer, or
+// no p99 to compare with, is never set by stalls.
+lockstep::bench::search_reading search_reading_of(std::vector<double> trial_p99_ns,
+                                                  std::optional<std::int64_t> found_period_ns) {
+  probes::delay_measurement measured;
+  measured.searched.emplace();
+  for (double p99 : trial_p99_ns) {
+    probes::period_trial trial;
+    trial.outcome.completion_p99_ns = p99;
+    measured.searched->search.trials.push_back(trial);
+  }
+  measured.searched->search.found_period_ns = found_period_ns;
+  const auto analysis = lockstep::bench::analyse_delay(measured);
+  EXPECT_TRUE(analysis.search.has_value());
+  return analysis.search.value_or(lockstep::bench::search_reading{});
+}
+
+TEST(SetByStalls, OnlyAnAnswerAboveTenTimesTheLargestTrialP99) {
+  EXPECT_EQ(lockstep::bench::kStallDominatedFactor, 10.0) << "the known answers below are for a factor of 10";
+  const auto at_edge = search_reading_of({100'000, 150'000, 120'000}, 1'500'000);
+  EXPECT_EQ(at_edge.largest_completion_p99_ns, 150'000.0) << "the largest p99 of every trial, not the last";
+  EXPECT_FALSE(at_edge.set_by_stalls) << "exactly 10 times is not above it";
+  EXPECT_TRUE(search_reading_of({100'000, 150'000, 120'000}, 1'500'001).set_by_stalls);
+  EXPECT_FALSE(search_reading_of({100'000, 150'000, 120'000}, 1'499'999).set_by_stalls);
+  EXPECT_FALSE(search_reading_of({100'000, 150'000}, std::nullopt).set_by_stalls) << "no answer";
+  EXPECT_FALSE(search_reading_of({0, 0}, 1'000'000).set_by_stalls) << "no p99 to compare with";
 }
 
 std::string scratch_file(const std::string& name) {

@@ -2,14 +2,17 @@
 // whom, applicability, the bounded run's agreed stop, the sync-time
 // instrumentation, and constructor arguments reaching the primitive.
 #include <atomic>
+#include <barrier>
 #include <chrono>
 #include <cstdint>
 #include <string>
+#include <string_view>
+#include <thread>
 #include <vector>
 
 #include "sync/registry.hpp"
-#include "sync/win_event_faithful.hpp"
 #include "tests/matrix/matrix_cases.hpp"
+#include "tests/support/faulty_primitives.hpp"
 
 namespace lockstep::testing::matrix {
 namespace {
@@ -149,35 +152,125 @@ TEST(SyncTiming, OffReadsNoClockAndReportsZero) {
   EXPECT_EQ(step.sync_time().nanoseconds, 0U);
 }
 
-// Extra constructor arguments reach the primitive: win_event_faithful with a
-// short timeout (a lost wake-up then costs 50 ms, not the paper's second).
-// Under ThreadSanitizer it is skipped, by the trait that keeps such primitives
-// out of every TSan run (sync/registry.hpp, checked_by_tsan): after a lost
-// wake-up the timeout lets a waiter read before the writer is done, the
-// paper's race, real and intended (CI once caught it here).
-TEST(SyncArguments, ReachThePrimitive) {
-#if defined(__SANITIZE_THREAD__)
-  if (!sync::checked_by_tsan(sync::info_of<sync::win_event_faithful>()))
-    GTEST_SKIP() << "win_event_faithful may lose wake-ups: its race is intended, not for TSan";
-#endif
-  const watchdog guard(std::chrono::milliseconds(60'000 * kSlowdown));
-  const kernels::two_mass_model model;
-  kernels::parallel_rk4<sync::win_event_faithful, layouts::padded64> step(model, kStepSize, 4, model.initial_state(),
-                                                                          std::chrono::milliseconds(50));
-  kernels::run_team(step, 30);
-  kernels::staged_rk4<kernels::two_mass_model> serial(model, kStepSize);
-  serial.run(30);
-  EXPECT_EQ(first_difference(step.state(), serial.state()), "");
+// What a primitive's constructor received, and on which thread each
+// participant arrived first: written by the primitive, read after the team
+// joined.
+struct construction_record {
+  unsigned participants = 0;
+  std::size_t width = 0;  // channels: doubles per stage
+  std::chrono::milliseconds timeout{0};
+  std::vector<std::thread::id> arrived_on;  // barriers: per participant
+};
+
+// Where a primitive built without a record writes (never read).
+construction_record& unread() {
+  static construction_record nobody_reads;
+  return nobody_reads;
 }
 
-// The pin hook runs on each participant's own thread before its first step.
+// std::barrier, recording its constructor's arguments (the participants, then
+// what the step was given after the initial state) and its participants'
+// threads.
+class recording_barrier {
+ public:
+  static constexpr std::string_view kName = "recording_barrier";
+  static constexpr std::string_view kDescription = "test-only: std::barrier that records its construction";
+  static constexpr sync::primitive_kind kKind = sync::primitive_kind::barrier;
+  static constexpr bool kPureSpin = false;
+  static constexpr bool kMayLoseWakeups = false;
+  static constexpr bool kCountsFutexWaits = false;
+  static constexpr bool kSpinsLong = false;
+  static constexpr bool kVisibleToTsan = true;
+
+  // (The defaults make it a phase_barrier: constructible from the count.)
+  explicit recording_barrier(unsigned participants, std::chrono::milliseconds timeout = {},
+                             construction_record* record = &unread())
+      : barrier_(static_cast<std::ptrdiff_t>(participants)), record_(record) {
+    record_->participants = participants;
+    record_->timeout = timeout;
+    record_->arrived_on.assign(participants, std::thread::id{});
+  }
+
+  void arrive_and_wait(sync::participant& self) {
+    // Each participant writes only its own entry; the team's join orders it
+    // before the test reads it.
+    if (record_->arrived_on[self.id] == std::thread::id{}) record_->arrived_on[self.id] = std::this_thread::get_id();
+    barrier_.arrive_and_wait();
+  }
+
+ private:
+  std::barrier<> barrier_;
+  construction_record* record_;
+};
+
+// The fault-free test channel (tests/support/faulty_primitives.hpp), recording
+// its constructor's arguments (the graph and width, then what the step was
+// given after the initial state).
+class recording_channel : public faulty::stage_channel<faulty::channel_fault::none> {
+ public:
+  static constexpr std::string_view kName = "recording_channel";
+
+  // (The defaults make it a graph_channel: constructible from the graph and width.)
+  recording_channel(const sync::dependency_graph& graph, std::size_t width, std::chrono::milliseconds timeout = {},
+                    construction_record* record = &unread())
+      : stage_channel(graph, width) {
+    record->participants = graph.participants();
+    record->width = width;
+    record->timeout = timeout;
+  }
+};
+
+// Extra constructor arguments (here a timeout and a record) reach the
+// primitive, after the participant count for a barrier and after the graph
+// and width for a channel; the step still runs bitwise serial on it.
+TEST(SyncArguments, ReachThePrimitive) {
+  const watchdog guard(std::chrono::milliseconds(60'000 * kSlowdown));
+  const kernels::two_mass_model model;
+  kernels::staged_rk4<kernels::two_mass_model> serial(model, kStepSize);
+  serial.run(30);
+
+  construction_record barrier_record;
+  kernels::parallel_rk4<recording_barrier, layouts::padded64> on_barrier(
+      model, kStepSize, 4, model.initial_state(), std::chrono::milliseconds(50), &barrier_record);
+  EXPECT_EQ(barrier_record.participants, 4U);
+  EXPECT_EQ(barrier_record.timeout, std::chrono::milliseconds(50));
+  kernels::run_team(on_barrier, 30);
+  EXPECT_EQ(first_difference(on_barrier.state(), serial.state()), "");
+
+  construction_record channel_record;
+  kernels::parallel_rk4<recording_channel, layouts::per_thread> on_channel(
+      model, kStepSize, 2, model.initial_state(), std::chrono::milliseconds(70), &channel_record);
+  EXPECT_EQ(channel_record.participants, 2U);
+  EXPECT_EQ(channel_record.width, 2U) << "two threads on four equations: blocks of two";
+  EXPECT_EQ(channel_record.timeout, std::chrono::milliseconds(70));
+  kernels::run_team(on_channel, 30);
+  EXPECT_EQ(first_difference(on_channel.state(), serial.state()), "");
+}
+
+// The hook runs once per participant, on the thread that then runs that
+// participant's steps (the one its first arrival comes from), one thread each.
 TEST(RunTeam, CallsTheHookOncePerParticipantOnItsThread) {
   const watchdog guard(std::chrono::milliseconds(30'000 * kSlowdown));
-  kernels::parallel_rk4<sync::std_barrier, layouts::per_thread> step(kernels::two_mass_model{}, kStepSize, 4);
-  std::atomic<unsigned> calls{0};
-  kernels::run_team(step, 5, [&](unsigned /*participant*/) { calls.fetch_add(1, std::memory_order_relaxed); });
-  EXPECT_EQ(calls.load(), 4U);
+  construction_record record;
+  kernels::parallel_rk4<recording_barrier, layouts::per_thread> step(
+      kernels::two_mass_model{}, kStepSize, 4, kernels::two_mass_model{}.initial_state(), std::chrono::milliseconds(0),
+      &record);
+  struct hook_call {
+    unsigned calls = 0;
+    std::thread::id thread;
+  };
+  std::vector<hook_call> hooked(4);  // each participant writes its own entry; read after the join
+  kernels::run_team(step, 5, [&](unsigned participant) {
+    ++hooked[participant].calls;
+    hooked[participant].thread = std::this_thread::get_id();
+  });
   EXPECT_EQ(step.steps_taken(), 5U);
+  for (unsigned participant = 0; participant < 4; ++participant) {
+    EXPECT_EQ(hooked[participant].calls, 1U) << "participant " << participant;
+    EXPECT_EQ(hooked[participant].thread, record.arrived_on[participant]) << "participant " << participant;
+    for (unsigned other = 0; other < participant; ++other)
+      EXPECT_NE(hooked[participant].thread, hooked[other].thread) << participant << " and " << other;
+  }
 }
 
 }  // namespace
