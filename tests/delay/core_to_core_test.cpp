@@ -51,7 +51,7 @@ TEST(CoreToCore, RejectsBadRequests) {
 }
 
 TEST(CoreToCore, ReportsACpuItCannotUse) {
-  lockstep::testing::watchdog guard(std::chrono::seconds(30), "c2c with an offline CPU");
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "c2c with an offline CPU");
   pair_request request;
   request.cpu_a = 0;
   request.cpu_b = CPU_SETSIZE - 1;  // never online on this machine

@@ -11,7 +11,6 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <functional>
@@ -130,11 +129,11 @@ void expect_bitwise_serial(const Model& model, unsigned threads, placement pin, 
       // The paper's ThreadWaiter synchronises only while it loses no wake-up
       // (see tests/sync/conformance.hpp): after a timeout a participant may
       // read a stage that is not complete, so the trajectory is no longer an
-      // oracle. The harness flags such entries the same way.
-      std::printf("[ lost wake-up ] %s x %s: %llu timeouts after %llu steps; bitwise check not applicable\n",
-                  std::string(Sync::kName).c_str(), std::string(Layout::kName).c_str(),
-                  static_cast<unsigned long long>(counters.timeouts), static_cast<unsigned long long>(done));
-      return;
+      // oracle. The harness flags such entries the same way; the test is
+      // reported as skipped, not passed.
+      GTEST_SKIP() << Sync::kName << " x " << Layout::kName << " lost wake-ups (" << counters.timeouts
+                   << " timeouts) in the segment ending after " << done
+                   << " steps: the bitwise check is not applicable after a lost wake-up";
     }
     const std::string difference = first_difference(parallel.state(), serial.state());
     ASSERT_TRUE(difference.empty()) << "after " << done << " steps the trajectory is not bitwise serial: "

@@ -11,7 +11,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -255,14 +257,32 @@ TEST(MpiCommand, AHostfileOnlyTheLauncherReadsStopsNoRank) {
 
 // A rank that stops (or dies) ends the job within the watchdog's bound, with
 // a message; never a hang (the CTest timeout is far behind).
+//
+// Rank 1 stalls at step 50 of the first exchange (p2p). The ranks that wait
+// for it block in MPI and beat no more either, so each rank whose watchdog
+// fires before mpirun ends the job reports the same place: every such line
+// must name a rank of the job and that exchange and step, and none may name
+// anywhere else (a watchdog that fired on a healthy rank before the stall, in
+// the start-up or the ping-pong, or at another step, fails here). Which of
+// them is the stalled one the lines cannot say: the watchdog's message
+// (distributed/watchdog.hpp) is the same for the rank that stalled and the
+// ranks that wait for it.
 TEST(MpiCommand, StalledRankEndsTheJobWithAMessage) {
   ::setenv("LOCKSTEP_MPI_FAULT", "stall:1:50", 1);
   const command_result result = run_command({LOCKSTEP_BINARY, "mpi", "--ranks", "4", "--steps", "200", "--rounds",
                                              "1", "--pingpong", "100", "--watchdog", "1s"});
   ::unsetenv("LOCKSTEP_MPI_FAULT");
   EXPECT_EQ(result.exit_status, 3) << result.err;
-  EXPECT_NE(result.err.find("made no progress for 1 s"), std::string::npos) << result.err;
   EXPECT_NE(result.err.find("the MPI job failed"), std::string::npos) << result.err;
+  const std::regex stalled_here(R"(^lockstep mpi: rank [0-3] on \S+ made no progress for 1 s \(in p2p, at 50\): )");
+  int stall_lines = 0;
+  std::istringstream lines(result.err);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.find("made no progress") == std::string::npos) continue;
+    ++stall_lines;
+    EXPECT_TRUE(std::regex_search(line, stalled_here)) << "a watchdog fired elsewhere than at the stall: " << line;
+  }
+  EXPECT_GE(stall_lines, 1) << result.err;
 }
 
 TEST(MpiCommand, KilledRankEndsTheJobWithAMessage) {

@@ -194,8 +194,21 @@ struct scenario {
   bool confine_to_one_cpu = false;
 };
 
-// Runs the scenario on primitive P and checks the invariant and what P
-// promises about its counters.
+// One line per run: what the primitive did (the conformance logs carry it).
+template <class Primitive>
+void print_counters(const scenario& setup, const phase_run_result& result, const sync_counters& total) {
+  std::printf("[ counters ] %s participants=%u phases=%llu%s futex_waits=%llu futex_wakes=%llu yields=%llu "
+              "spins_exhausted=%llu timeouts=%llu\n",
+              std::string(Primitive::kName).c_str(), setup.participants,
+              static_cast<unsigned long long>(result.phases), result.stopped_by_time ? " (time budget)" : "",
+              static_cast<unsigned long long>(total.futex_waits), static_cast<unsigned long long>(total.futex_wakes),
+              static_cast<unsigned long long>(total.yields), static_cast<unsigned long long>(total.spins_exhausted),
+              static_cast<unsigned long long>(total.timeouts));
+}
+
+// Runs the scenario on primitive P and checks the invariant. A primitive
+// that may lose wake-ups and lost one (a timeout) is reported as skipped, with
+// the reason: after the loss the invariant is no oracle.
 template <class Primitive>
 void run_conformance(const scenario& setup) {
   using barrier_type = as_barrier_t<Primitive>;
@@ -256,31 +269,24 @@ void run_conformance(const scenario& setup) {
   } else {
     EXPECT_EQ(result.phases, phases);
   }
-  if (!Primitive::kMayLoseWakeups) {
-    EXPECT_EQ(total.timeouts, 0u) << "a primitive that cannot lose a wake-up timed out";
-    EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
-  } else if (total.timeouts == 0) {
-    // The paper's ThreadWaiter is a correct barrier for as long as it loses
-    // no wake-up.
-    EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
-  } else if (invariant.violations() != 0) {
-    // ...and not after: a lost wake-up makes the waiters time out together,
-    // while the releaser, already waiting in the next phase, started its own
-    // timeout earlier; if it expires before the latecomers arrive, it leaves
-    // that phase early and the shared counter stays off by one from then on.
-    // That is the paper's design (win_event_faithful.hpp), reproduced on
-    // purpose: record it, do not call it a bug of the emulation.
-    std::printf("[ lost wake-up ] %s: %llu timeouts, then %llu phase-invariant violations (%s)\n",
-                std::string(Primitive::kName).c_str(), static_cast<unsigned long long>(total.timeouts),
-                static_cast<unsigned long long>(invariant.violations()), invariant.first_violation().c_str());
+  print_counters<Primitive>(setup, result, total);
+  // A primitive that cannot lose a wake-up never leaves a phase early, however
+  // long a phase lasts (win_event counts a wait that outlasts its timeout and
+  // waits again), so its timeouts are no fault: the invariant is the check.
+  if (Primitive::kMayLoseWakeups && total.timeouts > 0) {
+    // The paper's ThreadWaiter is a correct barrier only while it loses no
+    // wake-up: a lost one makes the waiters time out together, while the
+    // releaser, already waiting in the next phase, started its own timeout
+    // earlier; if it expires before the latecomers arrive, it leaves that
+    // phase early and the shared counter stays off by one from then on
+    // (win_event_faithful.hpp, reproduced on purpose). After a timeout the
+    // invariant is no oracle: the run is reported as skipped, not passed.
+    GTEST_SKIP() << Primitive::kName << " lost wake-ups (" << total.timeouts << " timeouts, then "
+                 << invariant.violations() << " phase-invariant violations"
+                 << (invariant.violations() ? ": " + invariant.first_violation() : std::string())
+                 << "): the invariant checks nothing after a lost wake-up";
   }
-  std::printf("[ counters ] %s participants=%u phases=%llu%s futex_waits=%llu futex_wakes=%llu yields=%llu "
-              "spins_exhausted=%llu timeouts=%llu\n",
-              std::string(Primitive::kName).c_str(), setup.participants,
-              static_cast<unsigned long long>(result.phases), result.stopped_by_time ? " (time budget)" : "",
-              static_cast<unsigned long long>(total.futex_waits), static_cast<unsigned long long>(total.futex_wakes),
-              static_cast<unsigned long long>(total.yields), static_cast<unsigned long long>(total.spins_exhausted),
-              static_cast<unsigned long long>(total.timeouts));
+  EXPECT_EQ(invariant.violations(), 0u) << invariant.first_violation();
 }
 
 }  // namespace lockstep::sync::testing

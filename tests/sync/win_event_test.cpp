@@ -20,6 +20,7 @@
 #include "sync/win_event.hpp"
 #include "sync/win_event_faithful.hpp"
 #include "tests/support/watchdog.hpp"
+#include "tests/sync/conformance.hpp"
 
 namespace lockstep::sync {
 namespace {
@@ -146,14 +147,34 @@ struct forced_interleaving {
   }
 };
 
-// After the forced phase, both keep going: the barrier still works.
+// After the forced phase, both keep going for 200 phases under the phase
+// invariant of the conformance suite: whether the barrier still orders them,
+// and how many of their waits timed out meanwhile.
+struct later_phases {
+  std::uint64_t violations = 0;
+  std::string first_violation;
+  std::uint64_t timeouts = 0;  // during these phases only
+};
+
 template <class Barrier>
-std::uint64_t more_phases(Barrier& barrier, forced_interleaving<Barrier>& forced) {
-  std::jthread first([&] {
-    for (int phase = 0; phase < 200; ++phase) barrier.arrive_and_wait(forced.parked);
-  });
-  for (int phase = 0; phase < 200; ++phase) barrier.arrive_and_wait(forced.last);
-  return 200;
+later_phases more_phases(Barrier& barrier, forced_interleaving<Barrier>& forced) {
+  constexpr std::uint64_t kPhases = 200;
+  const std::uint64_t timeouts_before = forced.parked.counters.timeouts + forced.last.counters.timeouts;
+  testing::phase_invariant invariant(2);
+  {
+    std::jthread first([&] {
+      for (std::uint64_t phase = 0; phase < kPhases; ++phase) {
+        invariant.before_arrival(forced.parked, phase);
+        barrier.arrive_and_wait(forced.parked);
+      }
+    });
+    for (std::uint64_t phase = 0; phase < kPhases; ++phase) {
+      invariant.before_arrival(forced.last, phase);
+      barrier.arrive_and_wait(forced.last);
+    }
+  }  // joined: the counters and the invariant are read after
+  return {invariant.violations(), invariant.first_violation(),
+          forced.parked.counters.timeouts + forced.last.counters.timeouts - timeouts_before};
 }
 
 TEST(WinEventFaithful, LosesTheWakeUpOfALateWaiterAndCountsTheTimeout) {
@@ -165,7 +186,15 @@ TEST(WinEventFaithful, LosesTheWakeUpOfALateWaiterAndCountsTheTimeout) {
   EXPECT_GE(forced.parked_wait, 50ms) << "it waited for the whole timeout";
   EXPECT_EQ(forced.last.counters.timeouts, 0u);
   EXPECT_EQ(forced.last.counters.futex_wakes, 1u) << "the last arriver set the event once";
-  more_phases(barrier, forced);  // the counter is intact after the loss
+  // The loss left the counter intact (the phase was over when the wait timed
+  // out): the barrier orders the next phases. Checkable only while it loses
+  // no further wake-up, which with this primitive is up to the scheduler (a
+  // wait that times out leaves its phase early: the paper's design).
+  const later_phases after = more_phases(barrier, forced);
+  if (after.timeouts > 0)
+    GTEST_SKIP() << "a later phase lost a wake-up too (" << after.timeouts
+                 << " timeouts): whether the counter stayed intact cannot be told";
+  EXPECT_EQ(after.violations, 0u) << "the counter is off after the loss: " << after.first_violation;
 }
 
 TEST(WinEvent, TheSameInterleavingLosesNothing) {
@@ -176,8 +205,11 @@ TEST(WinEvent, TheSameInterleavingLosesNothing) {
   EXPECT_EQ(forced.parked.counters.timeouts, 0u) << "the late waiter found its phase's event still set";
   EXPECT_EQ(forced.parked.counters.futex_waits, 0u) << "it did not even need to sleep";
   EXPECT_EQ(forced.last.counters.timeouts, 0u);
-  more_phases(barrier, forced);
-  EXPECT_EQ(forced.parked.counters.timeouts + forced.last.counters.timeouts, 0u);
+  // And the barrier goes on ordering its phases. (A later wait may still time
+  // out if a phase outlasts the 2 s on a stalled machine: win_event then
+  // waits again and never leaves early, so the invariant holds regardless.)
+  const later_phases after = more_phases(barrier, forced);
+  EXPECT_EQ(after.violations, 0u) << after.first_violation;
 }
 
 // Participant 1 is late to wait in every fifth phase: win_event_faithful loses
@@ -200,7 +232,8 @@ TEST(WinEventFaithful, ARunThatLosesWakeUpsStillEndsEveryParticipant) {
   const phase_run_result result =
       run_phases(barrier, kParticipants, {400, std::chrono::hours(1)}, [](participant&, std::uint64_t) {});
   EXPECT_EQ(result.phases, 400u);
-  EXPECT_GT(result.total().timeouts, 0u) << "the late waiter lost no wake-up: the scenario did not happen";
+  if (result.total().timeouts == 0)
+    GTEST_SKIP() << "the late waiter lost no wake-up: the scenario this test is about did not happen";
 }
 
 }  // namespace
