@@ -1,7 +1,9 @@
 // The pace trace's modes and the paired ratios' statistics (bench/harness:
 // pace.hpp, paired_ratio.hpp) on synthetic traces and ratios whose answers are
-// known: a trace with one switch of pace, a flat trace, a single outlier; a
-// ratio set clearly above the noise band, one inside it, one clearly below.
+// known: a trace with one switch of pace, a flat trace, a single outlier, the
+// shares of an unevenly spaced trace, the mode gap and the smallest mode at
+// their edges; a ratio set clearly above the noise band, one inside it, one
+// clearly below.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -28,6 +30,14 @@ std::vector<bench::pace_reading> trace_of(const std::vector<double>& c2c) {
 }
 
 std::vector<double> repeated(double value, std::size_t count) { return std::vector<double>(count, value); }
+
+// Readings every 10 ms with exactly these c2c values.
+std::vector<bench::pace_reading> trace_of_exactly(const std::vector<double>& c2c) {
+  std::vector<bench::pace_reading> trace;
+  for (std::size_t index = 0; index < c2c.size(); ++index)
+    trace.push_back({0.01 * static_cast<double>(index), c2c[index], 10.0 * c2c[index]});
+  return trace;
+}
 
 std::vector<double> joined(std::vector<double> a, const std::vector<double>& b) {
   a.insert(a.end(), b.begin(), b.end());
@@ -91,6 +101,93 @@ TEST(PaceModes, AnEmptyTraceHasNoModes) {
   const bench::pace_modes modes = bench::find_modes({});
   EXPECT_TRUE(modes.modes.empty());
   EXPECT_EQ(bench::agreed_mode(modes, 0, 1), -1);
+}
+
+// Readings at the given times (seconds) with the given c2c values exactly
+// (no wobble: the known answers below sit on the rules' edges).
+std::vector<bench::pace_reading> trace_at(const std::vector<double>& t_s, const std::vector<double>& c2c) {
+  std::vector<bench::pace_reading> trace;
+  for (std::size_t index = 0; index < t_s.size(); ++index) trace.push_back({t_s[index], c2c[index], 10.0 * c2c[index]});
+  return trace;
+}
+
+std::vector<double> times_from(double start, double every, std::size_t count) {
+  std::vector<double> times;
+  for (std::size_t index = 0; index < count; ++index) times.push_back(start + every * static_cast<double>(index));
+  return times;
+}
+
+// A mode's share is of the trace's time, not of its readings: each reading
+// stands for the span to the next one, the last for the median span. Ten fast
+// readings 10 ms apart (from 0 to 90 ms; the tenth's span runs to 100 ms),
+// then ten slow ones 100 ms apart (100 ms to 1 s): the spans are ten of 10 ms
+// and nine of 100 ms, whose median (10 ms) the last reading stands for. So
+// the fast mode held 100 ms and the slow one 910 ms of 1010: shares of 10/101
+// and 91/101, where counting readings would say half and half.
+TEST(PaceModes, SharesAreOfTimeOnAnUnevenlySpacedTrace) {
+  const auto trace = trace_at(joined(times_from(0.0, 0.01, 10), times_from(0.1, 0.1, 10)),
+                              joined(repeated(25.0, 10), repeated(100.0, 10)));
+  const bench::pace_modes modes = bench::find_modes(trace);
+  ASSERT_EQ(modes.modes.size(), 2u);
+  EXPECT_EQ(modes.modes[0].readings, 10u);
+  EXPECT_EQ(modes.modes[1].readings, 10u);
+  EXPECT_NEAR(modes.modes[0].share, 10.0 / 101.0, 1e-12);
+  EXPECT_NEAR(modes.modes[1].share, 91.0 / 101.0, 1e-12);
+  EXPECT_EQ(modes.changes, 1u);
+}
+
+// An outlier's span goes to the mode of the nearest earlier reading that has
+// one; spans before the first moded reading go to no mode. Outliers at 0 s
+// (before any mode) and at 0.3 s (span 0.5 s, inside the fast mode); the fast
+// mode's readings at 0.1, 0.2 and 0.8 s, the slow mode's at 0.9, 1.0 and 1.1 s
+// (the last stands for the median span, 0.1 s). The fast mode holds 0.1 + 0.1
+// + 0.5 (the outlier's) + 0.1 = 0.8 s, the slow one 0.3 s; moving the first
+// outlier back to -0.9 s (its span 1 s) changes nothing.
+TEST(PaceModes, AnOutliersSpanGoesToTheModeBeforeIt) {
+  const auto trace = trace_at({0.0, 1.0 / 10, 2.0 / 10, 3.0 / 10, 8.0 / 10, 9.0 / 10, 10.0 / 10, 11.0 / 10},
+                              {900.0, 25.0, 25.0, 400.0, 25.0, 100.0, 100.0, 100.0});
+  auto earlier = trace;
+  earlier[0].t_s = -0.9;
+  for (const auto& one : {trace, earlier}) {
+    const bench::pace_modes modes = bench::find_modes(one);
+    ASSERT_EQ(modes.modes.size(), 2u);
+    EXPECT_EQ(modes.mode_of[0], -1);
+    EXPECT_EQ(modes.mode_of[3], -1);
+    EXPECT_NEAR(modes.modes[0].share, 0.8 / 1.1, 1e-12);
+    EXPECT_NEAR(modes.modes[1].share, 0.3 / 1.1, 1e-12);
+    EXPECT_EQ(modes.changes, 1u);
+  }
+}
+
+// Two sorted neighbours more than kModeGap (1.5x) apart start a new mode; at
+// exactly 1.5x they stay together. Neighbours, not the mode's ends: 20, 30
+// and 45 ns (each 1.5x the one before) are one mode although 45 is 2.25x 20.
+TEST(PaceModes, TheModeGapIsMoreThanOnePointFiveTimesTheNeighbour) {
+  ASSERT_EQ(bench::kModeGap, 1.5) << "the known answers below are for a gap of 1.5";
+  const auto at_gap = bench::find_modes(trace_of_exactly(joined(repeated(20.0, 3), repeated(30.0, 3))));
+  EXPECT_EQ(at_gap.modes.size(), 1u) << "30 is exactly 1.5 x 20";
+  const auto beyond = bench::find_modes(trace_of_exactly(joined(repeated(20.0, 3), repeated(30.000001, 3))));
+  ASSERT_EQ(beyond.modes.size(), 2u) << "30.000001 is more than 1.5 x 20";
+  EXPECT_EQ(beyond.modes[0].c2c_ns, 20.0);
+  EXPECT_EQ(beyond.modes[1].c2c_ns, 30.000001);
+  const auto chained =
+      bench::find_modes(trace_of_exactly(joined(joined(repeated(20.0, 3), repeated(30.0, 3)), repeated(45.0, 3))));
+  ASSERT_EQ(chained.modes.size(), 1u);
+  EXPECT_EQ(chained.modes[0].readings, 9u);
+  EXPECT_EQ(chained.modes[0].c2c_ns, 30.0) << "the median of the mode's readings";
+}
+
+// A cluster needs kMinModeReadings (3) readings to be a mode: two are
+// outliers, and their time goes to the mode before them.
+TEST(PaceModes, ThreeReadingsMakeAModeAndTwoDoNot) {
+  ASSERT_EQ(bench::kMinModeReadings, 3u);
+  const auto two = bench::find_modes(trace_of_exactly(joined(repeated(20.0, 4), repeated(100.0, 2))));
+  ASSERT_EQ(two.modes.size(), 1u);
+  EXPECT_EQ(two.mode_of[4], -1);
+  EXPECT_DOUBLE_EQ(two.modes[0].share, 1.0);
+  const auto three = bench::find_modes(trace_of_exactly(joined(repeated(20.0, 4), repeated(100.0, 3))));
+  ASSERT_EQ(three.modes.size(), 2u);
+  EXPECT_EQ(three.mode_of[4], 1);
 }
 
 TEST(PairedRatio, AClearPenaltyIsCalledAPenalty) {

@@ -4,7 +4,9 @@
 // its comparison with a failure; the time budget cuts a comparison only after
 // its first kMinPairs pairs. Block runners here are stand-ins that return a
 // fixed time per unit and log the order in which blocks ran: no timing is
-// asserted.
+// asserted. And which comparisons a run plans (plan_comparisons: false sharing
+// and migration) and which pace mode each repetition and pair is given
+// (assign_pace_modes), on hand-made run books with known answers.
 #include <gtest/gtest.h>
 
 #include <cstddef>
@@ -14,7 +16,9 @@
 #include <string>
 #include <vector>
 
+#include "bench/harness/pace.hpp"
 #include "bench/harness/paired_blocks.hpp"
+#include "bench/harness/reporters.hpp"
 #include "bench/harness/run_book.hpp"
 #include "bench/harness/team_driver.hpp"
 
@@ -143,6 +147,147 @@ TEST(PairedRounds, AComparisonWithoutRunnersSaysSo) {
   bench::measure_pairs(run.harness, run.plan, settings, {});
   ASSERT_EQ(run.book.pairs.size(), 1u);
   EXPECT_FALSE(run.book.pairs[0].failure.empty());
+}
+
+// ---- Which comparisons are planned (plan_comparisons), on hand-made books --
+
+// An rk4 entry whose repetitions read these step times (and, for an unpinned
+// entry, this many migrations per thousand steps).
+bench::captured_entry step_entry(const std::string& name, const std::vector<double>& ns_per_step,
+                                 double migrations_per_kstep = 0.0) {
+  bench::captured_entry entry;
+  entry.name = name;
+  entry.fields = bench::parse_entry_name(name);
+  for (const double value : ns_per_step)
+    entry.repetitions.push_back({{"ns_per_step", value}, {"migrations_per_kstep", migrations_per_kstep}});
+  return entry;
+}
+
+std::string step_name(const std::string& sync, const std::string& layout, const std::string& pin, unsigned threads) {
+  return "rk4/sync:" + sync + "/layout:" + layout + "/pin:" + pin + "/threads:" + std::to_string(threads);
+}
+
+std::vector<bench::comparison> planned(const bench::run_book& book, bench::comparison_kind kind) {
+  std::vector<bench::comparison> found;
+  for (const bench::comparison& what : bench::plan_comparisons(book))
+    if (what.kind == kind) found.push_back(what);
+  return found;
+}
+
+// False sharing, per (sync, pin, threads): the layout whose writers share
+// lines (packed) against the fastest layout that isolates them (padded64 or
+// padded128, by the layout registry's writer_isolation), never against
+// per_thread however fast (its writers share nothing, but it copies: another
+// comparison). The medians decide, not the first repetition.
+TEST(PlanComparisons, FalseSharingSetsPackedAgainstTheFastestPaddedLayout) {
+  bench::run_book book;
+  book.record(step_entry(step_name("futex_spin", "packed", "compact", 2), {100, 101, 99}));
+  book.record(step_entry(step_name("futex_spin", "padded64", "compact", 2), {60, 90, 91}));  // median 90
+  book.record(step_entry(step_name("futex_spin", "padded128", "compact", 2), {85, 80, 86}));  // median 85
+  book.record(step_entry(step_name("futex_spin", "per_thread", "compact", 2), {10, 10, 10}));
+  // Another placement is another group; without a padded layout, no comparison.
+  book.record(step_entry(step_name("futex_spin", "packed", "none", 2), {100}));
+  book.record(step_entry(step_name("futex_spin", "per_thread", "none", 2), {50}));
+  const auto plan = planned(book, bench::comparison_kind::false_sharing);
+  ASSERT_EQ(plan.size(), 1u);
+  EXPECT_EQ(plan[0].group, "sync:futex_spin pin:compact threads:2");
+  EXPECT_EQ(plan[0].a, step_name("futex_spin", "packed", "compact", 2));
+  EXPECT_EQ(plan[0].b, step_name("futex_spin", "padded128", "compact", 2));
+}
+
+// A side that erred or collapsed is no side: the next fastest padded layout
+// stands in, and without any the comparison is not planned.
+TEST(PlanComparisons, FalseSharingLeavesOutEntriesThatErredOrCollapsed) {
+  bench::run_book book;
+  book.record(step_entry(step_name("mailbox", "packed", "compact", 4), {100}));
+  auto erred = step_entry(step_name("mailbox", "padded128", "compact", 4), {70});
+  erred.error = "stalled";
+  book.record(erred);
+  book.record(step_entry(step_name("mailbox", "padded64", "compact", 4), {80}));
+  EXPECT_EQ(planned(book, bench::comparison_kind::false_sharing).at(0).b,
+            step_name("mailbox", "padded64", "compact", 4));
+  book.collapsed.insert(step_name("mailbox", "padded64", "compact", 4));
+  EXPECT_TRUE(planned(book, bench::comparison_kind::false_sharing).empty());
+}
+
+// Migration, per (sync, threads): pin:none against pin:compact on the layout
+// whose pinned entry is fastest among those whose unpinned entry migrated
+// (migrations_per_kstep above 0: exactly 0 prices nothing).
+TEST(PlanComparisons, MigrationIsOnTheBestPinnedLayoutThatMigrated) {
+  bench::run_book book;
+  // packed is the fastest pinned, but its unpinned entry never migrated.
+  book.record(step_entry(step_name("std_barrier", "packed", "compact", 2), {50}));
+  book.record(step_entry(step_name("std_barrier", "packed", "none", 2), {55}, 0.0));
+  book.record(step_entry(step_name("std_barrier", "padded64", "compact", 2), {60}));
+  book.record(step_entry(step_name("std_barrier", "padded64", "none", 2), {90}, 0.001));
+  book.record(step_entry(step_name("std_barrier", "padded128", "compact", 2), {70}));
+  book.record(step_entry(step_name("std_barrier", "padded128", "none", 2), {95}, 4.0));
+  // A layout measured pinned only is not a side.
+  book.record(step_entry(step_name("std_barrier", "per_thread", "compact", 2), {40}));
+  const auto plan = planned(book, bench::comparison_kind::migration);
+  ASSERT_EQ(plan.size(), 1u);
+  EXPECT_EQ(plan[0].group, "sync:std_barrier threads:2 layout:padded64");
+  EXPECT_EQ(plan[0].a, step_name("std_barrier", "padded64", "none", 2));
+  EXPECT_EQ(plan[0].b, step_name("std_barrier", "padded64", "compact", 2));
+}
+
+TEST(PlanComparisons, NoMigrationWhereNoUnpinnedEntryMigrated) {
+  bench::run_book book;
+  book.record(step_entry(step_name("std_barrier", "packed", "compact", 4), {50}));
+  book.record(step_entry(step_name("std_barrier", "packed", "none", 4), {55}, 0.0));
+  auto uncounted = step_entry(step_name("std_barrier", "padded64", "none", 4), {90});
+  for (auto& repetition : uncounted.repetitions) repetition.erase("migrations_per_kstep");  // not counted
+  book.record(uncounted);
+  book.record(step_entry(step_name("std_barrier", "padded64", "compact", 4), {60}));
+  EXPECT_TRUE(planned(book, bench::comparison_kind::migration).empty());
+}
+
+// ---- The pace modes given to repetitions and pairs (assign_pace_modes) ------
+
+// Modes by reading: 0 0 0 1 1 1 -1 (an outlier) 0.
+bench::pace_modes six_readings_and_an_outlier() {
+  bench::pace_modes modes;
+  modes.modes.resize(2);
+  modes.mode_of = {0, 0, 0, 1, 1, 1, -1, 0};
+  return modes;
+}
+
+TEST(AssignPaceModes, ARepetitionGetsTheModeItsReadingsAgreeOnAndLosesTheIndices) {
+  bench::run_book book;
+  auto entry = step_entry(step_name("mailbox", "per_thread", "compact", 2), {10, 11, 12, 13, 14});
+  const std::string before(bench::kPaceBeforeCounter);
+  const std::string after(bench::kPaceAfterCounter);
+  entry.repetitions[0].insert({{before, 0}, {after, 2}});  // both in mode 0
+  entry.repetitions[1].insert({{before, 3}, {after, 5}});  // both in mode 1
+  entry.repetitions[2].insert({{before, 2}, {after, 3}});  // straddles the change
+  entry.repetitions[3].insert({{before, 5}, {after, 6}});  // ends on an outlier
+  // repetitions[4]: no readings (a run without a pace probe): left alone.
+  book.record(entry);
+  bench::assign_pace_modes(book, six_readings_and_an_outlier());
+  const auto& repetitions = book.entries().front().repetitions;
+  const std::vector<double> expected{0, 1, -1, -1};
+  for (std::size_t index = 0; index < expected.size(); ++index) {
+    ASSERT_EQ(repetitions[index].count("pace_mode"), 1u) << index;
+    EXPECT_EQ(repetitions[index].at("pace_mode"), expected[index]) << index;
+    EXPECT_EQ(repetitions[index].count(before) + repetitions[index].count(after), 0u) << index;
+  }
+  EXPECT_EQ(repetitions[4].count("pace_mode"), 0u);
+  ASSERT_TRUE(book.pace.has_value());
+  EXPECT_EQ(book.pace->mode_of, six_readings_and_an_outlier().mode_of);
+}
+
+TEST(AssignPaceModes, EachPairGetsTheModeOfItsTwoReadings) {
+  bench::run_book book;
+  bench::paired_result pair;
+  pair.ratios = {1.0, 1.1, 1.2, 1.3};
+  // Pair 0 in mode 0, pair 1 across the change, pair 2 in mode 1, pair 3
+  // after the last reading the trace knows (-1), and a reading pair with no
+  // ratio (a failed last pair) adds no mode.
+  pair.readings = {0, 1, 2, 3, 4, 5, 7, 9, 0, 0};
+  pair.modes = {7, 7, 7, 7, 7};  // stale: replaced
+  book.pairs.push_back(pair);
+  bench::assign_pace_modes(book, six_readings_and_an_outlier());
+  EXPECT_EQ(book.pairs[0].modes, (std::vector<int>{0, -1, 1, -1}));
 }
 
 }  // namespace
