@@ -339,6 +339,9 @@ void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pa
                      {"ci_low", pair.estimate.low},
                      {"ci_high", pair.estimate.high},
                      {"confidence", kConfidence},
+                     // what recomputes the interval from the ratios (platform/statistics.hpp's draw rule)
+                     {"resamples", kBootstrapResamples},
+                     {"seed", kBootstrapSeed},
                      {"noise", book.noise},
                      {"verdict", to_string(pair.verdict)},
                      {"block_ms", pair.block_ms},
