@@ -57,7 +57,8 @@ class watchdog {
   std::thread thread_;  // last: starts after the members it reads
 };
 
-// Sanitizer builds run several times slower; deadlines scale with this.
+// Sanitizer builds run several times slower; deadlines scale with this (and
+// CTest's timeouts by the same factor, tests/CMakeLists.txt).
 inline constexpr int kSlowdown =
 #if defined(__SANITIZE_THREAD__) || defined(__SANITIZE_ADDRESS__)
     10;
