@@ -47,7 +47,7 @@ from .fields import (BACK_TO_BACK_ORDER, C2C_CONTEXT, C2C_COUNTER, COUNTERS_SHOW
                      PER_UNIT_TIMES_SCHEMA, SERIAL_CONTEXT, SYNC_COUNTER, UNAVAILABLE, VS_C2C_COUNTER,
                      VS_SERIAL_COUNTER)
 from .formatting import format_ns, format_number
-from .inputs import RunFile
+from .inputs import Run, RunFile
 from .names import BenchmarkKey, parse_name
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
@@ -189,9 +189,11 @@ class Comparison:
 
     def regressions_beyond(self, percent: float) -> list[Row]:
         """Combinations that are "slower" beyond the pace (whole interval above the noise band; pace-aware
-        where both files carry the pace) with a ratio above 1 + percent/100. Calibrations never count."""
-        limit = 1.0 + percent / 100.0
-        return [row for row in self.rows if self.beyond_pace(row) == "slower" and row.beyond_pace_ratio() > limit]
+        where both files carry the pace) with a ratio above the band of half-width percent/100
+        (statistics.beyond_noise). Calibrations never count."""
+        band = percent / 100.0
+        return [row for row in self.rows if self.beyond_pace(row) == "slower"
+                and row.beyond_pace_ratio() > 1.0 and statistics.beyond_noise(row.beyond_pace_ratio(), band)]
 
     def calibration_moves(self) -> list[tuple[str, str, float | None, float | None, float | None]]:
         """(name, unit, A, B, change B/A - 1 in percent) of the context's in-run calibrations (the entries'
@@ -213,12 +215,8 @@ class Comparison:
                     pairs.setdefault(key.without("accounting"), set()).add(key)
         for base in sorted(pairs, key=BenchmarkKey.sort_key):
             on, off = base.replaced("accounting", "on"), base.replaced("accounting", "off")
-            ratios = []
-            for run_file in (self.baseline, self.contender):
-                time_on = run_median(run_file, on, self.time_kind)
-                time_off = run_median(run_file, off, self.time_kind)
-                ratios.append(time_on / time_off if (time_on and time_off) else None)
-            result.append((base, ratios[0], ratios[1]))
+            result.append((base, median_ratio(self.baseline, on, off, self.time_kind),
+                           median_ratio(self.contender, on, off, self.time_kind)))
         return result
 
 
@@ -466,6 +464,31 @@ def run_median(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     return statistics.median(times) if times else None
 
 
+def median_ratio(run_file: RunFile, numerator: BenchmarkKey, denominator: BenchmarkKey, time_kind: str = "real",
+                 collapsed=frozenset()) -> float | None:
+    """median(numerator) / median(denominator) of one file's entries (run_median): the one ratio of two medians
+    every table and figure shows. None when either entry is missing, errored, has a zero median or is in
+    `collapsed`."""
+    if numerator in collapsed or denominator in collapsed:
+        return None
+    top, bottom = run_median(run_file, numerator, time_kind), run_median(run_file, denominator, time_kind)
+    return top / bottom if (top and bottom) else None
+
+
+def per_mode_medians(run: Run) -> tuple[dict[int, tuple[float, int]], float | None, int]:
+    """An entry's repetitions split by the pace mode they ran in (real time): {mode: (median, repetitions)},
+    the slowest mode's median over the fastest's (the trace lists its modes fastest first: the highest mode's
+    over the lowest's; None with fewer than two modes), and how many repetitions straddled a change of mode."""
+    paced = [(r.pace.mode, r.real_ns) for r in run.repetitions if r.pace is not None and r.pace.mode is not None]
+    by_mode: dict[int, list[float]] = {}
+    for mode, value in paced:
+        if mode >= 0:
+            by_mode.setdefault(mode, []).append(value)
+    medians = {mode: (statistics.median(values), len(values)) for mode, values in by_mode.items()}
+    spread = medians[max(medians)][0] / medians[min(medians)][0] if len(medians) >= 2 else None
+    return medians, spread, sum(1 for mode, _ in paced if mode < 0)
+
+
 def calibration(run_file: RunFile, context_key: str) -> float | None:
     """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry
     (for c2c, of its one_way_ns counter when it has one: its iteration time includes thread start-up)."""
@@ -537,13 +560,8 @@ def layout_effects(run_files: list[RunFile], reference: str = "packed", time_kin
         if layout is None or layout == reference:
             continue
         reference_key = key.replaced("layout", reference)
-        speedups = []
-        for run_file in run_files:
-            if key in run_file.collapsed or reference_key in run_file.collapsed:
-                speedups.append(None)
-                continue
-            this, base = run_median(run_file, key, time_kind), run_median(run_file, reference_key, time_kind)
-            speedups.append(base / this if (this and base) else None)
+        speedups = [median_ratio(run_file, reference_key, key, time_kind, run_file.collapsed)
+                    for run_file in run_files]
         if any(s is not None for s in speedups):
             rows.append((key.get("sync"), key.get("pin"), key.get("threads"), layout, speedups))
     return rows
@@ -625,7 +643,7 @@ def calibration_move_line(comparison: Comparison, letter: str) -> str:
     parts, moves = [], []
     for name, unit, before, after, move in comparison.calibration_moves():
         if move is not None:
-            moves.append((name, move))
+            moves.append((name, after / before))
             digits = 2 if max(before, after) < 100 and name.startswith("serial") else 1
             parts.append(f"{name} {before:.{digits}f} -> {after:.{digits}f} {unit} ({_percent(move)})")
         else:
@@ -633,8 +651,7 @@ def calibration_move_line(comparison: Comparison, letter: str) -> str:
     line = (f"calibrations moved, {letter} against A (in-run medians from each file's context, else from its "
             f"calibration entries; the comparisons below are not rescaled by them): " + ", ".join(parts))
     noise = comparison.noise_percent
-    limit = 1.0 + noise / 100.0
-    beyond = [name for name, move in moves if not (1.0 / limit <= 1.0 + move / 100.0 <= limit)]
+    beyond = [name for name, ratio in moves if statistics.beyond_noise(ratio, noise / 100.0)]
     if not moves:
         return line + ": the machine's movement between the runs is unknown."
     if beyond:

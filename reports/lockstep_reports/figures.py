@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
 from . import paper, statistics  # noqa: E402
-from .compare import run_median, sample  # noqa: E402
+from .compare import median_ratio, run_median, sample  # noqa: E402
 from .formatting import format_ns  # noqa: E402
 from .names import BenchmarkKey  # noqa: E402
 
@@ -290,25 +290,23 @@ def penalty_rows(run_file, collapsed=frozenset()) -> list[PenaltyRow]:
     threads_list = sorted({threads for _, threads in groups})
     rows = []
 
-    def median_of(sync, layout, pin, threads):
-        key = _rk4_key(run_file, sync, layout, pin, threads)
-        return None if key in collapsed else run_median(run_file, key)
+    def ratio_of(sync, threads, numerator, denominator):
+        """median_ratio of two entries (layout, pin) of one primitive and thread count."""
+        return median_ratio(run_file, _rk4_key(run_file, sync, *numerator, threads),
+                            _rk4_key(run_file, sync, *denominator, threads), collapsed=collapsed)
 
     for sync in syncs:
         for threads in threads_list:
             if padded and "packed" in layouts:
-                packed_time = median_of(sync, "packed", "compact", threads)
-                padded_time = median_of(sync, padded, "compact", threads)
-                if packed_time and padded_time:
-                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads,
-                                           packed_time / padded_time, pin="compact"))
+                ratio = ratio_of(sync, threads, ("packed", "compact"), (padded, "compact"))
+                if ratio is not None:
+                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads, ratio, pin="compact"))
             base_layout = padded or (layouts[0] if layouts else None)
             for moved in ("migrate", "none"):
-                compact = median_of(sync, base_layout, "compact", threads)
-                other = median_of(sync, base_layout, moved, threads)
-                if compact and other:
+                ratio = ratio_of(sync, threads, (base_layout, moved), (base_layout, "compact"))
+                if ratio is not None:
                     rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
-                                           other / compact, pin=moved))
+                                           ratio, pin=moved))
     return rows
 
 

@@ -255,15 +255,12 @@ class PacePair:
 
     def inverse(self) -> "PacePair":
         """The same comparison read the other way round, b / a: each ratio and the median inverted, the
-        interval [1 / ci_high, 1 / ci_low], penalty and gain swapped (within noise and unsure stay). The
-        verdict is mirrored, not recomputed, as lockstep run mirrors it (bench/harness/paired_ratio.hpp,
-        inverse): the band is symmetric on a log scale, and rounding at its edge cannot make the two
-        directions of one comparison disagree."""
-        mirrored = {statistics.PENALTY: statistics.GAIN, statistics.GAIN: statistics.PENALTY}
+        interval [1 / ci_high, 1 / ci_low], the verdict mirrored by statistics.inverse_verdict (penalty and
+        gain swapped; within noise and unsure stay), not recomputed."""
         return PacePair(self.comparison, self.group, self.b, self.a, self.b_key, self.a_key,
                         tuple(1.0 / ratio for ratio in self.ratios), self.modes, 1.0 / self.median,
                         1.0 / self.ci_high, 1.0 / self.ci_low, self.confidence, self.noise,
-                        mirrored.get(self.verdict, self.verdict), self.block_ms, not self.inverted)
+                        statistics.inverse_verdict(self.verdict), self.block_ms, not self.inverted)
 
 
 def _best_other_group(pair: PacePair) -> tuple:

@@ -23,7 +23,7 @@ import jinja2
 import markupsafe
 
 from . import figures, paper, statistics
-from .compare import calibration, fingerprint, layout_effects, rank_tables, run_median
+from .compare import calibration, fingerprint, layout_effects, per_mode_medians, rank_tables, run_median
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER, SERIAL_CONTEXT,
                      UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
@@ -501,23 +501,16 @@ def per_mode_rows(run_file: RunFile) -> tuple[list[list[str]], int]:
         run = run_file.runs[key]
         if run.errored:
             continue
-        paced = [(r.pace.mode, r.real_ns) for r in run.repetitions if r.pace is not None and r.pace.mode is not None]
-        if any(mode < 0 for mode, _ in paced):
+        medians, spread, straddles = per_mode_medians(run)
+        if straddles:
             straddling += 1
-        by_mode: dict[int, list[float]] = {}
-        for mode, value in paced:
-            if mode >= 0:
-                by_mode.setdefault(mode, []).append(value)
-        if len(by_mode) < 2:
+        if spread is None:
             continue
-        medians = {mode: statistics.median(values) for mode, values in by_mode.items()}
         cells = [key.display]
         for mode in modes:
-            values = by_mode.get(mode.mode)
-            cells.append(f"{format_ns(medians[mode.mode])} ({len(values)})" if values else "")
-        fastest, slowest = medians[min(medians)], medians[max(medians)]
-        straddles = sum(1 for mode, _ in paced if mode < 0)
-        cells += [format_number(slowest / fastest, 2, "x"), str(straddles) if straddles else ""]
+            median, count = medians.get(mode.mode, (None, 0))
+            cells.append(f"{format_ns(median)} ({count})" if count else "")
+        cells += [format_number(spread, 2, "x"), str(straddles) if straddles else ""]
         rows.append(cells)
     return rows, straddling
 

@@ -185,6 +185,21 @@ def verdict(low: float, high: float, noise: float) -> str:
     return UNSURE
 
 
+def beyond_noise(ratio: float, noise: float) -> bool:
+    """Whether a single ratio, with no interval, lies outside the noise band [1 / (1 + noise), 1 + noise] (an
+    end on an edge counting as inside, as in verdict; a NaN is not inside). The verdict of the interval
+    [ratio, ratio]: penalty or gain."""
+    return verdict(ratio, ratio, noise) != WITHIN_NOISE
+
+
+def inverse_verdict(word: str) -> str:
+    """The verdict of a ratio read the other way round (1 / ratio, its interval [1 / high, 1 / low]): penalty
+    and gain swapped, within noise and unsure (and any other word) unchanged. Mirrored, not recomputed, as
+    lockstep run mirrors it (bench/harness/paired_ratio.hpp, inverse): the band is symmetric on a log scale, and
+    rounding at its edge cannot make the two directions of one comparison disagree."""
+    return {PENALTY: GAIN, GAIN: PENALTY}.get(word, word)
+
+
 def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     """Percentile bootstrap interval of median(b)/median(a); None with fewer than 2 values a side.
     Each side is sorted first, so the interval does not depend on the order of the repetitions in a file. The

@@ -83,6 +83,51 @@ class Golden(unittest.TestCase):
                                  words[case["verdict"]])
         self.assertEqual(compare.verdict_of(None, 5.0), "untested")
 
+    # One ratio with no interval against the band [1 / (1 + noise), 1 + noise], an end on an edge inside
+    # (statistics.beyond_noise): each edge, and the doubles either side of it, written out as the golden file
+    # writes its verdict cases.
+    SINGLE_RATIOS = [
+        # (name, ratio, noise, beyond)
+        ("one", 1.0, 0.05, False),
+        ("on the upper edge", 1.05, 0.05, False),
+        ("one double below the upper edge", 1.0499999999999998, 0.05, False),
+        ("one double above the upper edge", 1.0500000000000003, 0.05, True),
+        ("on the lower edge", 0.9523809523809523, 0.05, False),
+        ("one double above the lower edge", 0.9523809523809524, 0.05, False),
+        ("one double below the lower edge", 0.9523809523809522, 0.05, True),
+        ("on the upper edge of 1 %", 1.01, 0.01, False),
+        ("one double below the upper edge of 1 %", 1.0099999999999998, 0.01, False),
+        ("one double above the upper edge of 1 %", 1.0100000000000002, 0.01, True),
+        ("on the lower edge of 1 %", 0.9900990099009901, 0.01, False),
+        ("one double above the lower edge of 1 %", 0.9900990099009902, 0.01, False),
+        ("one double below the lower edge of 1 %", 0.99009900990099, 0.01, True),
+        ("far above", 2.0, 0.05, True),
+        ("far below", 0.5, 0.05, True),
+        ("not a number: not inside", math.nan, 0.05, True),
+    ]
+
+    def test_a_single_ratio_beyond_the_noise_band(self):
+        for noise in (0.05, 0.01):  # the cases hold each edge of each band and the doubles either side of it
+            ratios = {ratio for _, ratio, case_noise, _ in self.SINGLE_RATIOS if case_noise == noise}
+            for edge in (1.0 + noise, 1.0 / (1.0 + noise)):
+                self.assertLessEqual({edge, math.nextafter(edge, 0.0), math.nextafter(edge, 2.0)}, ratios)
+        for name, ratio, noise, beyond in self.SINGLE_RATIOS:
+            with self.subTest(name):
+                self.assertIs(statistics.beyond_noise(ratio, noise), beyond)
+                # The same band as an interval's verdict: [ratio, ratio] is penalty or gain exactly when beyond.
+                self.assertEqual(statistics.verdict(ratio, ratio, noise) in (statistics.PENALTY, statistics.GAIN),
+                                 beyond and not math.isnan(ratio))
+
+    def test_the_inverse_of_a_verdict(self):
+        self.assertEqual([statistics.inverse_verdict(word) for word in statistics.VERDICTS],
+                         [statistics.GAIN, statistics.PENALTY, statistics.WITHIN_NOISE, statistics.UNSURE])
+        # Away from the edges, the verdict of the interval read the other way round, [1 / high, 1 / low], is the
+        # inverse word (on an edge, 1 / x may round to either side: lockstep run mirrors the word instead).
+        for low, high in ((1.1, 1.3), (0.8, 0.9), (0.98, 1.03), (1.02, 1.12), (0.9, 0.97), (0.9, 1.2)):
+            with self.subTest(low=low, high=high):
+                self.assertEqual(statistics.inverse_verdict(statistics.verdict(low, high, 0.05)),
+                                 statistics.verdict(1.0 / high, 1.0 / low, 0.05))
+
 
 class Statistics(unittest.TestCase):
     def test_quantiles_agree_with_numpy_on_random_values(self):
