@@ -232,7 +232,7 @@ def bars_with_spread(run_file, pin: str, threads: int, collapsed=frozenset()) ->
             if not times:
                 continue
             x = row + (column - (len(layouts) - 1) / 2) * width
-            center = statistics.median(times)
+            center = run_median(run_file, key)  # the median every table shows (compare.run_median)
             low, high = statistics.quantile(times, 0.25), statistics.quantile(times, 0.75)
             drawn += list(times)
             axes.bar(x, center, width * 0.9, color=colors(column), label=layout if not any(
