@@ -24,12 +24,6 @@
 
 namespace lockstep::bench {
 
-namespace {
-
-
-
-
-}  // namespace
 
 std::map<std::string, std::string> parse_entry_name(const std::string& name) {
   std::map<std::string, std::string> fields;
