@@ -48,6 +48,7 @@ from .fields import (BACK_TO_BACK_ORDER, C2C_CONTEXT, C2C_COUNTER, COUNTERS_SHOW
                      VS_SERIAL_COUNTER)
 from .formatting import format_ns, format_number
 from .inputs import Run, RunFile
+from .mpi_context import mpi_difference_lines
 from .names import BenchmarkKey, parse_name
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
@@ -964,6 +965,7 @@ def render_summary(run_files: list[RunFile], comparisons: list[Comparison], cont
     machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
     out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")
     out += differing_context_lines(all_files)
+    out += mpi_difference_lines(all_files)
     if context_files:
         out.append("fingerprint only (not benchmark results): " +
                    ", ".join(f"{f.label} (lockstep {f.kind})" for f in context_files))
