@@ -43,7 +43,21 @@ Besides, for comparing two runs:
   the entries called different, which fits hundreds of related tests; Holm's
   family-wise control multiplies 5 against 5's smallest p, 0.008, past 0.05
   as soon as there are 7 tests, so it could never call anything in a matrix.
-- Geometric mean of the ratios over matched pairs only.
+- Geometric mean of the ratios over matched pairs only; with an interval (geometric_mean_interval): the
+  percentile bootstrap of the mean log ratio over the entries (bootstrap_indices from a seed per group), so
+  the entry-to-entry spread, drift included, is in it. The drift common to every entry of a run is what the
+  noise band stands for.
+- An entry's interval from the whole file pair's evidence (pooled_interval): the log ratio of the medians
+  with a t interval whose variance is (1) the entry's own variance of log times, moderated towards the
+  file pair's typical variance (Smyth 2004, limma's empirical Bayes: prior_variance fits a scaled inverse
+  chi-square prior to every entry's variance, so an entry of 3 repetitions a side borrows the degrees of
+  freedom of hundreds), over the repetitions, plus (2) the drift between the runs, calibrated from the file
+  pair (calibrated_drift: the variance the entries' log ratios spread by around their median beyond what
+  their own variances explain, robustly: the median of the standardised squares set to chi-square(1)'s).
+  Repetitions inside a run cannot see the drift; (2) puts it back, so an A/A pair stays specific.
+- The smallest detectable change of an interval (detectable_change): the band edge times the interval's
+  half-width, (1 + noise) exp(log(high / low) / 2) - 1: no shift smaller than that could have put an
+  interval this wide wholly beyond the band.
 """
 from __future__ import annotations
 
@@ -307,3 +321,122 @@ def geometric_mean(ratios) -> float | None:
     if not values:
         return None
     return float(math.exp(sum(math.log(r) for r in values) / len(values)))
+
+
+# The pooled interval (pooled_interval) needs the variances of this many entries to fit its prior; with
+# fewer, compare keeps each entry's exact interval.
+MIN_POOLED_ENTRIES = 10
+
+
+def _trigamma_inverse(value: float) -> float:
+    """y with trigamma(y) = value (limma's Newton iteration, from y = 0.5 + 1 / value)."""
+    from scipy import special
+
+    y = 0.5 + 1.0 / value
+    for _ in range(50):
+        trigamma = float(special.polygamma(1, y))
+        step = trigamma * (1.0 - trigamma / value) / float(special.polygamma(2, y))
+        y += step
+        if -step / y < 1e-8:
+            break
+    return y
+
+
+def prior_variance(variances, degrees) -> tuple[float, float] | None:
+    """(s0^2, d0): the scaled inverse chi-square prior of a family of variances, each with its degrees of
+    freedom (limma's fitFDist, by moments of log s^2); d0 is infinite when the variances spread no more than
+    their sampling does. Only positive variances with degrees >= 1 count; None with fewer than
+    MIN_POOLED_ENTRIES of them."""
+    from scipy import special
+
+    pairs = [(float(v), float(d)) for v, d in zip(variances, degrees) if v is not None and v > 0 and d >= 1]
+    if len(pairs) < MIN_POOLED_ENTRIES:
+        return None
+    logs = np.array([math.log(v) for v, _ in pairs])
+    halves = np.array([d / 2.0 for _, d in pairs])
+    centred = logs - special.digamma(halves) + np.log(halves)
+    mean = float(centred.mean())
+    excess = float(((centred - mean) ** 2).sum() / (len(pairs) - 1) - special.polygamma(1, halves).mean())
+    if excess <= 0:
+        return math.exp(mean), math.inf
+    d0 = 2.0 * _trigamma_inverse(excess)
+    return math.exp(mean + float(special.digamma(d0 / 2.0)) - math.log(d0 / 2.0)), d0
+
+
+def moderated_variance(variance: float | None, degrees: float, prior: tuple[float, float]) -> tuple[float, float]:
+    """(posterior variance, its degrees of freedom): the entry's variance shrunk towards the prior,
+    (d0 s0^2 + d s^2) / (d0 + d) with d0 + d degrees; no variance of its own (d = 0): the prior's."""
+    s0, d0 = prior
+    own = variance if (variance is not None and degrees >= 1) else 0.0
+    degrees = degrees if variance is not None else 0.0
+    if math.isinf(d0):
+        return s0, math.inf
+    return (d0 * s0 + degrees * own) / (d0 + degrees), d0 + degrees
+
+
+def calibrated_drift(log_ratios, variances) -> float:
+    """The drift's standard deviation (log scale) between two runs, from every entry's log ratio and its
+    sampling variance: the tau >= 0 for which the median of (x - median x)^2 / (variance + tau^2) is
+    chi-square(1)'s median, 0 when the variances alone explain the spread. Robust: a minority of entries that
+    really changed moves the median little."""
+    from scipy import optimize, stats
+
+    values = np.asarray(log_ratios, dtype=float)
+    spreads = np.asarray(variances, dtype=float)
+    if len(values) < MIN_POOLED_ENTRIES:
+        return 0.0
+    squares = (values - np.median(values)) ** 2
+    target = float(stats.chi2.ppf(0.5, 1))
+
+    def excess(tau):
+        return float(np.median(squares / (spreads + tau * tau))) - target
+
+    if excess(0.0) <= 0:
+        return 0.0
+    high = 1.0
+    while excess(high) > 0:
+        high *= 2.0
+    return float(optimize.brentq(excess, 0.0, high, xtol=1e-9))
+
+
+def pooled_interval(log_ratio: float, variance: float, degrees: float, drift: float,
+                    confidence: float = CONFIDENCE) -> tuple[float, float]:
+    """exp(log_ratio -+ t sqrt(variance + drift^2)), t the two-sided quantile of Student's t with `degrees`
+    (the normal's when infinite): an entry's interval of B/A from its moderated sampling variance of the log
+    ratio and the calibrated drift."""
+    from scipy import stats
+
+    quantile = 0.5 + confidence / 2.0
+    t = float(stats.norm.ppf(quantile)) if math.isinf(degrees) else float(stats.t.ppf(quantile, degrees))
+    half = t * math.sqrt(variance + drift * drift)
+    return math.exp(log_ratio - half), math.exp(log_ratio + half)
+
+
+def geometric_mean_interval(ratios, seed: int, confidence: float = CONFIDENCE,
+                            resamples: int = BOOTSTRAP_RESAMPLES) -> tuple[float, float, float] | None:
+    """(geometric mean, low, high) of positive finite ratios: the percentile bootstrap interval of the mean log
+    ratio over resamples of the entries (bootstrap_indices from `seed`). One ratio: the interval is the ratio
+    itself (no spread to resample: the caller says so); none: None."""
+    logs = [math.log(r) for r in ratios if r is not None and math.isfinite(r) and r > 0]
+    if not logs:
+        return None
+    whole = math.exp(sum(logs) / len(logs))
+    if len(logs) < 2:
+        return whole, whole, whole
+    means = [sum(logs[i] for i in indices) / len(indices)
+             for indices in bootstrap_indices(len(logs), resamples, seed)]
+    low, high = percentile_interval(means, confidence)
+    return whole, math.exp(low), math.exp(high)
+
+
+def seed_of(name: str) -> int:
+    """The bootstrap seed of a named estimate: BASE_SEED + crc32 of the name (ratio_interval's rule)."""
+    return BASE_SEED + zlib.crc32(name.encode("utf-8"))
+
+
+def detectable_change(interval: tuple[float, float] | None, noise: float) -> float | None:
+    """The smallest change (a fraction: 0.23 is 23 %) an interval this wide could have shown beyond the noise
+    band of half-width `noise`: (1 + noise) sqrt(high / low) - 1. None without an interval."""
+    if interval is None or not (interval[0] > 0 and interval[1] >= interval[0]):
+        return None
+    return (1.0 + noise) * math.sqrt(interval[1] / interval[0]) - 1.0

@@ -5,6 +5,7 @@ import itertools
 import json
 import math
 import os
+import random
 import unittest
 
 import numpy as np
@@ -167,3 +168,51 @@ class Statistics(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class PooledEvidence(unittest.TestCase):
+    """The helpers behind compare's aggregate verdict and pooled intervals, on seeded data."""
+
+    def test_the_geometric_mean_interval_is_seeded_and_covers_a_known_shift(self):
+        noise = random.Random(7)
+        ratios = [1.15 * math.exp(noise.gauss(0.0, 0.05)) for _ in range(100)]
+        first = statistics.geometric_mean_interval(ratios, statistics.seed_of("all"))
+        self.assertEqual(first, statistics.geometric_mean_interval(ratios, statistics.seed_of("all")))
+        mean, low, high = first
+        self.assertAlmostEqual(mean, statistics.geometric_mean(ratios))
+        self.assertLess(low, 1.15)
+        self.assertGreater(high, 1.15)
+        self.assertEqual(statistics.verdict(low, high, 0.05), statistics.PENALTY)
+        same = [math.exp(noise.gauss(0.0, 0.05)) for _ in range(100)]
+        self.assertEqual(statistics.verdict(*statistics.geometric_mean_interval(same, 1)[1:], 0.05),
+                         statistics.WITHIN_NOISE)
+
+    def test_the_detectable_change_at_a_known_spread(self):
+        # An interval of half-width 10 % (log) at the 5 % band: 1.05 e^0.1 - 1.
+        self.assertAlmostEqual(statistics.detectable_change((math.exp(-0.1), math.exp(0.1)), 0.05),
+                               1.05 * math.exp(0.1) - 1.0)
+        self.assertIsNone(statistics.detectable_change(None, 0.05))
+        # A pooled interval with no drift: sampling variance s^2 (1/5 + 1/5), t with 8 degrees.
+        low, high = statistics.pooled_interval(0.0, 0.1 ** 2 * 0.4, 8, 0.0)
+        self.assertAlmostEqual(math.log(high), 2.306004 * 0.1 * 0.4 ** 0.5, places=5)
+        self.assertAlmostEqual(statistics.detectable_change((low, high), 0.05),
+                               1.05 * math.exp(2.306004 * 0.1 * 0.4 ** 0.5) - 1.0, places=5)
+
+    def test_the_drift_is_calibrated_from_the_spread_beyond_the_sampling(self):
+        noise = random.Random(11)
+        logs = [noise.gauss(0.0, (0.02 ** 2 + 0.04 ** 2) ** 0.5) for _ in range(400)]
+        self.assertAlmostEqual(statistics.calibrated_drift(logs, [0.02 ** 2] * 400), 0.04, delta=0.008)
+        self.assertEqual(statistics.calibrated_drift([0.0] * 400, [0.02 ** 2] * 400), 0.0)
+        self.assertEqual(statistics.calibrated_drift(logs[:5], [0.02 ** 2] * 5), 0.0)  # too few to calibrate
+
+    def test_the_prior_of_variances_and_the_moderated_variance(self):
+        noise = random.Random(3)
+        # 200 variances of 8 degrees each from one true variance 0.01: the prior finds it, and is strong.
+        variances = [0.01 * sum(noise.gauss(0.0, 1.0) ** 2 for _ in range(8)) / 8 for _ in range(200)]
+        s0, d0 = statistics.prior_variance(variances, [8] * 200)
+        self.assertAlmostEqual(s0, 0.01, delta=0.002)
+        self.assertGreater(d0, 30)
+        moderated, degrees = statistics.moderated_variance(0.04, 8, (0.01, 24.0))
+        self.assertAlmostEqual(moderated, (24 * 0.01 + 8 * 0.04) / 32)
+        self.assertEqual(degrees, 32)
+        self.assertIsNone(statistics.prior_variance(variances[:5], [8] * 5))
