@@ -24,10 +24,31 @@ by c2c within MODE_TOLERANCE, compare says whether the runs ran in the same
 modes, and every entry also gets a pace-aware verdict: the raw one where all
 its repetitions ran in one matching mode; else within the matching modes
 (only the repetitions of the best-filled pair of matching modes) when each
-side keeps MIN_REPETITIONS there; else on the pace-normalised figure, each
+side keeps MIN_IN_MODE there (MIN_REPETITIONS where the evidence is not
+pooled, below); else on the pace-normalised figure, each
 repetition's time divided by the c2c reading taken around it (pace_c2c_ns).
 The headline count of changed entries counts what changed beyond the pace:
 the pace-aware verdict where there is one, else the raw one.
+
+More evidence at the same run time, the drift kept in (statistics.py,
+pooled_interval): when at least statistics.MIN_POOLED_ENTRIES entries of the
+file pair have a pace-aware figure, their intervals are not each its own exact
+one. Each entry's variance of log time within its runs is moderated towards the
+whole file pair's (an entry borrows the degrees of freedom of hundreds, so 3
+repetitions a side in a matching mode are enough: MIN_IN_MODE), and the drift
+between the two runs, which repetitions inside one run cannot see, is
+calibrated from the spread of every entry's log ratio and added to each
+entry's variance. An entry whose interval reaches across the band says the
+smallest change it could have shown (statistics.detectable_change).
+
+The answer first: the geometric mean of B/A over the matched combinations
+(the beyond-the-pace ratio of each; calibrations and collapsed entries apart)
+with its bootstrap interval over the entries and a verdict, overall and per
+primitive, thread count and placement (Aggregate). A uniform change that no
+single entry can show is called there. Entries that either file's headline
+calls collapsed (they ran oversubscribed at 100 times the best of their kind
+or more, with one repetition) are "collapsed", never "untested", and stay out
+of the aggregates and --fail-above.
 
 Calibrations: `rk4/serial` (and a chain's `rk4/model:chainS/serial`), `mpi/pingpong/...`, `c2c/...`
 and the `overhead/...` pair measure the machine and the instrumentation, not a
@@ -40,6 +61,7 @@ time comparisons are never rescaled by it.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from . import statistics
@@ -66,7 +88,14 @@ NOISE_RATIONALE = (
 MODE_TOLERANCE = 1.5
 # How a pace-aware figure was made (PaceAware.method).
 PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_NORMALISED = "one mode", "matching modes", "pace-normalised"
-VERDICTS = ("slower", "faster", "unsure", "within noise", "untested")
+COLLAPSED = "collapsed"
+VERDICTS = ("slower", "faster", "unsure", "within noise", "untested", COLLAPSED)
+# Within matching modes needs this many repetitions a side: the median of 3 when the file pair's pooled variance
+# gives the interval its degrees of freedom (statistics.pooled_interval); each entry's own exact interval
+# (a pair of files with fewer than statistics.MIN_POOLED_ENTRIES entries to pool) needs MIN_REPETITIONS.
+MIN_IN_MODE = 3
+# An aggregate (Aggregate) of fewer entries has no interval: the bootstrap over entries needs some to resample.
+MIN_AGGREGATE_ENTRIES = 5
 
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")
@@ -99,6 +128,10 @@ class PaceAware:
     interval: tuple[float, float] | None
     repetitions_a: int
     repetitions_b: int
+    # The selected figures (times, or times / pace), kept for the file pair's pooling (pool_evidence).
+    values_a: tuple[float, ...] = ()
+    values_b: tuple[float, ...] = ()
+    pooled: bool = False  # the interval is statistics.pooled_interval's, not the entry's own exact one
 
 
 @dataclass
@@ -115,16 +148,19 @@ class Row:
     counters: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
     measure: str = "time"  # what median_a / median_b are: "time", or a counter's name
     pace: PaceAware | None = None  # None: a file without the pace trace, or a repetition without its pace
+    collapsed: bool = False  # either file's headline calls it collapsed: no verdict, no aggregate, no gate
 
     def significant(self, alpha: float) -> bool:
         return self.p_adjusted is not None and self.p_adjusted < alpha
 
     def verdict(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str:
-        """The raw verdict: this entry's interval against the noise band."""
-        return verdict_of(self.interval, noise_percent)
+        """The raw verdict: this entry's interval against the noise band; "collapsed" for a collapsed entry."""
+        return COLLAPSED if self.collapsed else verdict_of(self.interval, noise_percent)
 
     def pace_verdict(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str | None:
         """The pace-aware verdict, None where the pace is unavailable."""
+        if self.collapsed:
+            return COLLAPSED
         return verdict_of(self.pace.interval, noise_percent) if self.pace else None
 
     def beyond_pace(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> str:
@@ -133,6 +169,36 @@ class Row:
 
     def beyond_pace_ratio(self) -> float:
         return self.pace.ratio if self.pace else self.ratio
+
+    def beyond_pace_interval(self) -> tuple[float, float] | None:
+        return self.pace.interval if self.pace else self.interval
+
+    def detectable(self, noise_percent: float = DEFAULT_NOISE_PERCENT) -> float | None:
+        """The smallest change, in percent, this entry could have shown beyond the band (its beyond-the-pace
+        interval's width: statistics.detectable_change); None without an interval."""
+        change = statistics.detectable_change(self.beyond_pace_interval(), noise_percent / 100.0)
+        return None if change is None else change * 100.0
+
+
+@dataclass
+class Aggregate:
+    """The geometric mean of B/A over a group of matched combinations (their beyond-the-pace ratios), its
+    bootstrap interval over the entries and its verdict. group: "all", or a segment such as "threads:2"."""
+
+    group: str
+    entries: int
+    ratio: float
+    interval: tuple[float, float] | None
+    verdict: str
+
+    def detectable(self, noise_percent: float) -> float | None:
+        change = statistics.detectable_change(self.interval, noise_percent / 100.0)
+        return None if change is None else change * 100.0
+
+
+# The segments an aggregate groups by: per primitive, per thread count, per placement (an MPI file's
+# exchanges group by exchange).
+AGGREGATE_SEGMENTS = ("sync", "threads", "pin", "exchange")
 
 
 @dataclass
@@ -148,10 +214,46 @@ class Comparison:
     alpha: float
     noise_percent: float = DEFAULT_NOISE_PERCENT
     calibrations: list[Row] = field(default_factory=list)  # rk4/serial, c2c, overhead: their own family
+    # The file pair's pooling (pool_evidence): the drift's standard deviation of log time between the runs and
+    # how many entries' intervals are pooled; None: too few entries, each interval is the entry's own.
+    drift: float | None = None
+    pooled_entries: int = 0
+
+    @property
+    def combinations(self) -> list[Row]:
+        """The matched combinations the aggregates and the gate read: every row but the collapsed ones."""
+        return [row for row in self.rows if not row.collapsed]
 
     @property
     def geometric_mean(self) -> float | None:
-        return statistics.geometric_mean([row.ratio for row in self.rows])
+        return statistics.geometric_mean([row.beyond_pace_ratio() for row in self.combinations])
+
+    def aggregates(self) -> list[Aggregate]:
+        """The geometric mean of B/A with its interval and verdict: over every matched combination ("all"),
+        then per primitive, thread count and placement (AGGREGATE_SEGMENTS), each group in its name's order."""
+        groups: dict[str, list[Row]] = {"all": self.combinations}
+        for segment in AGGREGATE_SEGMENTS:
+            values = sorted({row.key.get(segment) for row in self.combinations if row.key.get(segment)},
+                            key=lambda value: (len(value), value) if segment == "threads" else (0, value))
+            for value in values:
+                groups[f"{segment}:{value}"] = [row for row in self.combinations if row.key.get(segment) == value]
+        result = []
+        for group, rows in groups.items():
+            ratios = [row.beyond_pace_ratio() for row in rows]
+            estimate = statistics.geometric_mean_interval(ratios, statistics.seed_of(group))
+            if estimate is None:
+                continue
+            interval = estimate[1:] if len(rows) >= MIN_AGGREGATE_ENTRIES else None
+            result.append(Aggregate(group, len(rows), estimate[0], interval,
+                                    verdict_of(interval, self.noise_percent)))
+        return result
+
+    def failed_groups(self, percent: float) -> list[Aggregate]:
+        """The aggregates --fail-above fails: slower (whole interval above the noise band) with a geometric
+        mean above the band of half-width percent/100 (statistics.beyond_noise)."""
+        band = percent / 100.0
+        return [aggregate for aggregate in self.aggregates() if aggregate.verdict == "slower"
+                and aggregate.ratio > 1.0 and statistics.beyond_noise(aggregate.ratio, band)]
 
     different_modes: bool | None = None  # None: a file has no pace trace
 
@@ -193,7 +295,7 @@ class Comparison:
         where both files carry the pace) with a ratio above the band of half-width percent/100
         (statistics.beyond_noise). Calibrations never count."""
         band = percent / 100.0
-        return [row for row in self.rows if self.beyond_pace(row) == "slower"
+        return [row for row in self.combinations if self.beyond_pace(row) == "slower"
                 and row.beyond_pace_ratio() > 1.0 and statistics.beyond_noise(row.beyond_pace_ratio(), band)]
 
     def calibration_moves(self) -> list[tuple[str, str, float | None, float | None, float | None]]:
@@ -310,8 +412,11 @@ def _paced_values(run, time_kind: str) -> list[tuple[float, object]] | None:
     return values or None
 
 
-def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, time_kind: str) -> PaceAware | None:
-    """The entry compared beyond the pace (see the module's text), or None where the pace is unavailable."""
+def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, time_kind: str,
+               min_in_mode: int = statistics.MIN_REPETITIONS) -> PaceAware | None:
+    """The entry compared beyond the pace (see the module's text), or None where the pace is unavailable.
+    Within matching modes when each side keeps `min_in_mode` repetitions there (MIN_IN_MODE when the file
+    pair's evidence is pooled)."""
     values_a, values_b = _paced_values(run_a, time_kind), _paced_values(run_b, time_kind)
     if values_a is None or values_b is None:
         return None
@@ -329,7 +434,7 @@ def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, tim
         best = max(matches, key=lambda pair: (min(len(in_mode(values_a, pair[0])), len(in_mode(values_b, pair[1]))),
                                               -pair[0], -pair[1]), default=None)
         filled = best and min(len(in_mode(values_a, best[0])), len(in_mode(values_b, best[1])))
-        if best and filled >= statistics.MIN_REPETITIONS:
+        if best and filled >= min_in_mode:
             times_a, times_b = in_mode(values_a, best[0]), in_mode(values_b, best[1])
             detail = (f"the repetitions in matching modes A {best[0]} / B {best[1]} (c2c "
                       f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / {_short(contender.pace.modes[best[1]].c2c_ns)} ns)")
@@ -345,7 +450,42 @@ def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, tim
             detail = f"time / pace_{reading} of each repetition"
             method = PACE_NORMALISED
     ratio = statistics.median(times_b) / statistics.median(times_a)
-    return PaceAware(method, detail, ratio, statistics.shift_interval(times_a, times_b), len(times_a), len(times_b))
+    return PaceAware(method, detail, ratio, statistics.shift_interval(times_a, times_b), len(times_a), len(times_b),
+                     tuple(times_a), tuple(times_b))
+
+
+def _log_variance(values_a, values_b) -> tuple[float | None, int]:
+    """The pooled variance of log values within the two sides, and its degrees of freedom (n_a + n_b - 2);
+    None with no degree of freedom."""
+    logs = [[math.log(value) for value in side] for side in (values_a, values_b)]
+    degrees = sum(len(side) for side in logs) - 2
+    if degrees < 1 or any(not side for side in logs):
+        return None, 0
+    squares = sum(sum((value - sum(side) / len(side)) ** 2 for value in side) for side in logs)
+    return squares / degrees, degrees
+
+
+def pool_evidence(rows: list[Row]) -> tuple[float | None, int]:
+    """Give every row's pace-aware figure the file pair's interval (statistics.pooled_interval): its variance of
+    log time moderated by the prior every row's variance fits, plus the drift calibrated from every row's log
+    ratio. Returns (the drift, the rows pooled); (None, 0) and the rows' own exact intervals left as they are
+    when fewer than statistics.MIN_POOLED_ENTRIES rows have a variance."""
+    paced = [row for row in rows if row.pace is not None and not row.collapsed and row.pace.values_a
+             and row.pace.values_b]
+    variances = [_log_variance(row.pace.values_a, row.pace.values_b) for row in paced]
+    prior = statistics.prior_variance([v for v, _ in variances], [d for _, d in variances])
+    if prior is None:
+        return None, 0
+    sampling = []
+    for row, (variance, degrees) in zip(paced, variances):
+        moderated, total = statistics.moderated_variance(variance, degrees, prior)
+        sampling.append((moderated * (1.0 / len(row.pace.values_a) + 1.0 / len(row.pace.values_b)), total))
+    logs = [math.log(row.pace.ratio) for row in paced]
+    drift = statistics.calibrated_drift(logs, [variance for variance, _ in sampling])
+    for row, log_ratio, (variance, degrees) in zip(paced, logs, sampling):
+        row.pace.interval = statistics.pooled_interval(log_ratio, variance, degrees, drift)
+        row.pace.pooled = True
+    return drift, len(paced)
 
 
 def _short(value: float | None) -> str:
@@ -358,6 +498,7 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
     rows, calibration_rows, errored, warnings = [], [], [], []
     _, different_modes = pace_note(baseline, contender, "B")
     matches = matching_modes(baseline, contender) if different_modes is not None else []
+    collapsed = baseline.collapsed | contender.collapsed
     untested = []
     for key in sorted(keys_a & keys_b, key=BenchmarkKey.sort_key):
         run_a, run_b = baseline.runs[key], contender.runs[key]
@@ -386,7 +527,7 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
         ratio = median_b / median_a  # inputs.py keeps every time within [SHORTEST_NS, LONGEST_NS]
         interval = statistics.shift_interval(times_a, times_b) if reps_a and reps_b else None
         p_raw = statistics.mann_whitney_p(times_a, times_b) if reps_a and reps_b else None
-        if interval is None and not calibrating:
+        if interval is None and not calibrating and key not in collapsed:
             untested.append(key)
         counters = {}
         for counter, _ in COUNTERS_SHOWN:
@@ -395,10 +536,17 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                 counters[counter] = (statistics.median(values_a) if values_a else None,
                                      statistics.median(values_b) if values_b else None)
         row = Row(key, median_a, median_b, len(times_a) if reps_a else 0, len(times_b) if reps_b else 0,
-                  ratio, interval, p_raw, counters=counters, measure=measure_a)
+                  ratio, interval, p_raw, counters=counters, measure=measure_a,
+                  collapsed=not calibrating and key in collapsed)
         if different_modes is not None and not calibrating and measure_a == "time":
-            row.pace = pace_aware(run_a, run_b, baseline, contender, matches, time_kind)
+            row.pace = pace_aware(run_a, run_b, baseline, contender, matches, time_kind, MIN_IN_MODE)
         (calibration_rows if calibrating else rows).append(row)
+    drift, pooled_entries = pool_evidence(rows)
+    if drift is None:  # too few entries to pool: each its own exact interval, within matching modes from 5
+        for row in rows:
+            if row.pace is not None:
+                run_a, run_b = baseline.runs[row.key], contender.runs[row.key]
+                row.pace = pace_aware(run_a, run_b, baseline, contender, matches, time_kind)
     # Two families, each adjusted on its own: the combinations, and the calibrations.
     for family in (rows, calibration_rows):
         for row, adjusted in zip(family, statistics.benjamini_hochberg([row.p_raw for row in family])):
@@ -442,7 +590,7 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                       removed=sorted(keys_a - keys_b, key=BenchmarkKey.sort_key),
                       errored=errored, warnings=warnings, time_kind=time_kind, alpha=alpha,
                       noise_percent=noise_percent, calibrations=calibration_rows,
-                      different_modes=different_modes)
+                      different_modes=different_modes, drift=drift, pooled_entries=pooled_entries)
 
 
 # ---------------------------------------------------------------- across machines
@@ -676,14 +824,93 @@ PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PA
 
 def _pace_cells(comparison: Comparison, row: Row) -> list[str]:
     if row.pace is None:
-        return [UNAVAILABLE, "-", "-", "-"]
+        return [UNAVAILABLE, "-", "-", "-", "-"]
     how = PACE_HOW[row.pace.method] if "serial" not in row.pace.detail else "/ pace serial"
-    return [how, f"{row.pace.ratio:.3f}", _interval(row.pace.interval), comparison.pace_verdict(row)]
+    return [how, f"{row.pace.ratio:.3f}", _interval(row.pace.interval), comparison.pace_verdict(row),
+            _plus_minus(row.detectable(comparison.noise_percent))]
 
 
 def _counts_text(counts: dict[str, int]) -> str:
     return (f"{counts['slower']} slower, {counts['faster']} faster, {counts['unsure']} unsure, "
-            f"{counts['within noise']} within noise, {counts['untested']} untested")
+            f"{counts['within noise']} within noise, {counts['untested']} untested"
+            + (f", {counts[COLLAPSED]} {COLLAPSED}" if counts.get(COLLAPSED) else ""))
+
+
+def _plus_minus(percent: float | None) -> str:
+    return "-" if percent is None else f"±{percent:.0f} %"
+
+
+def aggregate_line(comparison: Comparison, letter: str) -> str:
+    """The answer: the geometric mean of B/A over every matched combination, its interval and verdict, and
+    what it could not have seen when unsure. Printed the same way by the summary and --all."""
+    overall = next((a for a in comparison.aggregates() if a.group == "all"), None)
+    collapsed = len(comparison.rows) - len(comparison.combinations)
+    apart = "calibrations" + (f" and {collapsed} collapsed" if collapsed else "") + " apart"
+    head = (f"geometric mean of {letter}/A over the {len(comparison.combinations)} matched pairs (combinations "
+            f"only, {apart}")
+    if overall is None:
+        return head + f"): {UNAVAILABLE}"
+    return head + ("; beyond the pace" if comparison.paced else "") + "): " + aggregate_text(comparison, overall)
+
+
+def aggregate_text(comparison: Comparison, aggregate: Aggregate) -> str:
+    """"1.153, 95% interval [1.120, 1.184]: slower" (and, when unsure, the smallest change it could have
+    shown); the one way an aggregate is written."""
+    text = f"{aggregate.ratio:.3f}, 95% interval {_interval(aggregate.interval)}: {aggregate.verdict}"
+    if aggregate.interval is None:
+        return text + f" (fewer than {MIN_AGGREGATE_ENTRIES} entries)"
+    if aggregate.verdict == "unsure":
+        text += f" (could not have seen less than {_plus_minus(aggregate.detectable(comparison.noise_percent))})"
+    return text
+
+
+SHOWN_GROUPS = 5
+
+
+def group_lines(comparison: Comparison) -> list[str]:
+    """The groups whose geometric mean is slower or faster beyond the band (largest change first, at most
+    SHOWN_GROUPS each way, each as aggregate_text writes it), and how many groups are within noise or unsure."""
+    groups = [a for a in comparison.aggregates() if a.group != "all"]
+    if not groups:
+        return []
+    out = []
+    for verdict, largest in (("slower", True), ("faster", False)):
+        called = sorted((a for a in groups if a.verdict == verdict), key=lambda a: (a.ratio, a.group),
+                        reverse=largest)
+        out += [f"  {a.group} ({a.entries} entries): {aggregate_text(comparison, a)}" for a in called[:SHOWN_GROUPS]]
+        if len(called) > SHOWN_GROUPS:
+            out.append(f"  ... and {len(called) - SHOWN_GROUPS} more {verdict} (--all lists every group)")
+    rest = {name: sum(a.verdict == name for a in groups) for name in ("within noise", "unsure", "untested")}
+    if any(rest.values()):
+        out.append(("  the other groups: " if out else "  ") + ", ".join(f"{count} {name}" for name, count
+                                                                      in rest.items() if count))
+    return [f"by group (per primitive, thread count, placement; {len(groups)} groups):"] + out
+
+
+def detectable_line(comparison: Comparison) -> str | None:
+    """For the entries whose beyond-the-pace verdict is unsure: the smallest change they could have shown, and
+    what would make it smaller. None when no entry is unsure."""
+    unsure = [row for row in comparison.combinations if comparison.beyond_pace(row) == "unsure"]
+    changes = sorted(change for change in (row.detectable(comparison.noise_percent) for row in unsure)
+                     if change is not None)
+    if not changes:
+        return None
+    median = statistics.median(changes)
+    drift = comparison.drift
+    line = (f"the {len(unsure)} unsure could not have seen less than {_plus_minus(median)} (median; "
+            f"{_plus_minus(changes[0])} the best, {_plus_minus(changes[-1])} the worst). To see less: more "
+            f"repetitions (lockstep run --repetitions 10 narrows the within-run part by about 1/sqrt(2))")
+    if drift is not None and drift * 100 < 0.05:
+        line += (", a quieter machine (between these runs the entries spread no more than their own repetitions "
+                 "do: no drift beyond them)")
+    elif drift is not None:
+        floor = ((1.0 + comparison.noise_percent / 100.0) * math.exp(1.96 * drift) - 1.0) * 100.0
+        line += (f", a quieter machine (the drift between these runs, {drift * 100:.1f} % of log time, calibrated "
+                 f"from every entry, sets a floor of {_plus_minus(floor)} that repetitions do not lower)")
+    else:
+        line += ", a quieter machine"
+    return line + (f", or a wider band (--noise; now {comparison.noise_percent:g} %); the aggregate above "
+                   f"sees a uniform change that single entries cannot")
 
 
 def _tool(run_file: RunFile) -> str:
@@ -718,12 +945,14 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     if comparison.paced:
         out.append(f"pace-aware (pace columns): how = one mode (every repetition of both sides in one matching mode: "
                    f"the raw comparison), matching modes (only the repetitions in the best-filled pair of matching "
-                   f"modes, when each side keeps {statistics.MIN_REPETITIONS}), or / pace c2c (each repetition's time "
+                   f"modes, when each side keeps {MIN_IN_MODE if comparison.drift is not None else statistics.MIN_REPETITIONS}), "
+                   f"or / pace c2c (each repetition's time "
                    f"divided by the c2c reading around it, pace_c2c_ns: the pace-normalised figure); its ratio, "
                    f"interval and verdict as above.")
     out.append("")
     counters_present = [(c, h) for c, h in COUNTERS_SHOWN if any(c in row.counters for row in comparison.rows)]
-    pace_headings = ["pace: how", f"{b}/A paced", "paced interval", "paced verdict"] if comparison.paced else []
+    pace_headings = (["pace: how", f"{b}/A paced", "paced interval", "paced verdict", "could see"]
+                     if comparison.paced else [])
     headings = ["benchmark", f"{a} median", f"{b} median", f"{b}/A", "95% interval", "reps", "q (BH)",
                 "verdict"] + pace_headings + [h for _, h in counters_present]
     rows = []
@@ -740,9 +969,16 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
         rows.append(cells)
     out += _table(headings, rows, right={1, 2, 3, 6} | ({9} if comparison.paced else set()))
     out.append("")
-    geometric_mean = comparison.geometric_mean
-    out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
-               f"calibrations apart): {format_number(geometric_mean, 3)}")
+    out.append(aggregate_line(comparison, b))
+    groups = [aggregate for aggregate in comparison.aggregates() if aggregate.group != "all"]
+    if groups:
+        out += _table(["group", "entries", f"{b}/A geometric mean", "95% interval", "verdict", "could see"],
+                      [[a.group, str(a.entries), f"{a.ratio:.3f}", _interval(a.interval), a.verdict,
+                        _plus_minus(a.detectable(noise))] for a in groups], right={1, 2})
+    if comparison.drift is not None:
+        out.append(f"pooled intervals ({comparison.pooled_entries} entries): each pace-aware interval from the "
+                   f"entry's variance of log time moderated towards the file pair's, plus the drift between the "
+                   f"runs calibrated from every entry's log ratio: {comparison.drift * 100:.1f} % (log time)")
     raw_called, raw_discovered = comparison.discoveries(comparison.verdict)
     out.append(f"raw verdicts at the {noise:g} % noise band: {_counts_text(comparison.verdict_counts())} "
                f"({raw_discovered} of the {raw_called} slower or faster also have BH q < alpha {comparison.alpha:g})")
@@ -871,6 +1107,8 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     if not set(comparison.baseline.runs) & set(comparison.contender.runs):
         out.append(f"no entries in common: A ({_tool(comparison.baseline)}) and {b} ({_tool(comparison.contender)}) "
                    f"name different benchmarks, so nothing is compared")
+    out.append(aggregate_line(comparison, b))
+    out += group_lines(comparison)
     out.append(calibration_move_line(comparison, b))
     out += pace_note(comparison.baseline, comparison.contender, b)[0]
     counts = comparison.pace_verdict_counts()
@@ -879,10 +1117,13 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     out.append(f"changed {what}: {counts['slower'] + counts['faster']} of {len(comparison.rows)} "
                f"({counts['slower']} slower, {counts['faster']} faster; {discovered} of them with Benjamini-Hochberg "
                f"q < alpha {comparison.alpha:g}); {counts['unsure']} unsure, {counts['within noise']} within noise, "
-               f"{counts['untested']} untested (verdict: the 95% interval of {b}/A against the {noise:g} % noise "
-               "band)")
-    out.append(f"geometric mean of {b}/A over the {len(comparison.rows)} matched pairs (combinations only, "
-               f"calibrations apart): {format_number(comparison.geometric_mean, 3)}")
+               f"{counts['untested']} untested"
+               + (f", {counts[COLLAPSED]} {COLLAPSED} (in a file's headline: oversubscribed, one repetition)"
+                  if counts[COLLAPSED] else "")
+               + f" (verdict: the 95% interval of {b}/A against the {noise:g} % noise band)")
+    unsure = detectable_line(comparison)
+    if unsure:
+        out.append(unsure)
     for verdict, order in (("slower", True), ("faster", False)):
         changed = sorted((row for row in comparison.rows if comparison.beyond_pace(row) == verdict),
                          key=lambda row: (row.beyond_pace_ratio(), row.key.sort_key()), reverse=order)

@@ -122,15 +122,18 @@ def compare_parser() -> argparse.ArgumentParser:
         "counter), the MPI ping-pong and the overhead pair are compared apart, as calibrations, and the "
         "context's calibrations say how far the machine itself moved between the runs. Files of `lockstep c2c`, "
         "`delay`, `falseshare`, `migrate` and `verify --out` join the machine fingerprint only.\n\n"
-        "By default it prints about 40 lines: the machines' differences, then per comparison the calibrations' "
-        "move, the pace, the verdict counts and the entries that changed beyond the pace (slower and faster, "
-        "largest first), what was added, removed or errored. --all prints every entry with its counters, the "
+        "By default it prints about 40 lines: the machines' differences, then per comparison the answer first "
+        "(the geometric mean of B/A over every matched combination with its 95% interval and verdict, and the "
+        "groups - per primitive, thread count, placement - that are slower or faster), the calibrations' "
+        "move, the pace, the verdict counts, the smallest change the unsure entries could have shown, and the "
+        "entries that changed beyond the pace (slower and faster, largest first), what was added, removed or "
+        "errored. --all prints every entry with its counters, the "
         "calibrations, the whole context and the across-machines tables. The same file twice (or two files "
         "with the same bytes) is one line saying so.",
         "RESULT.json", "two or more result files, the baseline first",
         "examples:\n  lockstep compare results/a.json results/b.json\n"
         "  lockstep compare a.json b.json --noise 2% --fail-above 10 --out comparison.json\n\n"
-        "exit status: 0 done; 1 with --fail-above, a combination slower beyond the limit; " + BAD_INPUT)
+        "exit status: 0 done; 1 with --fail-above, a combination or a group slower beyond the limit; " + BAD_INPUT)
     parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
                         help=f"noise band in percent, the %% sign optional (5 or 5%%; default "
                              f"{DEFAULT_NOISE_PERCENT:g}): an entry is slower only when its whole interval of B/A "
@@ -140,7 +143,9 @@ def compare_parser() -> argparse.ArgumentParser:
     parser.add_argument("--fail-above", type=percentage, metavar="PCT",
                         help="exit 1 when a matched combination is slower than A beyond the pace (its whole "
                              "interval above the noise band; pace-aware where both files carry the pace) by more "
-                             "than PCT percent (5 or 5%%); each such entry is named on stderr")
+                             "than PCT percent (5 or 5%%), or a group is (the geometric mean of B/A over every "
+                             "combination, or per primitive, thread count or placement: its whole interval above "
+                             "the band, the mean above PCT); each such entry and group is named on stderr")
     parser.add_argument("--alpha", type=float, default=0.05, metavar="LEVEL",
                         help="false discovery rate of the Benjamini-Hochberg q-values shown and counted beside "
                              "the verdicts, between 0 and 1 (default 0.05)")
@@ -214,6 +219,16 @@ def run_compare(argv: list[str]) -> int:
     sys.stdout.write(compare.render_text(run_files, comparisons, options.time, context_files, options.everything))
     if options.fail_above is not None:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
+        groups = [(c, aggregate) for c in comparisons for aggregate in c.failed_groups(options.fail_above)]
+        for comparison, aggregate in groups:
+            what = "every matched combination" if aggregate.group == "all" else f"the group {aggregate.group}"
+            sys.stderr.write(f"lockstep compare: regression beyond {options.fail_above:g}%: {what} "
+                             f"({aggregate.entries} entries) is {(aggregate.ratio - 1) * 100:.1f}% slower in "
+                             f"{comparison.contender.label} (geometric mean of B/A "
+                             f"{compare.aggregate_text(comparison, aggregate)}, beyond the {options.noise:g}% noise "
+                             f"band)\n")
+        if groups and not failures:
+            return EXIT_REGRESSION
         if failures:
             for comparison, row in failures:
                 shown = row.pace if row.pace else row
@@ -246,10 +261,12 @@ def row_json(comparison, row) -> dict:
             "median_b_ns": row.median_b, "ratio": row.ratio,
             "interval": list(row.interval) if row.interval else None,
             "p": row.p_raw, "q_bh": row.p_adjusted, "verdict": comparison.verdict(row),
+            "collapsed": row.collapsed, "detectable_pct": row.detectable(comparison.noise_percent),
             "pace": None if row.pace is None else {
                 "method": row.pace.method, "detail": row.pace.detail, "ratio": row.pace.ratio,
                 "interval": list(row.pace.interval) if row.pace.interval else None,
                 "repetitions": [row.pace.repetitions_a, row.pace.repetitions_b],
+                "interval_rule": "pooled" if row.pace.pooled else "exact",
                 "verdict": comparison.pace_verdict(row)},
             "verdict_beyond_pace": comparison.beyond_pace(row),
             "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
@@ -264,6 +281,11 @@ def comparison_json(comparisons) -> str:
             "interval": "exact distribution-free shift interval (Mann-Whitney U inverted on log time)",
             "noise_pct": comparison.noise_percent,
             "geometric_mean": comparison.geometric_mean, "matched": len(comparison.rows),
+            "aggregates": [{"group": a.group, "entries": a.entries, "geometric_mean": a.ratio,
+                            "interval": list(a.interval) if a.interval else None, "verdict": a.verdict,
+                            "detectable_pct": a.detectable(comparison.noise_percent)}
+                           for a in comparison.aggregates()],
+            "drift": comparison.drift, "pooled_entries": comparison.pooled_entries,
             "verdicts": comparison.verdict_counts(),
             "verdicts_beyond_pace": comparison.pace_verdict_counts(),
             "pace": ("unavailable" if comparison.different_modes is None

@@ -7,6 +7,7 @@ import subprocess
 import tempfile
 import unittest
 
+import synthetic_runs
 from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, run_tool
 
 from lockstep_reports import compare, statistics
@@ -343,7 +344,7 @@ class NoiseThreshold(ScratchFiles):
         self.assertEqual(comparison.verdict(row), "within noise")
         self.assertEqual(comparison.verdict(self.row(comparison, STEADY)), "within noise")
         self.assertEqual(comparison.verdict_counts(),
-                         {"slower": 0, "faster": 0, "unsure": 0, "within noise": 3, "untested": 0})
+                         {"slower": 0, "faster": 0, "unsure": 0, "within noise": 3, "untested": 0, "collapsed": 0})
         status, out, err = run_tool("compare", a, b, "--fail-above", "1", "--all")
         self.assertEqual(status, 0, err)  # within noise never fails the gate
         self.assertIn("0 slower, 0 faster, 0 unsure, 3 within noise", out)
@@ -787,8 +788,10 @@ class CompareSummary(Scratch):
         self.assertEqual(len(shown), compare.SHOWN_CHANGES)
         self.assertRegex(out, r"\n  \.\.\. and [0-9]+ more slower \(--all lists every entry\)\n")
         self.assertLessEqual(len(out.splitlines()), 45)
-        # a collapsed entry is said to be one
-        self.assertIn("(collapsed in A and B)", out)
+        # a collapsed entry is said to be one: counted as collapsed, never listed as slower, nor untested
+        self.assertIn(f"{len(collapsed)} collapsed (in a file's headline", out)
+        self.assertFalse(any(line.split()[0] in collapsed for line in shown))
+        self.assertIn("0 untested", out)
 
 
 LOCKSTEP_BINARY = os.environ.get("LOCKSTEP", os.path.join(REPORTS_DIR.parent, "build", "dev", "bench", "lockstep"))
@@ -868,3 +871,93 @@ class CommandLines(Scratch):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+# ---------------------------------------------------------------- aggregates, pooled evidence, collapsed
+
+class AggregatesAndPooledEvidence(ScratchFiles):
+    """Seeded synthetic matrices (synthetic_runs.py): 96 entries, 5 repetitions each, 5 % spread within a run,
+    3 % drift per entry and run between the runs (4.2 % on the log ratio)."""
+
+    COLLAPSED = tuple(name for name in synthetic_runs.entry_names() if "std_barrier" in name and "threads:4" in name)
+
+    def compared(self, shift):
+        a = self.write("a.json", synthetic_runs.matrix_document(1, drift=0.03, spread=0.05, collapsed=self.COLLAPSED))
+        b = self.write("b.json", synthetic_runs.matrix_document(2, shift=shift, drift=0.03, spread=0.05,
+                                                                collapsed=self.COLLAPSED))
+        return a, b, compare_pair(load_run_file(a), load_run_file(b))
+
+    def overall(self, comparison):
+        return next(aggregate for aggregate in comparison.aggregates() if aggregate.group == "all")
+
+    def test_a_uniform_shift_is_called_by_the_aggregate_and_its_groups(self):
+        a, b, comparison = self.compared(1.15)
+        overall = self.overall(comparison)
+        self.assertEqual(overall.entries, 88)  # the 8 collapsed entries apart
+        self.assertEqual(overall.verdict, "slower")
+        self.assertGreater(overall.interval[0], 1.05)
+        self.assertLess(overall.interval[0], 1.15)
+        self.assertGreater(overall.interval[1], 1.13)
+        for group in ("threads:2", "threads:4", "pin:compact", "pin:none", "sync:futex_spin"):
+            self.assertEqual(next(x for x in comparison.aggregates() if x.group == group).verdict, "slower", group)
+        status, out, err = run_tool("compare", a, b)
+        self.assertEqual(status, 0, err)
+        # the answer first: right after the comparison's title
+        lines = out.splitlines()
+        title = next(index for index, line in enumerate(lines) if line.startswith("== B"))
+        self.assertTrue(lines[title + 1].startswith("geometric mean of B/A over the 88 matched pairs"), lines[title + 1])
+        self.assertTrue(lines[title + 1].endswith(": slower"), lines[title + 1])
+        # --fail-above names the groups that failed, even where no single entry is called slower beyond 10 %
+        status, out, err = run_tool("compare", a, b, "--fail-above", "10")
+        self.assertEqual(status, 1, err)
+        self.assertIn("every matched combination (88 entries) is", err)
+        self.assertIn("the group threads:2", err)
+        status, out, err = run_tool("compare", a, b, "--fail-above", "40")
+        self.assertEqual(status, 0, err)
+
+    def test_an_a_a_pair_stays_within_noise(self):
+        a, b, comparison = self.compared(1.0)
+        self.assertEqual(self.overall(comparison).verdict, "within noise")
+        called = [row for row in comparison.combinations if comparison.beyond_pace(row) in ("slower", "faster")]
+        self.assertLessEqual(len(called), 0.05 * len(comparison.combinations))
+        # the drift between the runs is calibrated from the pair: sqrt(2) x 3 % on the log ratio
+        self.assertAlmostEqual(comparison.drift, 0.03 * 2 ** 0.5, delta=0.012)
+        self.assertEqual(comparison.pooled_entries, 88)
+        err = run_tool("compare", a, b, "--fail-above", "5")[2]
+        self.assertNotIn("every matched combination", err)  # an entry may drift; no group fails
+        self.assertNotIn("the group", err)
+
+    def test_collapsed_entries_are_collapsed_not_untested(self):
+        a, b, comparison = self.compared(1.15)
+        collapsed = [row for row in comparison.rows if row.collapsed]
+        self.assertEqual(sorted(row.key.display for row in collapsed), sorted(self.COLLAPSED))
+        self.assertTrue(all(comparison.beyond_pace(row) == "collapsed" for row in collapsed))
+        self.assertEqual(comparison.pace_verdict_counts()["collapsed"], 8)
+        self.assertEqual(comparison.pace_verdict_counts()["untested"], 0)
+        self.assertFalse(any("untested" in warning for warning in comparison.warnings), comparison.warnings)
+        status, out, err = run_tool("compare", a, b, "--out", os.path.join(self.directory.name, "c.json"))
+        self.assertIn("8 collapsed (in a file's headline", out)
+        self.assertNotIn("--repetitions 10` or more", out)
+        with open(os.path.join(self.directory.name, "c.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        import jsonschema  # Debian's python3-jsonschema, as lockstep_reports/schemas.py
+        with open(REPORTS_DIR.parent / "docs" / "schemas" / "compare.schema.json", encoding="utf-8") as stream:
+            jsonschema.Draft202012Validator(json.load(stream)).validate(document)
+        written = document["comparisons"][0]
+        self.assertEqual(written["verdicts_beyond_pace"]["collapsed"], 8)
+        self.assertEqual(written["aggregates"][0]["group"], "all")
+        self.assertEqual(written["aggregates"][0]["verdict"], "slower")
+
+    def test_an_unsure_entry_says_what_it_could_have_seen(self):
+        a, b, comparison = self.compared(1.05)
+        self.assertIn(self.overall(comparison).verdict, ("unsure", "slower"))
+        unsure = [row for row in comparison.combinations if comparison.beyond_pace(row) == "unsure"]
+        self.assertTrue(unsure)
+        for row in unsure:
+            low, high = row.pace.interval
+            self.assertAlmostEqual(row.detectable(5.0), (1.05 * (high / low) ** 0.5 - 1.0) * 100.0)
+        out = run_tool("compare", a, b)[1]
+        self.assertRegex(out, r"the [0-9]+ unsure could not have seen less than ±[0-9]+ % \(median")
+        self.assertIn("--repetitions 10", out)
+        self.assertIn("--noise", out)
+        self.assertIn("could see", run_tool("compare", a, b, "--all")[1])
