@@ -1,6 +1,8 @@
 #include "distributed/benchmark.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <csignal>
 #include <cstring>
 #include <limits>
@@ -17,12 +19,28 @@ namespace lockstep::distributed {
 namespace {
 
 constexpr int kPingTag = 17;
+
+// The rank waits for other ranks while one lives (the watchdog's waiting
+// flag: a rank that stops here is waiting for another, not the one that stopped).
+class waiting_for_others {
+ public:
+  explicit waiting_for_others(watchdog& dog) noexcept : flag_(dog.waiting()) {
+    flag_.store(true, std::memory_order_relaxed);
+  }
+  ~waiting_for_others() { flag_.store(false, std::memory_order_relaxed); }
+  waiting_for_others(const waiting_for_others&) = delete;
+  waiting_for_others& operator=(const waiting_for_others&) = delete;
+
+ private:
+  std::atomic<bool>& flag_;
+};
 constexpr int kClockTag = 18;
 constexpr int kClockSamples = 64;
 
 // Each rank's clock minus rank 0's (0 on rank 0, and everywhere on one host).
-std::int64_t clock_offset(const world& job) {
+std::int64_t clock_offset(const world& job, watchdog& dog) {
   if (job.one_host()) return 0;
+  const waiting_for_others waiting(dog);
   std::int64_t offset = 0;
   for (int peer = 1; peer < job.size; ++peer) {
     if (job.rank == 0) {
@@ -84,6 +102,7 @@ pingpong_figures pingpong(const world& job, const benchmark_settings& settings, 
     }
   };
   if (job.rank < 2) {
+    const waiting_for_others waiting(dog);
     for (std::uint64_t done = 0; done < settings.pingpong_warmup; ++done) {
       trip(job.rank);
       if ((done & 1023U) == 0) dog.beat(done);
@@ -135,7 +154,12 @@ class exchange_runner {
     rank_step<Model> step(model_, settings_.dt, setup_.mine().block, values);
     step_hooks hooks;
     hooks.heartbeat = &dog.heartbeat();
-    if (first && settings_.inject != benchmark_settings::fault::none && settings_.fault_rank == job_.rank) {
+    hooks.waiting = &dog.waiting();
+    if (first && settings_.inject == benchmark_settings::fault::slow && settings_.fault_rank == job_.rank) {
+      hooks.at_step = [this](std::uint64_t) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(settings_.fault_sleep_ms));
+      };
+    } else if (first && settings_.inject != benchmark_settings::fault::none && settings_.fault_rank == job_.rank) {
       hooks.at_step = [this](std::uint64_t at) {
         if (at != settings_.fault_step) return;
         if (settings_.inject == benchmark_settings::fault::die) std::raise(SIGKILL);
@@ -146,12 +170,18 @@ class exchange_runner {
     step.reset();
     step.run(settings_.warmup_steps, hooks);
 
-    MPI_Barrier(job_.comm);
+    {
+      const waiting_for_others waiting(dog);
+      MPI_Barrier(job_.comm);
+    }
     const std::int64_t start = platform::now_ns();
     step.run(settings_.steps, hooks);
     const std::int64_t elapsed = platform::now_ns() - start;
     std::int64_t slowest = 0;
-    MPI_Reduce(&elapsed, &slowest, 1, MPI_INT64_T, MPI_MAX, 0, job_.comm);
+    {
+      const waiting_for_others waiting(dog);
+      MPI_Reduce(&elapsed, &slowest, 1, MPI_INT64_T, MPI_MAX, 0, job_.comm);
+    }
 
     const sync::sync_counters counters_before = values.counters();
     const platform::thread_counters switches_before = platform::snapshot_current_thread();
@@ -163,6 +193,7 @@ class exchange_runner {
     int identical = block.size() == reference_.size() &&
                     std::memcmp(block.data(), reference_.data(), block.size() * sizeof(double)) == 0;
     int all_identical = 0;
+    const waiting_for_others waiting(dog);
     MPI_Reduce(&identical, &all_identical, 1, MPI_INT, MPI_LAND, 0, job_.comm);
 
     exchange_figures figures;
@@ -284,7 +315,7 @@ benchmark_result run_benchmark(const world& job, const benchmark_settings& setti
   platform::pin_current_thread(result.plan, static_cast<unsigned>(job.host_rank));
   dog.phase("estimating clock offsets");
   result.one_clock = job.one_host();
-  const std::int64_t offset = clock_offset(job);
+  const std::int64_t offset = clock_offset(job, dog);
   if (settings.model.is_chain()) {
     run_exchanges(job, settings, kernels::chain_model(settings.model.chain()), offset, dog, progress, result);
   } else {

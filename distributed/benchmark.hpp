@@ -51,11 +51,15 @@ struct benchmark_settings {
   std::uint64_t pingpong_warmup = 1000;
   platform::placement pin = platform::placement::compact;
   // Fault injection for the tests: rank `fault_rank` stalls (sleeps for ever)
-  // or dies (SIGKILL) before step `fault_step` of the first exchange.
-  enum class fault { none, stall, die };
+  // or dies (SIGKILL) before step `fault_step` of the first exchange, or is
+  // slow but progressing: sleeps `fault_sleep_ms` before every step of the
+  // first exchange's first round (each sleep shorter than the watchdog's
+  // limit, all of them together longer).
+  enum class fault { none, stall, die, slow };
   fault inject = fault::none;
   int fault_rank = -1;
   std::uint64_t fault_step = 0;
+  std::uint64_t fault_sleep_ms = 0;
 };
 
 struct rank_figures {

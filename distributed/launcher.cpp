@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cerrno>
 #include <climits>
@@ -54,14 +55,24 @@ std::string launch_plan::shown() const {
 launch_plan plan_launch(const launch_request& request) {
   launch_plan plan;
   plan.argv.push_back(request.mpirun);
+  if (!request.network.empty() && request.hostfile.empty())
+    throw std::invalid_argument("--network names the network between hosts: it needs --hostfile");
   if (request.open_mpi) {
     plan.argv.insert(plan.argv.end(), {"--np", std::to_string(request.ranks)});
     if (!request.hostfile.empty()) plan.argv.insert(plan.argv.end(), {"--hostfile", request.hostfile});
     if (request.hostfile.empty() && request.ranks > request.host_cpus) plan.argv.emplace_back("--oversubscribe");
     plan.argv.insert(plan.argv.end(), {"--bind-to", "none", "--mca", "pml", "ob1"});
     if (!request.hostfile.empty()) {
-      plan.argv.insert(plan.argv.end(), {"--mca", "btl", request.how == transport::tcp ? "self,tcp" : "self,vader,tcp",
-                                         "--mca", "btl_vader_single_copy_mechanism", "none"});
+      plan.argv.insert(plan.argv.end(), {"--map-by", "node", "--mca", "btl",
+                                         request.how == transport::tcp ? "self,tcp" : "self,vader,tcp", "--mca",
+                                         "btl_vader_single_copy_mechanism", "none", "--mca", "osc",
+                                         request.how == transport::tcp ? "pt2pt" : "sm,pt2pt"});
+      if (!request.network.empty())
+        plan.argv.insert(plan.argv.end(), {"--mca", "btl_tcp_if_include", request.network, "--mca",
+                                           "oob_tcp_if_include", request.network});
+      const std::string keepalive = std::to_string(std::max<std::int64_t>(1, request.watchdog_ns / 4'000'000'000));
+      plan.argv.insert(plan.argv.end(), {"--mca", "oob_tcp_keepalive_time", keepalive, "--mca",
+                                         "oob_tcp_keepalive_intvl", keepalive, "--mca", "oob_tcp_keepalive_probes", "1"});
     } else if (request.how == transport::tcp) {
       // osc pt2pt: one-sided traffic over the same btl (osc sm would take the
       // shared memory of one host and bypass TCP).
@@ -77,8 +88,9 @@ launch_plan plan_launch(const launch_request& request) {
       plan.environment.emplace_back("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1");
     }
   } else {
-    if (request.how == transport::tcp)
-      throw std::invalid_argument("--transport tcp needs Open MPI's mpirun (" + request.mpirun +
+    if (request.how == transport::tcp || !request.network.empty())
+      throw std::invalid_argument(std::string(request.how == transport::tcp ? "--transport tcp" : "--network") +
+                                  " needs Open MPI's mpirun (" + request.mpirun +
                                   " is another MPI's, which chooses its own transport)");
     plan.argv.insert(plan.argv.end(), {"-n", std::to_string(request.ranks)});
     if (!request.hostfile.empty()) plan.argv.insert(plan.argv.end(), {"-f", request.hostfile});

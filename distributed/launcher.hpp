@@ -8,7 +8,9 @@
 //     mpirun --np N [--hostfile F] [--oversubscribe] --bind-to none --mca pml ob1
 //            --mca btl self,vader --mca btl_vader_single_copy_mechanism none      (--transport shm)
 //            --mca btl self,tcp --mca btl_tcp_if_include lo --mca osc pt2pt        (--transport tcp, one host)
-//            --mca btl self,vader,tcp                                              (--hostfile)
+//            --map-by node --mca btl self,vader,tcp --mca osc sm,pt2pt             (--hostfile)
+//              [--mca btl_tcp_if_include NET --mca oob_tcp_if_include NET]           (--network NET)
+//              --mca oob_tcp_keepalive_time K --mca oob_tcp_keepalive_intvl K --mca oob_tcp_keepalive_probes 1
 //            [-x VARIABLE ...] <this lockstep> <the user's own words>
 //   --bind-to none: lockstep pins its ranks itself (--pin, the same plans as
 //   threads); --oversubscribe when ranks exceed this host's CPUs; pml ob1 so
@@ -16,8 +18,20 @@
 //   rma_put's puts take it too); single-copy off because a
 //   container forbids the kernel's cross-memory attach. As root, the two
 //   OMPI_ALLOW_RUN_AS_ROOT variables are set (and shown).
+//   Across hosts: --map-by node deals the ranks out host by host (ranks 0
+//   and 1, the ping-pong's, on two hosts; 4 ranks on 2 hosts, two each);
+//   osc sm,pt2pt: rma_put's windows over the btl between hosts (Open MPI
+//   4.1's default one-sided component refuses a window over tcp), shared
+//   memory when every rank is on one; the out-of-band keepalive at K = a
+//   quarter of --watchdog (at least 1 s) notices a host whose network went
+//   down after about 2K, before the ranks' watchdogs, and mpirun ends the
+//   job naming it ("ORTE has lost communication with a remote daemon ...
+//   on node HOST"). mpirun reaches the hosts through its rsh agent (ssh, or
+//   OMPI_MCA_plm_rsh_agent; tests/mpi/netns-hosts.sh uses one that enters a
+//   network namespace).
 // Another MPI's mpirun (MPICH's hydra): mpirun -n N [-f F] ...; the transport
 // is that library's own choice, so --transport tcp is refused.
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -38,6 +52,8 @@ struct launch_request {
   unsigned ranks = 2;
   transport how = transport::shared_memory;
   std::string hostfile;     // empty: this host only
+  std::string network;      // with a hostfile: the interface or CIDR the ranks and daemons use (empty: Open MPI's choice)
+  std::int64_t watchdog_ns = 10'000'000'000;  // the ranks' --watchdog (the keepalive across hosts follows it)
   unsigned host_cpus = 1;   // CPUs of this host (for --oversubscribe)
   bool as_root = false;
   std::string executable;   // this lockstep
@@ -52,7 +68,8 @@ struct launch_plan {
 };
 
 // Throws std::invalid_argument (one line) when the request cannot be launched
-// with this mpirun (--transport tcp with another MPI than Open MPI).
+// with this mpirun (--transport tcp or --network with another MPI than Open
+// MPI, --network without a hostfile).
 [[nodiscard]] launch_plan plan_launch(const launch_request& request);
 
 // The program's path in PATH, or nothing.

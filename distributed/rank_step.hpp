@@ -14,7 +14,9 @@
 //                                      prepare() and the arithmetic are outside it
 //   step.own_block()                   x_n of the rank's block
 // hooks.heartbeat, when set, is stored every step (relaxed: the watchdog only
-// needs to see it move); hooks.at_step, when set, is called with the step
+// needs to see it move); hooks.waiting, when set, is true while the rank is in
+// share() (waiting for other ranks: the watchdog tells a rank that stopped
+// from ranks that wait for it); hooks.at_step, when set, is called with the step
 // number before each step (fault injection for the tests).
 #include <atomic>
 #include <cstddef>
@@ -32,6 +34,7 @@ namespace lockstep::distributed {
 
 struct step_hooks {
   std::atomic<std::uint64_t>* heartbeat = nullptr;
+  std::atomic<bool>* waiting = nullptr;
   std::function<void(std::uint64_t step)> at_step;
 };
 
@@ -91,6 +94,7 @@ class rank_step {
             next[equation] = kernels::rk4_update(coefficients_, x[equation], k0[equation], k1[equation], k2[equation],
                                                  current[equation]);
         }
+        if (hooks.waiting != nullptr) hooks.waiting->store(true, std::memory_order_relaxed);
         if constexpr (Timed) {
           const std::int64_t arrival = platform::now_ns();
           values_->share(global_stage);
@@ -100,6 +104,7 @@ class rank_step {
         } else {
           values_->share(global_stage);
         }
+        if (hooks.waiting != nullptr) hooks.waiting->store(false, std::memory_order_relaxed);
       }
       parity_ ^= 1U;
       ++steps_taken_;

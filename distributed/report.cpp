@@ -2,6 +2,7 @@
 #include "distributed/report.hpp"
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <utility>
@@ -20,6 +21,21 @@ std::string exchange_name(const exchange_entry& entry, const world& job) {
   return fmt::format("mpi/{}/ranks:{}/hosts:{}", entry.segment, job.size, job.hosts);
 }
 std::string pingpong_name(const world& job) { return fmt::format("mpi/pingpong/ranks:2/hosts:{}", job.hosts); }
+
+// Each host's ranks, in rank order (hosts by name).
+std::map<std::string, std::vector<int>> ranks_by_host(const world& job) {
+  std::map<std::string, std::vector<int>> result;
+  for (std::size_t rank = 0; rank < job.host_of_rank.size(); ++rank)
+    result[job.host_of_rank[rank]].push_back(static_cast<int>(rank));
+  return result;
+}
+
+// The path between ranks: across hosts, shared memory (vader) within a host
+// and TCP between hosts (distributed/launcher.hpp); tcp is TCP everywhere.
+std::string transport_label(const report_input& input) {
+  if (input.job->hosts > 1 && input.how == transport::shared_memory) return "shm+tcp";
+  return std::string(to_string(input.how));
+}
 
 }  // namespace
 
@@ -79,6 +95,7 @@ mpi_analysis analyse(const report_input& input) {
     std::uint64_t total = 0;
     for (std::uint64_t count : slowest) total += count;
     reading.slowest_rank = static_cast<int>(most - slowest.begin());
+    reading.slowest_rank_host = job.host_of_rank.at(static_cast<std::size_t>(reading.slowest_rank));
     reading.slowest_rank_percent = total ? 100.0 * static_cast<double>(*most) / static_cast<double>(total) : 0.0;
     analysis.all_bitwise = analysis.all_bitwise && reading.bitwise;
     analysis.exchanges.push_back(std::move(reading));
@@ -93,14 +110,23 @@ std::string mpi_text(const mpi_analysis& analysis) {
   const benchmark_result& measured = *input.measured;
   std::string out = fmt::format(
       "lockstep mpi: {} ranks on {} host{} ({} transport, {}), {}, pin {}, {} rounds of {} steps\n", job.size,
-      job.hosts, job.hosts == 1 ? "" : "s", to_string(input.how), analysis.library_short,
+      job.hosts, job.hosts == 1 ? "" : "s", transport_label(input), analysis.library_short,
       settings.model.description(), input.pin, settings.rounds, settings.steps);
   if (!measured.plan.note.empty()) out += fmt::format("placement: {}\n", measured.plan.note);
+  if (!job.one_host()) {
+    std::string hosts;
+    for (const auto& [host, ranks] : ranks_by_host(job))
+      hosts += fmt::format("{}{}: rank{} {}", hosts.empty() ? "" : "; ", host, ranks.size() == 1 ? "" : "s",
+                           fmt::join(ranks, ", "));
+    out += fmt::format("hosts: {}\n", hosts);
+  }
   if (!measured.pingpongs.empty()) {
     const auto& last = measured.pingpongs.back();
     out += fmt::format(
-        "ping-pong, ranks 0 and 1, 0 bytes: one-way {} (OSU style: mean of {} round trips / 2; median of {} rounds, "
+        "ping-pong, ranks 0 and 1{}, 0 bytes: one-way {} (OSU style: mean of {} round trips / 2; median of {} rounds, "
         "range {}..{}); per round trip, last round: min {}, p50 {}, p99 {}\n",
+        job.one_host() ? std::string()
+                       : fmt::format(" (on {} and {})", job.host_of_rank.at(0), job.host_of_rank.at(1)),
         format_ns(analysis.pingpong_median_ns), settings.pingpong_round_trips, measured.pingpongs.size(),
         format_ns(analysis.pingpong_min_ns), format_ns(analysis.pingpong_max_ns), format_ns(last.one_way.min),
         format_ns(last.one_way.p50), format_ns(last.one_way.p99));
@@ -115,7 +141,9 @@ std::string mpi_text(const mpi_analysis& analysis) {
                     format_ns(reading.step_max_ns)),
         format_ns(reading.stage_p50_ns), format_ns(reading.stage_p99_ns), format_ns(reading.stage_p999_ns),
         format_ns(reading.stage_max_ns), format_ns(reading.skew_p50_ns), format_ns(reading.skew_p99_ns),
-        fmt::format("{} ({:.0f}%)", reading.slowest_rank, reading.slowest_rank_percent),
+        job.one_host() ? fmt::format("{} ({:.0f}%)", reading.slowest_rank, reading.slowest_rank_percent)
+                       : fmt::format("{} on {} ({:.0f}%)", reading.slowest_rank, reading.slowest_rank_host,
+                                     reading.slowest_rank_percent),
         fmt::format("{} {:.2f}x ({:.2f}..{:.2f})", format_ns(reading.transfer_p50_ns), reading.over_pingpong_median,
                     reading.over_pingpong_min, reading.over_pingpong_max),
         reading.bitwise ? "yes" : "NO");
@@ -133,7 +161,7 @@ std::map<std::string, std::string> mpi_context(const mpi_analysis& analysis) {
   const world& job = *input.job;
   return {{"mpi_library", library_version()},
           {"mpi_standard", standard_version()},
-          {"mpi_transport", std::string(to_string(input.how))},
+          {"mpi_transport", transport_label(input)},
           {"mpi_hosts", std::to_string(job.hosts)},
           {"mpi_ranks", std::to_string(job.size)},
           {"mpi_ranks_per_host", std::to_string(job.ranks_per_host_max)},
@@ -151,7 +179,7 @@ nlohmann::json mpi_json(const mpi_analysis& analysis) {
   nlohmann::json document;
   document["settings"] = {{"ranks", job.size},
                           {"hosts", job.hosts},
-                          {"transport", to_string(input.how)},
+                          {"transport", transport_label(input)},
                           {"model", settings.model.key()},
                           {"equations", settings.model.equations()},
                           {"steps", settings.steps},
@@ -163,6 +191,10 @@ nlohmann::json mpi_json(const mpi_analysis& analysis) {
                           {"pingpong_warmup_round_trips", settings.pingpong_warmup},
                           {"watchdog_ns", input.watchdog_ns},
                           {"arrival_clock", measured.one_clock ? "one host" : "offset-estimated"}};
+  nlohmann::json per_host = nlohmann::json::object();
+  for (const auto& [host, ranks] : ranks_by_host(job)) per_host[host] = ranks.size();
+  document["settings"]["ranks_per_host"] = std::move(per_host);
+  document["settings"]["host_of_rank"] = job.host_of_rank;
   nlohmann::json benchmarks = nlohmann::json::array();
   for (const auto& p : measured.pingpongs) {
     const std::string name = pingpong_name(job);
@@ -222,6 +254,10 @@ nlohmann::json mpi_json(const mpi_analysis& analysis) {
                        {"skew_ns", platform::distribution_json(figures.skew)},
                        {"transfer_ns", platform::distribution_json(figures.transfer)},
                        {"slowest_rank_counts", figures.slowest_counts},
+                       {"slowest_rank_host",
+                        job.host_of_rank.at(static_cast<std::size_t>(
+                            std::max_element(figures.slowest_counts.begin(), figures.slowest_counts.end()) -
+                            figures.slowest_counts.begin()))},
                        {"per_rank", ranks}});
   }
   document["exchanges"] = std::move(details);

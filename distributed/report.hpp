@@ -41,6 +41,7 @@ struct exchange_reading {
   double transfer_p50_ns = 0;
   double over_pingpong_median = 0, over_pingpong_min = 0, over_pingpong_max = 0;
   int slowest_rank = 0;              // arrived last most often, over every round
+  std::string slowest_rank_host;     // where it runs
   double slowest_rank_percent = 0;   // of the stages counted
   bool bitwise = true;               // every round
 };

@@ -14,15 +14,22 @@ namespace lockstep::distributed {
 namespace {
 
 // The one armed watchdog's state, read by the signal handler: lock-free
-// atomics and a message prefix written before the timer starts.
-static_assert(std::atomic<std::uint64_t>::is_always_lock_free && std::atomic<const char*>::is_always_lock_free,
+// atomics and the message's two prefixes, written before the timer starts.
+static_assert(std::atomic<std::uint64_t>::is_always_lock_free && std::atomic<const char*>::is_always_lock_free &&
+                  std::atomic<bool>::is_always_lock_free,
               "the handler reads only lock-free atomics");
 std::atomic<std::uint64_t> progress{0};
 std::atomic<const char*> current_phase{"start-up"};
+std::atomic<bool> waiting_for_others{false};
 std::atomic<bool> armed{false};
-std::array<char, 512> prefix{};  // "lockstep mpi: rank R on HOST made no progress for 10 s (in "
-std::size_t prefix_length = 0;
+// "lockstep mpi: rank R on HOST stopped: no progress for 10 s outside any wait for another rank (in "
+std::array<char, 512> stopped_prefix{};
+std::size_t stopped_length = 0;
+// "lockstep mpi: rank R on HOST made no progress for 20 s waiting for other ranks (in "
+std::array<char, 512> waiting_prefix{};
+std::size_t waiting_length = 0;
 constexpr unsigned kChecksPerLimit = 16;
+constexpr unsigned kWaitingLimits = 2;  // a waiting rank allows twice the limit
 // Touched only by the handler, which runs on one thread only (the timer's
 // signal is aimed at the thread that armed it) and is not re-entered
 // (SIGALRM is blocked while its handler runs).
@@ -50,8 +57,12 @@ void on_alarm(int /*signal*/) noexcept {
     unchanged_checks = 0;
     return;
   }
-  if (++unchanged_checks < kChecksPerLimit) return;
-  write_all(prefix.data(), prefix_length);
+  const bool waiting = waiting_for_others.load(std::memory_order_relaxed);
+  if (++unchanged_checks < (waiting ? kWaitingLimits * kChecksPerLimit : kChecksPerLimit)) return;
+  if (waiting)
+    write_all(waiting_prefix.data(), waiting_length);
+  else
+    write_all(stopped_prefix.data(), stopped_length);
   const char* what = current_phase.load(std::memory_order_relaxed);
   write_all(what, std::strlen(what));
   char digits[24];
@@ -63,9 +74,15 @@ void on_alarm(int /*signal*/) noexcept {
   } while (value != 0 && at > 0);
   write_all(", at ", 5);
   write_all(digits + at, sizeof digits - at);
-  static constexpr char kSuffix[] =
-      "): another rank died or stalled, or this one did; ending the job (--watchdog sets the limit)\n";
-  write_all(kSuffix, sizeof kSuffix - 1);
+  static constexpr char kStoppedSuffix[] =
+      "): this rank is the one that stopped; ending the job (--watchdog sets the limit)\n";
+  static constexpr char kWaitingSuffix[] =
+      "): a rank it waits for stopped, or the network to it did; ending the job (--watchdog sets the limit, twice it "
+      "for a waiting rank)\n";
+  if (waiting)
+    write_all(kWaitingSuffix, sizeof kWaitingSuffix - 1);
+  else
+    write_all(kStoppedSuffix, sizeof kStoppedSuffix - 1);
   ::_exit(kExitStalled);
 }
 
@@ -82,9 +99,19 @@ void disarm_signal() noexcept {
 watchdog::watchdog(std::chrono::nanoseconds limit, const std::string& who) {
   if (armed.exchange(true)) throw std::runtime_error("one watchdog per process");
   const double seconds = std::chrono::duration<double>(limit).count();
-  const int length = std::snprintf(prefix.data(), prefix.size(), "lockstep mpi: %s made no progress for %.3g s (in ",
-                                   who.c_str(), seconds);
-  prefix_length = length < 0 ? 0 : std::min(static_cast<std::size_t>(length), prefix.size() - 1);
+  const auto clamp = [](int length, std::size_t size) {
+    return length < 0 ? std::size_t{0} : std::min(static_cast<std::size_t>(length), size - 1);
+  };
+  stopped_length = clamp(std::snprintf(stopped_prefix.data(), stopped_prefix.size(),
+                                       "lockstep mpi: %s stopped: no progress for %.3g s outside any wait for another "
+                                       "rank (in ",
+                                       who.c_str(), seconds),
+                         stopped_prefix.size());
+  waiting_length = clamp(std::snprintf(waiting_prefix.data(), waiting_prefix.size(),
+                                       "lockstep mpi: %s made no progress for %.3g s waiting for other ranks (in ",
+                                       who.c_str(), seconds * kWaitingLimits),
+                         waiting_prefix.size());
+  waiting_for_others.store(false, std::memory_order_relaxed);
   last_seen = progress.load(std::memory_order_relaxed);
   unchanged_checks = 0;
 
@@ -141,5 +168,7 @@ void watchdog::phase(const char* what) noexcept {
 void watchdog::beat(std::uint64_t value) noexcept { progress.store(value, std::memory_order_relaxed); }
 
 std::atomic<std::uint64_t>& watchdog::heartbeat() noexcept { return progress; }
+
+std::atomic<bool>& watchdog::waiting() noexcept { return waiting_for_others; }
 
 }  // namespace lockstep::distributed

@@ -50,6 +50,7 @@ struct mpi_options {
   std::optional<std::string> syncs;
   std::string transport = "shm";
   std::string hostfile;
+  std::string network;
   std::uint64_t steps = 5000;
   std::uint64_t warmup = 500;
   int repetitions = 5;  // compare needs 5 repetitions a side for an interval
@@ -62,7 +63,8 @@ struct mpi_options {
 };
 
 // The variable the launcher hands its command line down in, and the tests'
-// fault injection ("stall:RANK:STEP" or "die:RANK:STEP").
+// fault injection ("stall:RANK:STEP", "die:RANK:STEP", or "slow:RANK:MS":
+// rank RANK sleeps MS ms before every step of the first exchange's first round).
 constexpr const char* kLaunchVariable = "LOCKSTEP_MPI_LAUNCH";
 constexpr const char* kFaultVariable = "LOCKSTEP_MPI_FAULT";
 // The launcher's status when the job failed otherwise (a rank died, stalled
@@ -117,13 +119,16 @@ checked_options check(const mpi_options& options, unsigned ranks) {
     char kind[16] = {};
     int rank = -1;
     unsigned long long step = 0;
-    if (std::sscanf(fault, "%15[a-z]:%d:%llu", kind, &rank, &step) != 3 ||
-        (std::string(kind) != "stall" && std::string(kind) != "die"))
-      throw usage_error(std::string(kFaultVariable) + ": '" + fault + "' is not stall:RANK:STEP or die:RANK:STEP");
-    checked.inject = std::string(kind) == "stall" ? dist::benchmark_settings::fault::stall
-                                                  : dist::benchmark_settings::fault::die;
+    const bool parsed = std::sscanf(fault, "%15[a-z]:%d:%llu", kind, &rank, &step) == 3;
+    const std::string_view named = kind;  // after sscanf filled it
+    if (!parsed || (named != "stall" && named != "die" && named != "slow"))
+      throw usage_error(std::string(kFaultVariable) + ": '" + fault +
+                        "' is not stall:RANK:STEP, die:RANK:STEP or slow:RANK:MS");
+    checked.inject = named == "stall" ? dist::benchmark_settings::fault::stall
+                     : named == "die" ? dist::benchmark_settings::fault::die
+                                      : dist::benchmark_settings::fault::slow;
     checked.fault_rank = rank;
-    checked.fault_step = step;
+    checked.fault_step = step;  // the step, or slow's milliseconds
   }
   return checked;
 }
@@ -167,7 +172,12 @@ void launch(const mpi_options& options, int& result) {
     }
   }
   check_out(options.out);
-  const dist::job_shape shape{static_cast<int>(options.ranks), hosts.empty() ? 1 : static_cast<int>(hosts.size()),
+  // The hosts the ranks span: dealt out host by host (--map-by node), the
+  // hostfile's distinct hosts or the ranks, whichever is fewer.
+  std::sort(hosts.begin(), hosts.end());
+  hosts.erase(std::unique(hosts.begin(), hosts.end()), hosts.end());
+  const int spanned = hosts.empty() ? 1 : static_cast<int>(std::min<std::size_t>(hosts.size(), options.ranks));
+  const dist::job_shape shape{static_cast<int>(options.ranks), spanned,
                               checked.how};
   std::map<std::string, std::string> not_applicable;
   (void)applicable(checked, shape, not_applicable);
@@ -182,6 +192,8 @@ void launch(const mpi_options& options, int& result) {
   request.ranks = options.ranks;
   request.how = checked.how;
   request.hostfile = options.hostfile;
+  request.network = options.network;
+  request.watchdog_ns = checked.watchdog_ns;
   request.host_cpus = platform::affinity_cpu_count();
   request.as_root = geteuid() == 0;
   request.executable = dist::this_executable();
@@ -283,6 +295,7 @@ void run_as_rank(const mpi_options& options, int& result) {
   settings.inject = checked.inject;
   settings.fault_rank = checked.fault_rank;
   settings.fault_step = checked.fault_step;
+  settings.fault_sleep_ms = checked.fault_step;
 
   dog.emplace(std::chrono::nanoseconds(checked.watchdog_ns), fmt::format("rank {} on {}", job.rank, job.host));
   const dist::benchmark_result measured = dist::run_benchmark(
@@ -338,7 +351,12 @@ void add_mpi(CLI::App& app, int& result) {
   command->add_option("--transport", options->transport,
                       "shm (shared memory between ranks on one host) or tcp (the TCP path, on loopback for one host)")
       ->capture_default_str();
-  command->add_option("--hostfile", options->hostfile, "Open MPI hostfile: run the ranks on these hosts");
+  command->add_option("--hostfile", options->hostfile,
+                      "Open MPI hostfile: run the ranks on these hosts, dealt out host by host (mpirun reaches them "
+                      "with ssh, or the agent OMPI_MCA_plm_rsh_agent names)");
+  command->add_option("--network", options->network,
+                      "With --hostfile: the interface or CIDR the ranks and mpirun's daemons use between hosts "
+                      "(Open MPI's btl_tcp_if_include and oob_tcp_if_include), e.g. eth1 or 10.0.0.0/24");
   command->add_option("--steps", options->steps, "Steps per measurement (untimed for the step time, then timed)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{10'000'000}))
       ->capture_default_str();

@@ -77,6 +77,29 @@ TEST(MpiLauncher, HostfileSpansHosts) {
   EXPECT_TRUE(has_sequence(plan.argv, {"--hostfile", "hosts.txt"}));
   EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl", "self,vader,tcp"}));
   EXPECT_FALSE(has_sequence(plan.argv, {"--oversubscribe"})) << "the hosts' slots decide, not this host's CPUs";
+  EXPECT_TRUE(has_sequence(plan.argv, {"--map-by", "node"})) << "ranks 0 and 1 (the ping-pong's) on two hosts";
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "osc", "sm,pt2pt"})) << "rma_put's windows over the btl";
+  EXPECT_FALSE(has_sequence(plan.argv, {"--mca", "btl_tcp_if_include"})) << "no --network: Open MPI's choice";
+  // The daemons' keepalive notices a lost host at about twice a quarter of
+  // the ranks' watchdog, before it fires.
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "oob_tcp_keepalive_time", "2", "--mca", "oob_tcp_keepalive_intvl",
+                                       "2", "--mca", "oob_tcp_keepalive_probes", "1"}));
+}
+
+TEST(MpiLauncher, NetworkNamesTheInterfaceBetweenHosts) {
+  launch_request request = open_mpi_request();
+  request.hostfile = "hosts.txt";
+  request.network = "10.231.1.0/24";
+  request.how = transport::tcp;
+  request.watchdog_ns = 1'000'000'000;
+  const auto plan = plan_launch(request);
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl_tcp_if_include", "10.231.1.0/24", "--mca",
+                                       "oob_tcp_if_include", "10.231.1.0/24"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "btl", "self,tcp"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "osc", "pt2pt"}));
+  EXPECT_TRUE(has_sequence(plan.argv, {"--mca", "oob_tcp_keepalive_time", "1"})) << "at least 1 s";
+  request.hostfile.clear();
+  EXPECT_THROW((void)plan_launch(request), std::invalid_argument) << "--network without --hostfile";
 }
 
 TEST(MpiLauncher, AnotherMpiGetsItsOwnGrammarAndNoTransportChoice) {
