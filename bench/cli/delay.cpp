@@ -82,6 +82,8 @@ struct delay_options {
   std::optional<double> miss_rate;
   std::string search_budget = "120s";
   std::optional<std::int64_t> trial_periods;
+  bool no_record = false;
+  bool recording_cost = false;
 };
 
 std::int64_t whole_microseconds(const std::string& text, const std::string& option, std::int64_t min_us,
@@ -102,6 +104,9 @@ probes::delay_settings check_input(const delay_options& options) {
   plan.compare_pinning = options.compare_pinning;
   plan.per_cpu = options.per_cpu;
   plan.find_period = options.find_period;
+  plan.recording = options.no_record        ? probes::step_recording::off
+                   : options.recording_cost ? probes::step_recording::alternate_blocks
+                                            : probes::step_recording::every_period;
   const char* path_override = std::getenv(kDmaLatencyPathVariable);
   plan.dma_latency_path =
       path_override != nullptr && *path_override != '\0' ? path_override : platform::kDmaLatencyPath;
@@ -229,6 +234,11 @@ void add_delay(CLI::App& app, int& result) {
                   kernels::kPaperThreadsMax) +
       "Idle states: /dev/cpu_dma_latency is held at 0 us for the run, as cyclictest does, unless\n"
       "--dma-latency or --no-dma-latency says otherwise; the output says which setting was in force.\n"
+      "Why late: every period is recorded (per participant and stage: arrival and departure at the sync, its\n"
+      "CPU; per period: run-queue wait, switches, faults, per-CPU interrupts), and each step above the median\n"
+      "is split along its critical path into compute, run-queue wait, migration, page faults, interrupts,\n"
+      "wake-up latency and machine stall (time no guest event explains); the tail's table and the latest\n"
+      "steps are printed, --recording-cost prices the record as a pair.\n"
       "--find-period --miss-rate R: the shortest period whose deadline misses stay at most at rate R,\n"
       "with 95 % confidence (a one-sided Clopper-Pearson bound), found by bisection; --period is where\n" +
       fmt::format("the search starts. When the answer is over {:g}x every trial's completion p99, the misses were\n"
@@ -285,6 +295,13 @@ void add_delay(CLI::App& app, int& result) {
   command->add_option("--trial-periods", options->trial_periods,
                       "Periods per --find-period trial (default: the fewest that can show the rate)")
       ->needs(find);
+  auto* no_record = command->add_flag("--no-record", options->no_record,
+                                      "Keep no per-step record (no causes for the late steps)");
+  auto* cost = command->add_flag("--recording-cost", options->recording_cost,
+                                 "Record every other block of 250 periods and print what the record costs (a pair: "
+                                 "completion with it against without, in one run)");
+  no_record->excludes(cost);
+  cost->excludes(find)->excludes(per_cpu);
   add_out_option(*command, options->out);
   command->callback([options, &result] { run_delay(*options, result); });
 }

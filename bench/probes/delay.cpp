@@ -9,6 +9,7 @@
 #include <stop_token>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "platform/clock.hpp"
 #include "platform/idle_states.hpp"
@@ -36,6 +37,7 @@ std::jthread progress_reporter(std::int64_t total_ns, const delay_progress& prog
 delay_search run_search(const delay_settings& settings, paced_step_settings step,
                         const platform::placement_plan& placement, const delay_progress& progress) {
   delay_search outcome;
+  std::vector<std::pair<std::int64_t, paced_result>> failed_runs;  // runs with misses, by period
   const auto runner = [&](std::int64_t period_ns, std::int64_t periods, std::optional<std::uint64_t> stop_after_misses,
                           bool confirming) {
     step.pacing.period_ns = period_ns;
@@ -52,7 +54,10 @@ delay_search run_search(const delay_settings& settings, paced_step_settings step
       trial.completion_p50_ns = d.p50;
       trial.completion_p99_ns = d.p99;
     }
-    if (confirming) outcome.confirm = std::move(run);
+    if (confirming)
+      outcome.confirm = std::move(run);
+    else if (run.deadline_misses > 0)
+      failed_runs.emplace_back(period_ns, std::move(run));
     return trial;
   };
   const auto observe = [&](const period_trial& trial, bool confirming) {
@@ -62,6 +67,9 @@ delay_search run_search(const delay_settings& settings, paced_step_settings step
                          trial.holds ? "holds" : "fails"));
   };
   outcome.search = find_period(settings.search, runner, observe);
+  if (outcome.search.failed_period_ns)
+    for (auto& [period_ns, run] : failed_runs)
+      if (period_ns == *outcome.search.failed_period_ns) outcome.failed_trial = std::move(run);
   return outcome;
 }
 
@@ -123,6 +131,7 @@ delay_measurement measure_delay(const delay_settings& requested, const platform:
   step.pacing.periods = settings.periods;
   step.pacing.fifo_priority = settings.fifo_priority;
   step.pacing.stop_above_ns = settings.stop_above_ns;
+  step.pacing.recording = settings.per_cpu ? step_recording::off : settings.recording;
 
   result.name = fmt::format("rk4{}/sync:{}/layout:{}/pin:{}/threads:{}", settings.model.name_segment(), settings.sync,
                             settings.layout, settings.pin, settings.threads);
@@ -155,6 +164,7 @@ delay_measurement measure_delay(const delay_settings& requested, const platform:
     }
     if (settings.compare_pinning) {
       progress("delay: the same run unpinned (pin:none) for comparison");
+      step.pacing.recording = step_recording::off;
       const std::jthread reporter = progress_reporter(settings.periods * settings.period_ns, progress);
       result.unpinned = run_paced_step(step, unpinned_plan);
     }

@@ -45,6 +45,10 @@ struct delay_settings {
   std::optional<std::int64_t> stop_above_ns;
   bool find_period = false;
   period_search_settings search;  // with find_period
+  // The per-step record of the run (paced.hpp): every period by default (the
+  // late steps' causes), alternate blocks for --recording-cost (its cost as
+  // a pair), off with --no-record. With find_period every trial records.
+  step_recording recording = step_recording::every_period;
 };
 
 // The idle-state setting in force for the run.
@@ -63,6 +67,9 @@ struct idle_setting {
 struct delay_search {
   period_search_result search;
   std::optional<paced_result> confirm;  // the confirming run's whole result
+  // The run of the trial at search.failed_period_ns (the failed period next
+  // to the answer), whole: its misses are the ones the answer avoids.
+  std::optional<paced_result> failed_trial;
 };
 
 struct delay_measurement {

@@ -17,7 +17,107 @@
 #include "sync/team.hpp"
 
 namespace lockstep::bench::probes {
+
+void finish_record(step_record& record, std::size_t kept,
+                   const std::vector<platform::thread_step_counters>& first_snapshot,
+                   const platform::cpu_interrupt_totals& interrupt_start,
+                   const std::vector<platform::cpu_interrupt_totals>& interrupt_reads) {
+  const std::int64_t allocated = record.periods;
+  const auto periods = static_cast<std::int64_t>(kept);
+  const unsigned participants = record.participants;
+  // Keep the first `kept` periods of each participant's run, in place.
+  if (periods < allocated) {
+    for (unsigned p = 0; p < participants; ++p)
+      for (std::int64_t k = 0; k < periods; ++k)
+        record.steps[static_cast<std::size_t>(p) * static_cast<std::size_t>(periods) + static_cast<std::size_t>(k)] =
+            record.steps[static_cast<std::size_t>(p) * static_cast<std::size_t>(allocated) + static_cast<std::size_t>(k)];
+    record.steps.resize(static_cast<std::size_t>(periods) * participants);
+  }
+  record.periods = periods;
+  // Snapshots into differences, per participant, from the last to the first.
+  for (unsigned p = 0; p < participants; ++p) {
+    for (std::int64_t k = periods - 1; k >= 0; --k) {
+      participant_period& row = record.at(k, p);
+      if (!row.recorded) continue;
+      if (k == 0) {
+        // Its window holds the lead before the first period and the pin:
+        // kept, but not compared with the others.
+        row.counters = row.counters - first_snapshot[p];
+      } else if (record.at(k - 1, p).recorded) {
+        row.counters = row.counters - record.at(k - 1, p).counters;
+        row.counters_valid = true;
+      }
+    }
+  }
+  // Per-CPU interrupts between consecutive reads (the columns of the first).
+  record.cpus = interrupt_start.cpus;
+  const std::size_t columns = record.cpus.size();
+  record.interrupts.assign(static_cast<std::size_t>(periods) * columns, -1);
+  record.softirqs.assign(static_cast<std::size_t>(periods) * columns, -1);
+  const platform::cpu_interrupt_totals* previous = &interrupt_start;
+  for (std::int64_t k = 0; k < periods && static_cast<std::size_t>(k) < interrupt_reads.size(); ++k) {
+    const platform::cpu_interrupt_totals& now = interrupt_reads[static_cast<std::size_t>(k)];
+    if (now.cpus.empty() || now.cpus != record.cpus) continue;
+    for (std::size_t column = 0; column < columns; ++column) {
+      const std::size_t at = static_cast<std::size_t>(k) * columns + column;
+      if (now.interrupts.size() == columns && previous->interrupts.size() == columns)
+        record.interrupts[at] = now.interrupts[column] - previous->interrupts[column];
+      if (now.softirqs.size() == columns && previous->softirqs.size() == columns)
+        record.softirqs[at] = now.softirqs[column] - previous->softirqs[column];
+    }
+    previous = &now;
+  }
+}
+
 namespace {
+
+// The primitive with its passages recorded: the same primitive, the same
+// calls, and around each wait a report to the stage_recorder (two clock
+// reads and two sched_getcpu per stage while a period is recorded; a null
+// check otherwise). The step is composed over this type as over the
+// primitive itself; its shape (barrier or channel) and traits are the
+// primitive's.
+template <class Barrier>
+class recorded_barrier {
+ public:
+  static constexpr auto kName = Barrier::kName;
+  explicit recorded_barrier(unsigned participants, stage_recorder* recorder = nullptr)
+      : barrier_(participants), recorder_(recorder) {}
+  void arrive_and_wait(sync::participant& self) {
+    if (recorder_ != nullptr) recorder_->arrive(self.id);
+    barrier_.arrive_and_wait(self);
+    if (recorder_ != nullptr) recorder_->depart(self.id);
+  }
+
+ private:
+  Barrier barrier_;
+  stage_recorder* recorder_;
+};
+
+template <class Channel>
+class recorded_channel {
+ public:
+  static constexpr auto kName = Channel::kName;
+  recorded_channel(const sync::dependency_graph& graph, std::size_t width, stage_recorder* recorder = nullptr)
+      : channel_(graph, width), recorder_(recorder) {}
+  void publish(sync::participant& self, std::uint64_t stage, std::span<const double> values) {
+    if (recorder_ != nullptr) recorder_->channel_call_begins(self.id, static_cast<unsigned>(stage % kernels::kRk4Stages));
+    channel_.publish(self, stage, values);
+    if (recorder_ != nullptr) recorder_->channel_call_ends(self.id);
+  }
+  void receive(sync::participant& self, unsigned producer, std::uint64_t stage, std::span<double> received) {
+    if (recorder_ != nullptr) recorder_->channel_call_begins(self.id, static_cast<unsigned>(stage % kernels::kRk4Stages));
+    channel_.receive(self, producer, stage, received);
+    if (recorder_ != nullptr) recorder_->channel_call_ends(self.id);
+  }
+
+ private:
+  Channel channel_;
+  stage_recorder* recorder_;
+};
+
+template <class Sync>
+using recorded_sync = std::conditional_t<sync::phase_barrier<Sync>, recorded_barrier<Sync>, recorded_channel<Sync>>;
 
 // The model's time step. Fixed rather than tied to the period: the delay
 // measured must not depend on the physics, and 0.1 ms keeps omega * dt about
@@ -60,13 +160,17 @@ std::int64_t stop_margin_periods(const Step& step) {
 template <class Sync, class Layout, kernels::oscillator_model Model>
 paced_result run_combination(const Model& model, unsigned threads, const platform::placement_plan& plan,
                              paced_settings settings) {
-  kernels::parallel_rk4<Sync, Layout, Model> step(model, kStepSeconds, threads);
+  stage_recorder recorder(threads, settings.hook);
+  const bool recording = settings.recording != step_recording::off || settings.hook;
+  const auto initial = model.initial_state();
+  kernels::parallel_rk4<recorded_sync<Sync>, Layout, Model> step(model, kStepSeconds, threads, std::span<const double>(initial),
+                                                                 recording ? &recorder : nullptr);
   std::vector<sync::participant> participants(threads);
   for (unsigned id = 0; id < threads; ++id) participants[id].id = id;
   sync::team_of_t<Sync> team(threads);
   settings.stop_margin_periods = stop_margin_periods(step);
   settings.independent = false;
-  return run_paced(
+  paced_result result = run_paced(
       team, threads, settings, [&](unsigned id) { platform::pin_current_thread(plan, id); },
       [&](unsigned id, std::uint64_t period) {
         // migrate: the move happens inside the period it is due in, so its
@@ -80,7 +184,22 @@ paced_result run_combination(const Model& model, unsigned threads, const platfor
           }
         }
         step.run(participants[id], 1);
-      });
+      },
+      recording ? &recorder : nullptr);
+  if (result.record) {
+    // Whom each participant's departure waits for: a barrier releases when
+    // everyone has arrived; a channel consumer when its producers have.
+    result.record->waits_for.resize(threads);
+    for (unsigned id = 0; id < threads; ++id) {
+      if constexpr (sync::phase_barrier<Sync>) {
+        for (unsigned other = 0; other < threads; ++other)
+          if (other != id) result.record->waits_for[id].push_back(other);
+      } else {
+        result.record->waits_for[id] = step.plan_of(id).producers;
+      }
+    }
+  }
+  return result;
 }
 
 // Per CPU: participant i alone on cpus[i], with a step of its own, built on

@@ -62,12 +62,30 @@
 // Per thread, the paper's Figure 5 counters (platform/thread_accounting.hpp):
 // context switches and the share that crossed cores, from the run's start to
 // its end, for each participant and for the thread that launched the team.
+//
+// The per-step record (paced_settings::recording; a team run only): for
+// every period and participant, the arrival at and the departure from each
+// stage's synchronisation (ns from the period's target, with the CPU read at
+// each), the CPU it woke on and ended on, and its counters
+// (platform/step_counters.hpp) over the window from its previous step's end
+// to this one's (so a period's window holds its sleep, its wake-up and its
+// step); and per CPU the interrupts and softirqs of the window between two
+// reads, each by the last participant to end its period. What it costs on
+// the measured path: per stage two clock reads and two sched_getcpu calls in
+// the sync (stage_recorder, around the primitive's wait); after the step's
+// end, outside the completion time, one counter snapshot per participant and
+// the last one's read of the interrupt tables (a participant sharing a CPU
+// with one that has not ended yet can delay it by its snapshot). recording = alternate_blocks records every other block
+// of periods, so that one run gives its cost as a pair (on against off).
+// bench/harness/delay_report.hpp turns the record into causes.
 #include <time.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <optional>
@@ -76,12 +94,27 @@
 #include <vector>
 
 #include "kernels/model_choice.hpp"
+#include "kernels/rk4.hpp"
+#include "platform/cache_line.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"
 #include "platform/scheduling.hpp"
+#include "platform/step_counters.hpp"
 #include "platform/thread_accounting.hpp"
 
 namespace lockstep::bench::probes {
+
+// Whether a run keeps the per-step record (see the header).
+enum class step_recording {
+  off,
+  every_period,
+  alternate_blocks,  // on for recording_block_periods, off for as many, ...: the cost as a pair
+};
+
+// Called by a participant inside each stage, after its stage's work and
+// before it arrives at the stage's synchronisation (its time lands in the
+// participant's own part of the stage). A test hook: injected causes.
+using stage_hook = std::function<void(unsigned participant, std::uint64_t period, unsigned stage)>;
 
 struct paced_settings {
   std::int64_t period_ns = 1'000'000;
@@ -102,6 +135,150 @@ struct paced_settings {
   // End the run once this many periods have missed their deadline (a team
   // only; see above). Empty: run every period.
   std::optional<std::uint64_t> stop_after_misses;
+  // The per-step record (a team run; see the header).
+  step_recording recording = step_recording::off;
+  std::int64_t recording_block_periods = 250;  // alternate_blocks: periods per block
+  std::int64_t interrupt_every_periods = 1;    // the interrupt tables are read every N periods
+  stage_hook hook;                             // empty: none
+};
+
+// The record keeps at most this many participant-periods (about 200 bytes
+// each: 100 MB); a longer run keeps none and says so (step_record::not_kept).
+inline constexpr std::int64_t kMaxRecordedParticipantPeriods = 500'000;
+
+// One stage's synchronisation as one participant went through it; times in
+// ns from the period's target, -1 where nothing was recorded.
+struct stage_passage {
+  std::int64_t arrival_ns = -1;    // entered the sync (after its stage's work)
+  std::int64_t departure_ns = -1;  // left it (released)
+  std::int32_t arrival_cpu = -1;
+  std::int32_t departure_cpu = -1;
+};
+
+// One participant's period.
+struct participant_period {
+  bool recorded = false;         // false: recording was off for this period
+  bool counters_valid = false;   // the window began at the previous period's end (recorded too; never period 0)
+  std::int32_t wake_cpu = -1;    // read right after the wake-up
+  std::int32_t end_cpu = -1;     // read right after the step's end
+  std::array<stage_passage, kernels::kRk4Stages> stages{};
+  // Over the window from the previous period's end to this one's (after the
+  // run: a difference; during it the snapshot itself).
+  platform::thread_step_counters counters;
+};
+
+struct step_record {
+  unsigned participants = 0;
+  std::int64_t periods = 0;
+  std::int64_t period_ns = 0;
+  // Whose arrival each participant's departure waits for at every stage:
+  // every other participant for a barrier; its producers for a channel.
+  std::vector<std::vector<unsigned>> waits_for;
+  // participant-major, [p * periods + k]: a participant writes a run of its
+  // own, so participants never write the same cache line while they step.
+  std::vector<participant_period> steps;
+  // Per CPU, the interrupts and softirqs over the window that ends at the
+  // last participant's step end of period k (read every interrupt_every
+  // periods; -1: not read then, or unavailable): [k * cpus.size() + c].
+  std::vector<unsigned> cpus;
+  std::vector<std::int64_t> interrupts;
+  std::vector<std::int64_t> softirqs;
+  std::int64_t interrupt_every = 1;
+  bool schedstat_available = false;
+  bool interrupts_available = false;
+  double snapshot_cost_ns = 0;        // one thread snapshot, median (platform::snapshot_cost_ns)
+  double interrupt_read_cost_ns = 0;  // one read of both interrupt tables
+  step_recording mode = step_recording::off;
+  std::int64_t block_periods = 0;     // alternate_blocks
+  std::string not_kept;               // why no record was kept (too many periods), or empty
+
+  participant_period& at(std::int64_t period, unsigned participant) noexcept {
+    return steps[static_cast<std::size_t>(participant) * static_cast<std::size_t>(periods) +
+                 static_cast<std::size_t>(period)];
+  }
+  const participant_period& at(std::int64_t period, unsigned participant) const noexcept {
+    return steps[static_cast<std::size_t>(participant) * static_cast<std::size_t>(periods) +
+                 static_cast<std::size_t>(period)];
+  }
+  // The CPU column of `cpu` in `cpus`, or empty.
+  std::optional<std::size_t> cpu_column(unsigned cpu) const noexcept {
+    for (std::size_t column = 0; column < cpus.size(); ++column)
+      if (cpus[column] == cpu) return column;
+    return std::nullopt;
+  }
+};
+
+// Where the synchronisations a step makes report arrivals and departures
+// (bench/probes/paced.cpp wraps the primitive so that it does). Each
+// participant has a slot of its own line pair, written only by its thread.
+class stage_recorder {
+ public:
+  explicit stage_recorder(unsigned participants, stage_hook hook = {}) : slots_(participants), hook_(std::move(hook)) {}
+
+  // Participant p begins period k whose target is `target_ns`; `row` is
+  // where its passages go (nullptr: recording off for this period).
+  void begin_period(unsigned participant, std::uint64_t period, std::int64_t target_ns,
+                    participant_period* row) noexcept {
+    slot& mine = slots_[participant];
+    mine.row = row;
+    mine.period = period;
+    mine.target_ns = target_ns;
+    mine.stage = 0;
+    mine.open = false;
+  }
+
+  // A barrier's wait: one per stage.
+  void arrive(unsigned participant) { enter(participant, slots_[participant].stage); }
+  void depart(unsigned participant) noexcept {
+    slot& mine = slots_[participant];
+    leave(mine);
+    ++mine.stage;
+    mine.open = false;
+  }
+  // A channel's publish and receives: stage `stage_in_step`; the first call
+  // of a stage is the arrival, the end of each call a departure (the last
+  // one stays).
+  void channel_call_begins(unsigned participant, unsigned stage_in_step) {
+    slot& mine = slots_[participant];
+    if (!mine.open || mine.stage != stage_in_step) {
+      enter(participant, stage_in_step);
+      leave(mine);  // a stage with no receive leaves when it arrives
+    }
+  }
+  void channel_call_ends(unsigned participant) noexcept { leave(slots_[participant]); }
+
+ private:
+  struct alignas(platform::kPrefetchPair) slot {
+    participant_period* row = nullptr;
+    std::uint64_t period = 0;
+    std::int64_t target_ns = 0;
+    unsigned stage = 0;
+    bool open = false;  // the stage's arrival is recorded
+  };
+
+  void enter(unsigned participant, unsigned stage) {
+    slot& mine = slots_[participant];
+    if (hook_) hook_(participant, mine.period, stage);
+    mine.stage = stage;
+    mine.open = true;
+    if (mine.row == nullptr || stage >= kernels::kRk4Stages) return;
+    stage_passage& passage = mine.row->stages[stage];
+    passage.arrival_ns = platform::now_ns() - mine.target_ns;
+    passage.arrival_cpu = cpu_now();
+  }
+  static void leave(slot& mine) noexcept {
+    if (mine.row == nullptr || mine.stage >= kernels::kRk4Stages) return;
+    stage_passage& passage = mine.row->stages[mine.stage];
+    passage.departure_ns = platform::now_ns() - mine.target_ns;
+    passage.departure_cpu = cpu_now();
+  }
+  static std::int32_t cpu_now() noexcept {
+    const auto cpu = platform::current_cpu();
+    return cpu ? static_cast<std::int32_t>(*cpu) : -1;
+  }
+
+  std::vector<slot> slots_;
+  stage_hook hook_;
 };
 
 // The first wake-up later than stop_above_ns, and what the step was doing.
@@ -130,6 +307,7 @@ struct paced_result {
   bool stopped_after_misses = false;  // stop_after_misses ended the run early
   platform::figure5_table figure5;    // "main" first, then "worker <id>"
   std::vector<std::string> errors;    // a participant that could not pin or go FIFO (it still ran)
+  std::optional<step_record> record;  // with paced_settings::recording (a team run)
 };
 
 // One participant's samples out of a period-major vector (wakeup_ns, end_ns).
@@ -141,6 +319,15 @@ inline std::vector<double> participant_samples(const std::vector<double>& sample
   for (std::size_t index = participant; index < samples.size(); index += participants) mine.push_back(samples[index]);
   return mine;
 }
+
+// After a run: keeps the record's first `kept` periods, turns each
+// participant's snapshots into differences over its windows (a period whose
+// previous period was not recorded has counters_valid false), and the
+// interrupt reads into per-CPU differences between consecutive reads.
+void finish_record(step_record& record, std::size_t kept,
+                   const std::vector<platform::thread_step_counters>& first_snapshot,
+                   const platform::cpu_interrupt_totals& interrupt_start,
+                   const std::vector<platform::cpu_interrupt_totals>& interrupt_reads);
 
 // Sleeps until the absolute CLOCK_MONOTONIC time `target_ns` (restarted after
 // a signal: an interrupted sleep must not end a period early).
@@ -159,12 +346,51 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
 //                 not throw).
 // Throws nothing itself; FIFO failures land in errors too, so check the
 // permission before (platform::set_current_thread_fifo on the caller).
+//   recorder      where the step's synchronisations report their passages
+//                 (with settings.recording; nullptr: no per-stage times,
+//                 the counters are still recorded).
 template <class Team, class Prepare, class StepOne>
 paced_result run_paced(Team& team, unsigned participants, const paced_settings& settings, Prepare&& prepare,
-                       StepOne&& step_one) {
+                       StepOne&& step_one, stage_recorder* recorder = nullptr) {
   const auto periods = static_cast<std::size_t>(settings.periods);
   paced_result result;
   result.participants = participants;
+
+  // The per-step record, allocated and touched here, before the run.
+  std::optional<step_record> record;
+  std::vector<platform::cpu_interrupt_totals> interrupt_reads;  // at the last participant's end of period k
+  platform::cpu_interrupt_totals interrupt_start;                // before its first period
+  std::vector<platform::thread_step_counters> first_snapshot(participants);
+  if (settings.recording != step_recording::off) {
+    record.emplace();
+    record->participants = participants;
+    record->period_ns = settings.period_ns;
+    record->mode = settings.recording;
+    record->block_periods = std::max<std::int64_t>(settings.recording_block_periods, 1);
+    record->interrupt_every = std::max<std::int64_t>(settings.interrupt_every_periods, 1);
+    if (settings.periods * participants > kMaxRecordedParticipantPeriods) {
+      record->not_kept = "the run has " + std::to_string(settings.periods * participants) +
+                         " participant-periods, more than the record keeps (" +
+                         std::to_string(kMaxRecordedParticipantPeriods) + ")";
+    } else {
+      record->periods = settings.periods;
+      record->steps.resize(periods * participants);
+      interrupt_reads.resize(periods);
+    }
+    record->snapshot_cost_ns = platform::snapshot_cost_ns(101);
+    record->interrupt_read_cost_ns = platform::interrupt_read_cost_ns(11);
+  }
+  const bool keep_record = record && record->not_kept.empty();
+  const auto records_period = [&](std::size_t k) {
+    if (!keep_record) return false;
+    if (settings.recording == step_recording::every_period) return true;
+    return (static_cast<std::int64_t>(k) / record->block_periods) % 2 == 0;
+  };
+  std::atomic<bool> schedstat_seen{false};
+  std::atomic<bool> interrupts_seen{false};
+  // How many participants have ended each period: the last one reads the
+  // interrupt tables, so that nobody's end waits behind the read.
+  std::vector<std::atomic<unsigned>> periods_ended(keep_record ? periods : 0);
   std::vector<std::int64_t> wake(periods * participants, 0);
   std::vector<std::int64_t> end(periods * participants, 0);
   std::vector<std::optional<unsigned>> cpus(participants);
@@ -205,6 +431,17 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
     } catch (const std::exception& e) {
       errors[id] = e.what();
     }
+    // Opened on this thread (after the pin): /proc/thread-self is the opener.
+    std::optional<platform::thread_counter_reader> counters;
+    std::optional<platform::interrupt_reader> interrupts;
+    if (keep_record) {
+      counters.emplace();
+      if (counters->schedstat_available()) schedstat_seen.store(true, std::memory_order_relaxed);
+      interrupts.emplace();  // one per participant: two periods' last participants may read at once
+      if (interrupts->available()) interrupts_seen.store(true, std::memory_order_relaxed);
+      first_snapshot[id] = counters->read();
+      if (id == 0 && interrupts->available()) interrupt_start = interrupts->read();
+    }
     bool reported_late = false;
     for (std::size_t k = 0; k < periods; ++k) {
       // (2) relaxed: a team's sync edges order (1) before this read (header);
@@ -215,6 +452,12 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       const std::int64_t latency = platform::now_ns() - target;
       wake[k * participants + id] = latency;
       if (k == 0) cpus[id] = platform::current_cpu();
+      participant_period* row = records_period(k) ? &record->at(static_cast<std::int64_t>(k), id) : nullptr;
+      if (row != nullptr) {
+        const auto cpu = platform::current_cpu();
+        row->wake_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
+      }
+      if (recorder != nullptr) recorder->begin_period(id, k, target, row);
       if (settings.stop_above_ns && latency > *settings.stop_above_ns && !reported_late) {
         reported_late = true;
         const std::lock_guard lock(stop_mutex);
@@ -232,6 +475,17 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       step_one(id, static_cast<std::uint64_t>(k));
       const std::int64_t ended = platform::now_ns() - target;
       end[k * participants + id] = ended;
+      if (row != nullptr) {
+        // After the end was read: outside the completion time.
+        row->recorded = true;
+        row->counters = counters->read();
+        row->end_cpu = row->counters.cpu ? static_cast<std::int32_t>(*row->counters.cpu) : -1;
+        // acq_rel: the last participant's read comes after every other
+        // participant's end of this period.
+        const bool last = periods_ended[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants;
+        if (last && interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
+          interrupt_reads[k] = interrupts->read();
+      }
       if (settings.stop_after_misses && settings.stop_margin_periods > 0 && ended > settings.period_ns) {
         const auto period = static_cast<std::int64_t>(k);
         std::int64_t counted = last_counted_miss.load(std::memory_order_relaxed);
@@ -285,6 +539,12 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   for (unsigned id = 0; id < participants; ++id) result.figure5.add("worker " + std::to_string(id), "worker", deltas[id]);
   for (unsigned id = 0; id < participants; ++id)
     if (!errors[id].empty()) result.errors.push_back("worker " + std::to_string(id) + ": " + errors[id]);
+  if (record) {
+    if (keep_record) finish_record(*record, kept, first_snapshot, interrupt_start, interrupt_reads);
+    record->schedstat_available = schedstat_seen.load(std::memory_order_relaxed);
+    record->interrupts_available = interrupts_seen.load(std::memory_order_relaxed);
+    result.record = std::move(record);
+  }
   return result;
 }
 

@@ -289,6 +289,47 @@ TEST(DelayCommand, PacedRunWritesTheAgreedJson) {
   EXPECT_FALSE(document.contains("figure5_unpinned"));
 }
 
+TEST(DelayCommand, ARecordedRunSaysWhyItsLateStepsWereLate) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep delay causes");
+  const auto path = temp_json("delay-causes");
+  const auto result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration",
+                                   "200ms", "--out", path});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("why the late steps were late"), std::string::npos) << result.out;
+  EXPECT_NE(result.out.find("record: per stage"), std::string::npos) << result.out;
+  const auto document = read_json(path);
+  ASSERT_TRUE(document["causes"].is_object());
+  const auto& causes = document["causes"];
+  EXPECT_TRUE(causes["unavailable"].is_null());
+  for (const auto& row : causes["tail"]) {
+    double total = 0;
+    for (const auto& [cause, ns] : row["cause_ns"].items()) total += ns.get<double>();
+    EXPECT_NEAR(total, row["excess_ns"].get<double>(), 1e-6 * row["excess_ns"].get<double>() + 1)
+        << row["label"] << ": the causes add up to the excess";
+  }
+  for (const auto& step : causes["worst"])
+    EXPECT_EQ(step["line"].get<std::string>().rfind("step ", 0), 0u) << step["line"];
+}
+
+TEST(DelayCommand, NoRecordWritesNoCausesAndRecordingCostIsAPair) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep delay record");
+  const auto path = temp_json("delay-no-record");
+  const auto plain = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration",
+                                  "20ms", "--no-record", "--out", path});
+  ASSERT_EQ(plain.exit_status, 0) << plain.err;
+  EXPECT_TRUE(read_json(path)["causes"].is_null());
+  EXPECT_EQ(plain.out.find("why the late steps"), std::string::npos);
+  const auto cost = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration",
+                                 "1100ms", "--recording-cost", "--out", path});
+  ASSERT_EQ(cost.exit_status, 0) << cost.err;
+  EXPECT_NE(cost.out.find("recording cost: completion p50"), std::string::npos) << cost.out;
+  const auto document = read_json(path);
+  ASSERT_TRUE(document["causes"]["recording_cost"].is_object());
+  EXPECT_EQ(document["causes"]["recording_cost"]["pairs"], 2) << "1100 periods hold two pairs of 250-period blocks";
+  const auto both = run_command({LOCKSTEP_BINARY, "delay", "--no-record", "--recording-cost"});
+  EXPECT_EQ(both.exit_status, 2);
+}
+
 TEST(DelayCommand, ComparePinningAddsTheUnpinnedTable) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "delay --compare-pinning");
   const auto path = temp_json("delay-compare");
