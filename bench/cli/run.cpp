@@ -215,7 +215,8 @@ void add_run(CLI::App& app, int& result) {
                   fmt::format("Repetitions per entry (default {}; --quick {})", bench::kDefaultRepetitions, bench::kQuickRepetitions))
       ->check(CLI::Range(1, 1000));
   run->add_option("--min-time", options->min_time,
-                  fmt::format("Minimum measured time per repetition, with a unit (default {}; --quick {})",
+                  fmt::format("Measured time per repetition, with a unit (default {}; --quick {}): that many "
+                              "timed batches of about 2 ms (--quick 0.5 ms), at least one",
                               bench::kDefaultMinTime, bench::kQuickMinTime));
   add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)")->excludes(plan);
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");

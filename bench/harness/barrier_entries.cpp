@@ -58,7 +58,8 @@ std::vector<std::string> register_barrier_benchmarks(const run_selection& select
         auto* entry = benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
           barrier_entry<Primitive>(state, harness, spec);
         });
-        measure_briefly_if_it_will_collapse(*entry, sync::info_of<Primitive>(), threads, harness);
+        constexpr sync::primitive_info info = sync::info_of<Primitive>();
+        size_entry(*entry, &info, threads, harness);
         entry->UseManualTime()->Unit(benchmark::kNanosecond);
         registered.push_back(spec.name());
         // The entry's side of a paired comparison (paired_blocks.hpp).

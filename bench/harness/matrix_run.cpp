@@ -200,6 +200,10 @@ run_book execute_matrix(const matrix_request& request, const platform::topology&
     harness.settings.call_budget_ns = 2'000'000'000;
     harness.stalls_before_skipping_sync = 2;
   }
+  // --min-time in batches of the target size (run_book.hpp: timed_batches).
+  const std::int64_t target = harness.settings.target_batch_ns;
+  harness.settings.timed_batches =
+      static_cast<unsigned>(std::clamp<std::int64_t>((request.min_time_ns + target - 1) / target, 1, 1'000'000));
   // The harness-overhead pair gets three times the repetitions (at least the
   // run's): its on / off ratio is read to a percent or two.
   harness.settings.overhead_repetitions = 3 * (request.repetitions > 0 ? request.repetitions : repetitions);
@@ -216,8 +220,7 @@ run_book execute_matrix(const matrix_request& request, const platform::topology&
   std::vector<std::string> arguments{"lockstep run",
                                      "--benchmark_out=" + (result_file ? result_file->temporary_path() : std::string("/dev/null")),
                                      "--benchmark_out_format=json",
-                                     fmt::format("--benchmark_repetitions={}", repetitions),
-                                     fmt::format("--benchmark_min_time={}", static_cast<double>(request.min_time_ns) / 1e9)};
+                                     fmt::format("--benchmark_repetitions={}", repetitions)};
   const bool interleave = request.interleave;
   if (interleave) arguments.emplace_back("--benchmark_enable_random_interleaving=true");
   arguments.insert(arguments.end(), request.benchmark_flags.begin(), request.benchmark_flags.end());

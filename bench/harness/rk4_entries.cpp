@@ -256,7 +256,8 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
           : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
               rk4_entry<Sync, Layout, Model, kernels::sync_timing::off>(state, harness, spec);
             });
-  measure_briefly_if_it_will_collapse(*entry, sync::info_of<Sync>(), spec.threads, harness);
+  constexpr sync::primitive_info info = sync::info_of<Sync>();
+  size_entry(*entry, &info, spec.threads, harness);
   return entry->UseManualTime()->Unit(benchmark::kNanosecond);
 }
 
@@ -376,6 +377,7 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
                                    [&harness, spec](benchmark::State& state) {
                                      serial_entry<Model>(state, harness, spec);
                                    })
+          ->Iterations(harness.settings.timed_batches)
           ->UseManualTime()
           ->Unit(benchmark::kNanosecond);
     });

@@ -32,6 +32,7 @@
 //     a phase would hold the run; the primitives in sync/ always make progress
 //     (pure spinners through preemption, the paper's ThreadWaiter through its
 //     timeout), slowly, and the bound catches the slowness.
+#include <algorithm>
 #include <barrier>
 #include <cstddef>
 #include <cstdint>
@@ -76,6 +77,14 @@ struct run_settings {
   // barrier and two clock reads per batch vanish, short enough that Google
   // Benchmark can fit many batches into its minimum time.
   std::int64_t target_batch_ns = 2'000'000;
+  // Timed batches per repetition: the run's minimum time in batches of the
+  // target (matrix_run.cpp sets it from --min-time), given to Google
+  // Benchmark as the entry's iteration count (team_driver.hpp: size_entry).
+  // Left to size the count itself, Google Benchmark spends a first call of
+  // one batch and one of ten on each entry and then aims at 1.4 times the
+  // minimum time: the default run's repetitions held about 28 batches of
+  // 2 ms for a minimum of 40 ms.
+  unsigned timed_batches = 20;
   // A step (or episode) slower than this is a stall: four orders of magnitude
   // above any healthy combination (microseconds), below the paper's 1000 ms
   // timeout, so a lost wake-up is caught at its first occurrence.
@@ -228,6 +237,7 @@ class batch_clock {
       record_.batch_ns.push_back(batch);  // capacity reserved: no allocation here
     } else {
       warmed_up_ = true;
+      shrink_if_oversized(batch);
       if (warmed_up_hook_) warmed_up_hook_();
     }
     if (per_unit > settings_.stall_unit_ns) {
@@ -241,12 +251,32 @@ class batch_clock {
     }
   }
 
+  // A warm-up batch longer than this many targets makes the call's timed
+  // batches smaller (shrink_if_oversized).
+  static constexpr std::int64_t kOversizedBatch = 4;
+
   // Read by every participant after the barrier returns.
   bool stop() const noexcept { return stop_; }
   std::uint64_t units_per_batch() const noexcept { return units_per_batch_; }
   const batch_record& record() const noexcept { return record_; }
 
  private:
+  // A batch size probed while the entry ran fast can last tens of targets
+  // once the machine changes pace or a primitive with two speeds (win_event)
+  // turns slow: in the default run such repetitions took 1-2.4 s instead of
+  // about 40 ms, and the matrix a minute longer than planned. The warm-up
+  // batch shows it before any timed batch, so this call's timed batches are
+  // sized again from it; only ever smaller, never below one unit. The size
+  // lives here (record_.units_per_batch), and every figure per unit is taken
+  // from the record, so a smaller batch changes no unit's time.
+  void shrink_if_oversized(std::int64_t warm_up_ns) noexcept {
+    if (units_per_batch_ <= 1 || warm_up_ns <= kOversizedBatch * settings_.target_batch_ns) return;
+    const double unit_ns = static_cast<double>(warm_up_ns) / static_cast<double>(units_per_batch_);
+    const auto fits = static_cast<std::uint64_t>(static_cast<double>(settings_.target_batch_ns) / unit_ns);
+    units_per_batch_ = std::max<std::uint64_t>(1, fits);
+    record_.units_per_batch = units_per_batch_;
+  }
+
   unsigned wanted_;
   std::uint64_t units_per_batch_;
   const run_settings& settings_;

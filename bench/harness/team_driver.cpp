@@ -49,11 +49,17 @@ long pace_reading_before(harness_state& harness) {
   return harness.pace == nullptr ? -1 : static_cast<long>(harness.pace->latest_or_take(kFreshReadingNs));
 }
 
-void measure_briefly_if_it_will_collapse(benchmark::internal::Benchmark& entry, const sync::primitive_info& primitive,
-                                         unsigned threads, const harness_state& harness) {
-  if (primitive.pure_spin && harness.machine != nullptr &&
-      platform::is_oversubscribed(threads, static_cast<unsigned>(harness.machine->affinity().size())))
+void size_entry(benchmark::internal::Benchmark& entry, const sync::primitive_info* primitive, unsigned threads,
+                const harness_state& harness) {
+  const bool collapse_foreseen =
+      primitive != nullptr && primitive->pure_spin && harness.machine != nullptr &&
+      platform::is_oversubscribed(threads, static_cast<unsigned>(harness.machine->affinity().size()));
+  if (collapse_foreseen) {
     entry.Repetitions(kBriefRepetitions);
+    entry.Iterations(std::min(kBriefBatches, harness.settings.timed_batches));
+  } else {
+    entry.Iterations(harness.settings.timed_batches);
+  }
 }
 
 long pace_reading_after(harness_state& harness) {

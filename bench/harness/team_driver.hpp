@@ -221,17 +221,23 @@ struct harness_state {
   std::set<std::string> short_batches;
 };
 
+// How many repetitions and timed batches an entry gets (Google Benchmark's
+// Repetitions and Iterations): the run's timed_batches (run_book.hpp), and
+// the run's repetitions, except where collapse is foreseen.
+//
 // Collapse measured briefly: a pure spinner (sync/registry.hpp: pure_spin)
 // with more threads than the CPUs of the affinity set waits for a scheduler
 // quantum at every stage, so its step takes tens of milliseconds, where the
 // others' take microseconds, and every repetition costs tens of units of
 // that (ck_*'s entries at threads:4 took 13.6 s of the 42 s quick run on the
-// 2-vCPU development VM). One repetition shows it; the summary then reports
-// such an entry as collapsed (paired_blocks.hpp: find_collapsed) when it
-// does collapse, and ranks it as usual, with one repetition, when it does not.
+// 2-vCPU development VM). One repetition of a few batches shows it; the
+// summary then reports such an entry as collapsed (paired_blocks.hpp:
+// find_collapsed) when it does collapse, and ranks it as usual, with one
+// repetition, when it does not. `primitive`: nullptr for an entry of none.
 inline constexpr int kBriefRepetitions = 1;
-void measure_briefly_if_it_will_collapse(benchmark::internal::Benchmark& entry, const sync::primitive_info& primitive,
-                                         unsigned threads, const harness_state& harness);
+inline constexpr unsigned kBriefBatches = 3;
+void size_entry(benchmark::internal::Benchmark& entry, const sync::primitive_info* primitive, unsigned threads,
+                const harness_state& harness);
 
 // Takes a pace reading around a call (pace.hpp: the reading after the
 // previous call when it is fresh, else a new one; always a new one after)
@@ -428,7 +434,7 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
       return record_stop(result);
     const double unit_ns = median_unit_ns(result.batches);
     const double target = static_cast<double>(settings.target_batch_ns);
-    const double batch_ns = unit_ns * static_cast<double>(batch_size->second);
+    const double batch_ns = unit_ns * static_cast<double>(result.batches.units_per_batch);
     if (batch_ns >= target / 4.0) harness.short_batches.erase(name);
     if (resize == kResizes || unit_ns <= 0.0 || batch_ns >= target * kShortBatch) break;
     const double affordable = static_cast<double>(settings.call_budget_ns) / 4.0 / (unit_ns * wanted);
