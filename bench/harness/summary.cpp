@@ -39,6 +39,15 @@ std::string optional_number(const captured_entry& entry, const std::string& coun
   return fmt::format(fmt::runtime(format_spec), *value);
 }
 
+// The CPUs a step kept busy: the team's CPU time per step over the step's
+// wall time (both medians over the repetitions). A team that spins while it
+// waits reads near its thread count; one that sleeps, less.
+std::string cpus_busy(const captured_entry& entry, const char* unit) {
+  const auto cpu = entry.median(fmt::format("team_cpu_ns_per_{}", unit));
+  const auto wall = entry.median(fmt::format("ns_per_{}", unit));
+  if (!cpu || !wall || !(*wall > 0.0)) return "-";
+  return fmt::format("{:.1f}", *cpu / *wall);
+}
 
 // The pace modes an entry's repetitions ran in: mode -> their values of `counter`.
 std::map<int, std::vector<double>> by_mode(const captured_entry& entry, const std::string& counter) {
@@ -178,7 +187,7 @@ void short_ranking(std::string& out, const run_book& book, std::size_t per_group
   });
   if (steps.empty()) return;
   out += fmt::format("\nFastest {} per thread count and placement (median step, spread over repetitions, stage "
-                     "sync in core-to-core transfers):\n",
+                     "sync in core-to-core transfers, CPUs the team kept busy):\n",
                      per_group);
   std::string group;
   std::size_t shown = 0;
@@ -193,9 +202,9 @@ void short_ranking(std::string& out, const run_book& book, std::size_t per_group
       out += "  " + group + "\n";
     }
     if (shown++ >= per_group) continue;
-    out += fmt::format("    {:>11} {:>8} {:>6}  {} + {}{}\n", format_ns(step.median), spread_of(entry, "ns_per_step"),
-                       optional_number(entry, "vs_c2c", "{:.2f}"), entry.field("sync"), entry.field("layout"),
-                       entry_flags(entry));
+    out += fmt::format("    {:>11} {:>8} {:>6} {:>4} CPU  {} + {}{}\n", format_ns(step.median),
+                       spread_of(entry, "ns_per_step"), optional_number(entry, "vs_c2c", "{:.2f}"),
+                       cpus_busy(entry, "step"), entry.field("sync"), entry.field("layout"), entry_flags(entry));
   }
 }
 

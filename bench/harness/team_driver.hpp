@@ -48,6 +48,10 @@ struct call_result {
   // its first timed batch to its return from the barrier that ends the last
   // one. -1 when no timed batch ran or the clock could not be read.
   std::int64_t lead_cpu_ns = -1;
+  // The same summed over every participant: the CPU the team burned for the
+  // timed batches (a spinning participant burns its CPU while it waits, a
+  // sleeping one does not). -1 when any participant's clock is missing.
+  std::int64_t team_cpu_ns = -1;
 };
 
 // Per-participant slots, written only by the participant's own thread and
@@ -135,6 +139,17 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
   if (!result.batches.batch_ns.empty() && lead.timed_cpu_start_ns >= 0 &&
       lead.timed_cpu_end_ns >= lead.timed_cpu_start_ns)
     result.lead_cpu_ns = lead.timed_cpu_end_ns - lead.timed_cpu_start_ns;
+  if (result.lead_cpu_ns >= 0) {
+    std::int64_t team_cpu = 0;
+    for (const participant_slot& slot : slots) {
+      if (slot.timed_cpu_start_ns < 0 || slot.timed_cpu_end_ns < slot.timed_cpu_start_ns) {
+        team_cpu = -1;
+        break;
+      }
+      team_cpu += slot.timed_cpu_end_ns - slot.timed_cpu_start_ns;
+    }
+    result.team_cpu_ns = team_cpu;
+  }
   return result;
 }
 
@@ -457,9 +472,11 @@ std::optional<call_result> measure_entry(benchmark::State& state, harness_state&
   }
   const std::string unit_name(unit);
   state.counters[unit_name + "s_per_batch"] = units;
+  const double units_timed = static_cast<double>(result.batches.batch_ns.size()) * units;
   if (result.lead_cpu_ns >= 0)
-    state.counters["cpu_ns_per_" + unit_name] =
-        static_cast<double>(result.lead_cpu_ns) / (static_cast<double>(result.batches.batch_ns.size()) * units);
+    state.counters["cpu_ns_per_" + unit_name] = static_cast<double>(result.lead_cpu_ns) / units_timed;
+  if (result.team_cpu_ns >= 0)
+    state.counters["team_cpu_ns_per_" + unit_name] = static_cast<double>(result.team_cpu_ns) / units_timed;
   return result;
 }
 
