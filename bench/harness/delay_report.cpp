@@ -399,12 +399,16 @@ class step_reader {
     return arrival(k, p, s) - (s > 0 ? departure(k, p, s - 1) : wake(k, p));
   }
 
-  // Time off the CPU and not runnable in p's window (its sleep, its waits).
+  // Time off the CPU and not runnable in p's step: from its wake-up to its
+  // end, less the window's on-CPU time and run-queue wait (the window also
+  // holds the sleep before the wake-up, whose length moves with the previous
+  // step's end; that sleep is off the CPU, so it is left out here, and the
+  // little CPU and run-queue time around the wake-up only shifts the median).
   std::optional<double> blocked(std::int64_t k, unsigned p) const {
     const participant_period& row = record_.at(k, p);
-    if (k == 0 || !row.counters_valid || !row.counters.on_cpu_ns || !row.counters.run_queue_wait_ns) return std::nullopt;
-    const double window = period_ns_ + end(k, p) - end(k - 1, p);
-    return window - static_cast<double>(*row.counters.on_cpu_ns) - static_cast<double>(*row.counters.run_queue_wait_ns);
+    if (!row.counters_valid || !row.counters.on_cpu_ns || !row.counters.run_queue_wait_ns) return std::nullopt;
+    return end(k, p) - wake(k, p) - static_cast<double>(*row.counters.on_cpu_ns) -
+           static_cast<double>(*row.counters.run_queue_wait_ns);
   }
   std::optional<std::int64_t> interrupts_of(std::int64_t k, std::size_t column) const {
     const std::size_t at = static_cast<std::size_t>(k) * columns_ + column;
@@ -480,6 +484,7 @@ struct window_budget {
   std::int64_t fault_excess = 0;
   std::int64_t major_faults = 0;
   bool switched = false;  // more switches than its median: the guest scheduled it differently
+  bool migrated = false;  // it changed CPU somewhere in its window: the move's IPIs and cold caches are the move's
 };
 
 window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
@@ -496,42 +501,66 @@ window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
   budget.major_faults = row.counters.major_faults;
   budget.switched = row.counters.voluntary_switches > static_cast<std::int64_t>(std::llround(median.voluntary)) ||
                     row.counters.involuntary_switches > static_cast<std::int64_t>(std::llround(median.involuntary));
+  const std::int32_t woke_on = row.wake_cpu;
+  const auto moved = [&](std::int32_t cpu) { return cpu >= 0 && woke_on >= 0 && cpu != woke_on; };
+  if (k > 0 && reader.row(k - 1, p).recorded) budget.migrated = moved(reader.row(k - 1, p).end_cpu);
+  for (const auto& passage : row.stages)
+    budget.migrated = budget.migrated || moved(passage.arrival_cpu) || moved(passage.departure_cpu);
+  budget.migrated = budget.migrated || moved(row.end_cpu);
   return budget;
 }
 
-// Splits one part's excess `excess` (see delay_report.hpp's order).
+// Splits one part's excess `excess` (see delay_report.hpp).
 void split_part(const step_reader& reader, std::int64_t k, const part& piece, double excess, window_budget& budget,
                 cause_split& split) {
   double left = excess;
-  const auto take = [&](delay_cause cause, double available) {
-    const double amount = std::min(left, std::max(0.0, available));
-    split[cause_index(cause)] += amount;
-    left -= amount;
-    return amount;
-  };
   if (piece.cpu_start >= 0 && piece.cpu_end >= 0 && piece.cpu_start != piece.cpu_end) {
-    const double moved = take(delay_cause::migration, left);
-    budget.run_queue -= std::min(budget.run_queue, moved);
-  }
-  budget.run_queue -= take(delay_cause::run_queue_wait, budget.run_queue);
-  if (budget.fault_excess > 0) {
-    if (budget.major_faults > 0) budget.blocked -= take(delay_cause::page_faults, budget.blocked);
-    budget.on_cpu -= take(delay_cause::page_faults, budget.on_cpu);
+    // The part itself crossed CPUs: all of it is the move's.
+    split[cause_index(delay_cause::migration)] += left;
+    budget.run_queue -= std::min(budget.run_queue, left);
+    return;
   }
   const auto interrupts = reader.interrupt_excess(k, piece.cpu_end);
-  if (interrupts && *interrupts > 0) budget.on_cpu -= take(delay_cause::interrupts, budget.on_cpu);
-  // Blocked longer than usual: in its own stage, its own doing (compute); in
-  // a wake-up, the kernel's wake-up path when the guest shows it at work
+  const bool more_interrupts = interrupts && *interrupts > 0;
+  // Where the on-CPU time above the median went: faults, else the move's
+  // IPIs and cold caches, else interrupts, else no guest event (a stall).
+  const delay_cause on_cpu = budget.fault_excess > 0 ? delay_cause::page_faults
+                             : budget.migrated       ? delay_cause::migration
+                             : more_interrupts       ? delay_cause::interrupts
+                                                     : delay_cause::machine_stall;
+  // Blocked longer than usual: in its own stage, its own doing (compute);
+  // in a wake-up, the kernel's wake-up path when the guest shows it at work
   // (more switches or interrupts than usual), otherwise a wake-up no guest
-  // event delayed: the timer or the waker's signal was not delivered while
-  // the vCPU did not run (machine stall).
-  const bool guest_event = budget.switched || (interrupts && *interrupts > 0);
-  const delay_cause own = piece.kind == part_kind::compute ? delay_cause::compute
-                          : guest_event                    ? delay_cause::wakeup_latency
-                                                           : delay_cause::machine_stall;
-  budget.blocked -= take(own, budget.blocked);
-  budget.on_cpu -= take(delay_cause::machine_stall, budget.on_cpu);
-  take(piece.kind == part_kind::compute ? delay_cause::unexplained : delay_cause::wakeup_latency, left);
+  // event delayed (the timer or the waker's signal was not delivered while
+  // the vCPU did not run: a stall). Major faults block too.
+  const bool guest_event = budget.switched || more_interrupts;
+  const delay_cause blocked = budget.major_faults > 0           ? delay_cause::page_faults
+                              : piece.kind == part_kind::compute ? delay_cause::compute
+                              : guest_event                      ? delay_cause::wakeup_latency
+                                                                 : delay_cause::machine_stall;
+  // The part's excess is shared among the window's three kinds of time in
+  // proportion to what each has above its median (each capped by it).
+  // A timer wake-up lies before the step (in the sleep): of the window's
+  // time only its run-queue wait can be the wake-up's.
+  const bool timer = piece.kind == part_kind::timer_wakeup;
+  const double available = budget.run_queue + (timer ? 0.0 : budget.on_cpu + budget.blocked);
+  if (available > 0) {
+    const double share = std::min(1.0, left / available);
+    const double run_queue = budget.run_queue * share;
+    const double cpu = timer ? 0.0 : budget.on_cpu * share;
+    const double off = timer ? 0.0 : budget.blocked * share;
+    split[cause_index(delay_cause::run_queue_wait)] += run_queue;
+    split[cause_index(on_cpu)] += cpu;
+    split[cause_index(blocked)] += off;
+    budget.run_queue -= run_queue;
+    budget.on_cpu -= cpu;
+    budget.blocked -= off;
+    left -= run_queue + cpu + off;
+  }
+  if (left > 0)
+    split[cause_index(piece.kind == part_kind::compute ? delay_cause::unexplained
+                      : guest_event                    ? delay_cause::wakeup_latency
+                                                       : delay_cause::machine_stall)] += left;
 }
 
 delay_cause top_of(const cause_split& split) {

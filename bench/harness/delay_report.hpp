@@ -61,28 +61,38 @@ struct search_reading {
 // parts add up to the completion exactly. Each part's excess is its length
 // minus the median of the same part (participant, stage, kind) over the run.
 //
-// Splitting a part's excess, in this order, each capped by what is left:
-//   migration        the part began on one CPU and ended on another;
-//   run-queue wait   the participant's run-queue wait in its window (from
-//                    its previous step's end to this one's) above its median;
-//   page faults      its faults above the median, taken from its on-CPU
-//                    time above the median (a fault is handled on its CPU);
-//   interrupts       its CPU's interrupts and softirqs in the window above
-//                    that CPU's median, from the on-CPU time left;
-//   compute          (compute parts) time it was blocked in its own stage:
-//                    off the CPU and not runnable, above its median;
-//   wake-up latency  (resume and timer parts) the same blocked time, when
-//                    the guest shows its wake-up path at work (more switches
-//                    than its median, or more interrupts on its CPU); with
-//                    neither, the wake-up was delayed by nothing the guest
-//                    did: machine stall;
-//   machine stall    on-CPU time above the median that no guest event
-//                    explains: the guest says the thread ran, no switch, no
-//                    fault, no interrupt (on a VM whose host reports no steal
-//                    time, the vCPU was descheduled or the hardware stalled);
-//   wake-up latency  what is left of a resume or timer part;
-//   unexplained      what is left of a compute part, and the step's excess
-//                    the parts do not cover.
+// Splitting a part's excess. A part that began on one CPU and ended on
+// another is all migration. Otherwise the participant's window (from its
+// previous step's end to this one's) has three kinds of time above its
+// medians: run-queue wait, on-CPU time and blocked time (off the CPU, not
+// runnable); the part's excess is shared among them in proportion (each
+// capped by what it has left, shared by the participant's parts), and each
+// is named by the guest's evidence:
+//   run-queue wait   waiting on a run queue (preempted, or woken behind
+//                    another task);
+//   on-CPU time      page faults when it faulted more than its median;
+//                    else migration when it changed CPU in the window (the
+//                    move's IPIs and cold caches); else interrupts when its
+//                    CPU took more interrupts and softirqs than that CPU's
+//                    median; else machine stall: the guest says the thread
+//                    ran, and no switch, fault or interrupt explains the time
+//                    (on a VM whose host reports no steal time, the vCPU was
+//                    descheduled or the hardware stalled);
+//   blocked time     page faults when it had major faults; else in a
+//                    compute part its own doing (compute: it slept or waited
+//                    in its own stage); in a wake-up part wake-up latency
+//                    when the guest shows its wake-up path at work (more
+//                    switches, or more interrupts on its CPU), else machine
+//                    stall (a wake-up nothing the guest did delayed);
+//   what is left     in a wake-up part, wake-up latency when the guest
+//                    shows its wake-up path at work, else machine stall; in
+//                    a compute part, unexplained; and the step's excess the
+//                    parts do not cover is unexplained.
+// A timer wake-up lies in the sleep before the step: of the window's time
+// only its run-queue wait is shared with it; blocked time is the step's
+// (from its wake-up to its end).
+// (Blocked time is measured from the wake-up to the end, so that the sleep,
+// whose length moves with the previous step's end, does not blur it.)
 // A step whose timer part is late because the participant's own previous
 // step ended after this period's target inherits that step's causes.
 // When the parts' excesses add up to more than the step's excess (other
