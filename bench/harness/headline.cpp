@@ -103,6 +103,8 @@ std::vector<headline_choice> choose(const run_book& book) {
     if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0)
       choice.spread_pct = (range->second - range->first) / 2.0 / choice.ns_per_step * 100.0;
     choice.vs_c2c = chosen->median("vs_c2c");
+    if (const auto cpu = chosen->median("team_cpu_ns_per_step"); cpu && choice.ns_per_step > 0.0)
+      choice.cpus_busy = *cpu / choice.ns_per_step;
     choice.oversubscribed = chosen->median("oversubscribed").value_or(0.0) > 0.5;
     // std::barrier, the C++20 baseline, against the choice: its own pair
     // is against the median leader, which is the choice unless overturned.
@@ -124,6 +126,7 @@ void choice_lines(std::vector<std::string>& lines, const headline_choice& choice
                                   choice.threads, choice.pin, choice.sync, choice.layout, format_ns(choice.ns_per_step),
                                   choice.spread_pct);
   if (choice.vs_c2c) first += fmt::format(", sync {:.2f} c2c transfers a stage", *choice.vs_c2c);
+  if (choice.cpus_busy) first += fmt::format(", {:.1f} CPUs busy", *choice.cpus_busy);
   if (choice.oversubscribed) first += fmt::format(" ({} threads on {} CPUs)", choice.threads, cpus);
   lines.push_back(first);
   std::string second;
@@ -311,6 +314,7 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"ns_per_step", choice.ns_per_step},
                                {"spread_pct", choice.spread_pct},
                                {"vs_c2c", choice.vs_c2c ? nlohmann::json(*choice.vs_c2c) : nlohmann::json(nullptr)},
+                               {"cpus_busy", choice.cpus_busy ? nlohmann::json(*choice.cpus_busy) : nlohmann::json(nullptr)},
                                {"oversubscribed", choice.oversubscribed},
                                {"basis", choice.basis},
                                {"median_leader", choice.median_leader},

@@ -60,6 +60,8 @@ struct headline_choice {
   double ns_per_step = 0.0;
   double spread_pct = 0.0;          // half the min..max range over repetitions, of the median
   std::optional<double> vs_c2c;     // stage sync in one-way core-to-core transfers
+  // The CPUs the team kept busy: team_cpu_ns_per_step / ns_per_step (medians).
+  std::optional<double> cpus_busy;
   bool oversubscribed = false;
   // "paired": the pair with the runner-up keeps the median order or puts
   // the runner-up first; "medians": no pair was measured (--pairs 0).
