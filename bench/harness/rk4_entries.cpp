@@ -166,18 +166,17 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // The sync time the timed batches start from: read when the warm-up batch
   // ends (the team waiting at the harness barrier), so that the warm-up's
   // cold caches and first faults stay out of sync_ns_per_stage.
-  // The sampling period is set there too, from the probed batch size: about
+  // The sampling period is set there too, from this call's batch size (the
+  // probed one, or smaller after a slow warm-up: run_book.hpp, batch_clock): about
   // kSampledStepsPerBatch sampled steps per batch, never fewer than one step
   // in kSyncTimingSampleSteps. A slow step (few per batch) is then timed often
   // enough to be measured at all, and its clock readings (8 per sampled step)
   // stay a tiny share of it; a fast one keeps the default period.
   kernels::stage_sync_time sync_before{};
   const std::string name = spec.name();
-  const auto result = measure_entry(state, harness, name, sync::find_primitive(info.name), plan, team, slots, steps, kInstrumented, "step", [&] {
+  const auto result = measure_entry(state, harness, name, sync::find_primitive(info.name), plan, team, slots, steps, kInstrumented, "step", [&](std::uint64_t units) {
     if constexpr (Timing == kernels::sync_timing::sampled) {
       constexpr std::uint64_t kSampledStepsPerBatch = 8;
-      const auto batch = harness.units_per_batch.find(name);
-      const std::uint64_t units = batch == harness.units_per_batch.end() ? 1 : batch->second;
       step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1, kernels::kSyncTimingSampleSteps));
     }
     sync_before = step.sync_time();

@@ -206,11 +206,13 @@ struct batch_record {
 // batch: every participant has arrived (its writes happen-before the
 // completion) and none has started the first timed batch, so it may read
 // what the participants accumulated, without atomics, as the baseline of the
-// timed batches. It must not throw or block.
+// timed batches. It gets the size of the timed batches to come (the warm-up
+// may have made them smaller: shrink_if_oversized). It must not throw or
+// block.
 class batch_clock {
  public:
   batch_clock(unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings,
-              std::function<void()> warmed_up = {})
+              std::function<void(std::uint64_t units_per_batch)> warmed_up = {})
       : wanted_(timed_batches),
         units_per_batch_(units_per_batch),
         settings_(settings),
@@ -238,7 +240,7 @@ class batch_clock {
     } else {
       warmed_up_ = true;
       shrink_if_oversized(batch);
-      if (warmed_up_hook_) warmed_up_hook_();
+      if (warmed_up_hook_) warmed_up_hook_(units_per_batch_);
     }
     if (per_unit > settings_.stall_unit_ns) {
       record_.stalled = true;
@@ -280,7 +282,7 @@ class batch_clock {
   unsigned wanted_;
   std::uint64_t units_per_batch_;
   const run_settings& settings_;
-  std::function<void()> warmed_up_hook_;
+  std::function<void(std::uint64_t)> warmed_up_hook_;
   batch_record record_;
   bool started_ = false;
   bool warmed_up_ = false;

@@ -76,7 +76,7 @@ struct alignas(platform::kCacheLine) participant_slot {
 template <class Team, class Work>
 call_result run_call(Team& team, std::vector<participant_slot>& slots, const platform::placement_plan& plan,
                      unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings,
-                     bool accounting, Work& work, std::function<void()> warmed_up = {}) {
+                     bool accounting, Work& work, std::function<void(std::uint64_t)> warmed_up = {}) {
   batch_clock clock(timed_batches, units_per_batch, settings, std::move(warmed_up));
   batch_gate gate(static_cast<unsigned>(slots.size()), clock);
   team.run([&](unsigned id) {
@@ -301,8 +301,8 @@ double median_unit_ns(const batch_record& record);
 //
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
-// first call (8 batches of one unit); run the timed call, calling warmed_up()
-// between its warm-up batch and its first timed batch (the team waiting: a
+// first call (8 batches of one unit); run the timed call, calling
+// warmed_up(units per timed batch) between its warm-up batch and its first timed batch (the team waiting: a
 // baseline for what the timed batches accumulate); feed Google Benchmark the
 // timed batches as its iterations (per unit, as above). Returns the call's
 // result, or nothing when the entry was skipped (SkipWithError, with the
@@ -313,7 +313,8 @@ template <class Team, class Work>
 std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
                                          const sync::primitive_info* primitive, const platform::placement_plan& plan,
                                          Team& team, std::vector<participant_slot>& slots, Work& work,
-                                         bool accounting, const char* unit, std::function<void()> warmed_up = {}) {
+                                         bool accounting, const char* unit,
+                                         std::function<void(std::uint64_t)> warmed_up = {}) {
   const run_settings& settings = harness.settings;
   const auto skip = [&](const std::string& reason) {
     state.SkipWithError(reason.c_str());
