@@ -125,24 +125,34 @@ void choice_lines(std::vector<std::string>& lines, const headline_choice& choice
   std::string first = fmt::format("  {}threads:{} pin:{:<8} {} + {}: {} a step (+-{:.1f} %)", model_words(choice.model),
                                   choice.threads, choice.pin, choice.sync, choice.layout, format_ns(choice.ns_per_step),
                                   choice.spread_pct);
-  if (choice.vs_c2c) first += fmt::format(", sync {:.2f} c2c transfers a stage", *choice.vs_c2c);
   if (choice.cpus_busy) first += fmt::format(", {:.1f} CPUs busy", *choice.cpus_busy);
   if (choice.oversubscribed) first += fmt::format(" ({} threads on {} CPUs)", choice.threads, cpus);
   lines.push_back(first);
-  std::string second;
+  // The details, packed into lines of the headline's width at their seams.
+  std::vector<std::string> details;
+  if (choice.vs_c2c) details.push_back(fmt::format("sync {:.2f} c2c transfers a stage", *choice.vs_c2c));
   if (choice.runner_up) {
     const bool overturned = choice.median_leader != choice.entry;
-    second = overturned ? fmt::format("first by median {} takes {} side by side", choice.runner_up->sync,
-                                      ratio_text(choice.runner_up->estimate, choice.runner_up->verdict))
-                        : fmt::format("next {} takes {}", choice.runner_up->sync,
-                                      ratio_text(choice.runner_up->estimate, choice.runner_up->verdict));
+    details.push_back(overturned ? fmt::format("first by median {} takes {} side by side", choice.runner_up->sync,
+                                               ratio_text(choice.runner_up->estimate, choice.runner_up->verdict))
+                                 : fmt::format("next {} takes {}", choice.runner_up->sync,
+                                               ratio_text(choice.runner_up->estimate, choice.runner_up->verdict)));
   } else if (choice.basis == "medians") {
-    second = "no paired comparison (--pairs 0): ranked by medians only";
+    details.push_back("no paired comparison (--pairs 0): ranked by medians only");
   }
   if (choice.baseline)
-    second += fmt::format("{}{} takes {}", second.empty() ? "" : "; ", choice.baseline->sync,
-                          ratio_text(choice.baseline->estimate, choice.baseline->verdict));
-  if (!second.empty()) lines.push_back("      " + second);
+    details.push_back(
+        fmt::format("{} takes {}", choice.baseline->sync, ratio_text(choice.baseline->estimate, choice.baseline->verdict)));
+  const std::string indent = "      ";
+  std::string line;
+  for (const auto& detail : details) {
+    if (!line.empty() && line.size() + 2 + detail.size() > kLineWidth) {
+      lines.push_back(line);
+      line.clear();
+    }
+    line += line.empty() ? indent + detail : "; " + detail;
+  }
+  if (!line.empty()) lines.push_back(line);
 }
 
 void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& probes) {
