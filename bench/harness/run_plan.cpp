@@ -14,13 +14,14 @@ namespace lockstep::bench {
 namespace {
 
 // A repetition lasts a fixed part (the team's start, the pace readings
-// around its call, the first call's batch-size probe) and a part that grows
-// with its minimum time (Google Benchmark's trial to size the iteration
-// count, the warm-up batch): on the development VM the default mode's
-// repetitions (40 ms) took about 95 ms and the quick mode's (5 ms) about
-// 22 ms, once collapsing entries were measured briefly.
-constexpr double kRepetitionFixedNs = 12'000'000.0;
-constexpr double kRepetitionOverMinTime = 2.1;
+// around its call, the entry's batch-size probe spread over its
+// repetitions) and a part that grows with its minimum time (the timed
+// batches, the warm-up batch, batches longer than the target): on the
+// development VM, quiet, the default mode's repetitions (40 ms) took 60 and
+// 70 ms in two runs back to back and the quick mode's (5 ms) 21 ms, once
+// each repetition ran a fixed number of batches (run_book.hpp: timed_batches).
+constexpr double kRepetitionFixedNs = 14'000'000.0;
+constexpr double kRepetitionOverMinTime = 1.25;
 // A pair of blocks costs this many times its two timed blocks (building the
 // two teams once, the pace readings around each pair): 0.10 s for 10 pairs of
 // 1 ms blocks on the development VM.
