@@ -850,7 +850,15 @@ def aggregate_line(comparison: Comparison, letter: str) -> str:
             f"only, {apart}")
     if overall is None:
         return head + f"): {UNAVAILABLE}"
-    return head + ("; beyond the pace" if comparison.paced else "") + "): " + aggregate_text(comparison, overall)
+    line = head + ("; beyond the pace" if comparison.paced else "") + "): " + aggregate_text(comparison, overall)
+    if overall.verdict in ("slower", "faster"):
+        # Its interval is drawn over the entries of one run a side: a drift of the whole machine between
+        # the two runs (a host that wakes sleeping vCPUs slower for a minute) moves every entry alike and
+        # reads as a change. Two default runs of one build, back to back on the development VM, gave
+        # 1.003 once and 1.109 ("slower") once.
+        line += ("\n  (one run a side: a drift of the whole machine between the runs reads as a change here; "
+                 "to see its size, run A again and compare A with its rerun)")
+    return line
 
 
 def aggregate_text(comparison: Comparison, aggregate: Aggregate) -> str:
