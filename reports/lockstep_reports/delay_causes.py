@@ -2,10 +2,10 @@
 
 Reads the `causes` object of a delay result file (docs/result-files.md, delay;
 docs/schemas/delay.schema.json, $defs/causes), as `lockstep delay` writes it
-(bench/harness/delay_report.cpp, causes_json). Not wired into the report yet:
-`causes_figure(document)` returns an SVG string (or None when the file has no
-causes) for the report's delay section to place, and `causes_rows` the table
-behind it.
+(bench/harness/delay_report.cpp, causes_json). `causes_figure(document)`
+returns an SVG string (or None when the file has no causes), which the
+report's delay section places (report.py, delay_section), and `causes_rows`
+the table behind it.
 """
 
 from __future__ import annotations

@@ -15,6 +15,7 @@ matplotlib's hash salt and drops its date; nothing here reads the clock).
 from __future__ import annotations
 
 import functools
+import json
 import os
 import re
 from dataclasses import dataclass, field
@@ -22,7 +23,7 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import figures, paper, statistics
+from . import delay_causes, figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, per_mode_medians, rank_tables, run_median
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER, SERIAL_CONTEXT,
                      UNAVAILABLE)
@@ -655,6 +656,17 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
     return rows
 
 
+def _delay_causes_figure(path: str) -> str | None:
+    """The causes figure of a delay file (delay_causes.py), None when the file has no causes. The file was
+    read and checked once already (inputs.py); only its causes object is taken again."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            document = json.load(handle)
+    except (OSError, ValueError):
+        return None
+    return delay_causes.causes_figure(document) if isinstance(document, dict) else None
+
+
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
     extras = item.extras
     runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
@@ -726,6 +738,11 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
                             trial_rows, caption="find-period: the trials in the order they ran"))
         section_figures.append(Figure(f"delay-{counter[0]}-find-period", f"{item.label}, find-period search",
                                       figures.period_search(search)))
+    causes = _delay_causes_figure(item.path)
+    if causes is not None:
+        paragraphs.append("Why the late steps were late: each tail's excess over the median step, split by cause "
+                          "(`lockstep delay` prints the same table and the latest steps one line each).")
+        section_figures.append(Figure(f"delay-{counter[0]}-causes", f"{item.label}, causes of the tail", causes))
     tables.append(figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper"))
     if item.unpinned:
         tables.append(figure5_table(item.unpinned.figure5,

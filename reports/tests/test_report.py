@@ -409,3 +409,30 @@ class Figures(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class DelayCauses(Scratch):
+    """A delay file's causes object (bench/harness/delay_report.cpp, causes_json) becomes the delay section's
+    stacked bars (delay_causes.py), placed by report.py's delay_section; a file without one gets none."""
+
+    def delay_document(self):
+        with open(fixture("delay_a.json"), encoding="utf-8") as stream:
+            return json.load(stream)
+
+    def test_a_file_with_causes_gets_the_causes_figure(self):
+        document = self.delay_document()
+        split = {"compute": 0.0, "run_queue_wait": 300.0, "migration": 0.0, "page_faults": 0.0, "interrupts": 0.0,
+                 "wake_up_latency": 700.0, "machine_stall": 0.0, "unexplained": 0.0}
+        row = {"label": "above p99", "threshold_ns": 5000.0, "steps": 10, "excess_ns": 1000.0, "cause_ns": split,
+               "explained_share": 1.0, "guest_share": 1.0, "top": "wake_up_latency"}
+        document["causes"] = {"unavailable": None, "tail": [row], "per_cpu": [{"cpu": 1, "cause_ns": split}],
+                              "worst": []}
+        html, markdown = self.report(self.write("delay_causes.json", document))
+        self.assertIn("causes of the tail", html)
+        self.assertIn("delay-0-causes", markdown)
+
+    def test_a_file_without_causes_gets_none(self):
+        document = self.delay_document()
+        document.pop("causes", None)
+        html, _ = self.report(self.write("delay_plain.json", document))
+        self.assertNotIn("causes of the tail", html)
