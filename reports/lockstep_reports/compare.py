@@ -1075,7 +1075,7 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
 
 
 # The default output (render_text without everything) lists at most this many changed entries each way.
-SHOWN_CHANGES = 10
+SHOWN_CHANGES = 6
 ALL_HINT = ("(lockstep compare --all prints every entry with its interval, q and counters, the calibrations, the "
             "whole context and the across-machines tables)")
 
