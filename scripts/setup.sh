@@ -4,7 +4,8 @@
 #   scripts/setup.sh          what building and running lockstep needs
 #   scripts/setup.sh --test   that, and what the tests need too (rt-tests, chromium,
 #                             libbenchmark-tools: Google Benchmark's compare.py,
-#                             spin: the Promela models in tests/spin, compiled with gcc)
+#                             spin: the Promela models in tests/spin, compiled with gcc;
+#                             iproute2: `ip netns`, two hosts for tests/mpi/netns-hosts.sh)
 #
 # Idempotent: when everything is present it checks and returns in well under a
 # second. Runs apt-get as root, or through sudo; says plainly what it installs.
@@ -18,7 +19,7 @@ build_packages=(
   python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2 python3-jsonschema
   openmpi-bin libopenmpi-dev
 )
-test_packages=(rt-tests chromium libbenchmark-tools spin)
+test_packages=(rt-tests chromium libbenchmark-tools spin iproute2)
 
 packages=("${build_packages[@]}")
 case "${1:-}" in
