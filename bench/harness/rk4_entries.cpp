@@ -166,8 +166,7 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // The sync time the timed batches start from: read when the warm-up batch
   // ends (the team waiting at the harness barrier), so that the warm-up's
   // cold caches and first faults stay out of sync_ns_per_stage.
-  // The sampling period is set there too, from this call's batch size (the
-  // probed one, or smaller after a slow warm-up: run_book.hpp, batch_clock): about
+  // The sampling period is set there too, from this call's batch size: about
   // kSampledStepsPerBatch sampled steps per batch, never fewer than one step
   // in kSyncTimingSampleSteps. A slow step (few per batch) is then timed often
   // enough to be measured at all, and its clock readings (8 per sampled step)

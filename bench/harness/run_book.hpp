@@ -206,9 +206,8 @@ struct batch_record {
 // batch: every participant has arrived (its writes happen-before the
 // completion) and none has started the first timed batch, so it may read
 // what the participants accumulated, without atomics, as the baseline of the
-// timed batches. It gets the size of the timed batches to come (the warm-up
-// may have made them smaller: shrink_if_oversized). It must not throw or
-// block.
+// timed batches. It gets the size of the timed batches to come. It must not
+// throw or block.
 class batch_clock {
  public:
   batch_clock(unsigned timed_batches, std::uint64_t units_per_batch, const run_settings& settings,
@@ -239,7 +238,6 @@ class batch_clock {
       record_.batch_ns.push_back(batch);  // capacity reserved: no allocation here
     } else {
       warmed_up_ = true;
-      shrink_if_oversized(batch);
       if (warmed_up_hook_) warmed_up_hook_(units_per_batch_);
     }
     if (per_unit > settings_.stall_unit_ns) {
@@ -253,32 +251,12 @@ class batch_clock {
     }
   }
 
-  // A warm-up batch longer than this many targets makes the call's timed
-  // batches smaller (shrink_if_oversized).
-  static constexpr std::int64_t kOversizedBatch = 4;
-
   // Read by every participant after the barrier returns.
   bool stop() const noexcept { return stop_; }
   std::uint64_t units_per_batch() const noexcept { return units_per_batch_; }
   const batch_record& record() const noexcept { return record_; }
 
  private:
-  // A batch size probed while the entry ran fast can last tens of targets
-  // once the machine changes pace or a primitive with two speeds (win_event)
-  // turns slow: in the default run such repetitions took 1-2.4 s instead of
-  // about 40 ms, and the matrix a minute longer than planned. The warm-up
-  // batch shows it before any timed batch, so this call's timed batches are
-  // sized again from it; only ever smaller, never below one unit. The size
-  // lives here (record_.units_per_batch), and every figure per unit is taken
-  // from the record, so a smaller batch changes no unit's time.
-  void shrink_if_oversized(std::int64_t warm_up_ns) noexcept {
-    if (units_per_batch_ <= 1 || warm_up_ns <= kOversizedBatch * settings_.target_batch_ns) return;
-    const double unit_ns = static_cast<double>(warm_up_ns) / static_cast<double>(units_per_batch_);
-    const auto fits = static_cast<std::uint64_t>(static_cast<double>(settings_.target_batch_ns) / unit_ns);
-    units_per_batch_ = std::max<std::uint64_t>(1, fits);
-    record_.units_per_batch = units_per_batch_;
-  }
-
   unsigned wanted_;
   std::uint64_t units_per_batch_;
   const run_settings& settings_;
