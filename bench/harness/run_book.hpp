@@ -32,7 +32,6 @@
 //     a phase would hold the run; the primitives in sync/ always make progress
 //     (pure spinners through preemption, the paper's ThreadWaiter through its
 //     timeout), slowly, and the bound catches the slowness.
-#include <algorithm>
 #include <barrier>
 #include <cstddef>
 #include <cstdint>

@@ -302,8 +302,9 @@ double median_unit_ns(const batch_record& record);
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
 // first call (8 batches of one unit); run the timed call, calling
-// warmed_up(units per timed batch) between its warm-up batch and its first timed batch (the team waiting: a
-// baseline for what the timed batches accumulate); feed Google Benchmark the
+// warmed_up(units per timed batch) between its warm-up batch and its first
+// timed batch (the team waiting: a baseline for what the timed batches
+// accumulate); feed Google Benchmark the
 // timed batches as its iterations (per unit, as above). Returns the call's
 // result, or nothing when the entry was skipped (SkipWithError, with the
 // reason). `primitive`: the registry's facts about the entry's primitive

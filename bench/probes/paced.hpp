@@ -386,6 +386,8 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
     if (settings.recording == step_recording::every_period) return true;
     return (static_cast<std::int64_t>(k) / record->block_periods) % 2 == 0;
   };
+  // Set by any participant, read after the team is joined: the join orders
+  // them, so relaxed (the flags carry no data of their own).
   std::atomic<bool> schedstat_seen{false};
   std::atomic<bool> interrupts_seen{false};
   // How many participants have ended each period: the last one reads the
@@ -480,8 +482,9 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
         row->recorded = true;
         row->counters = counters->read();
         row->end_cpu = row->counters.cpu ? static_cast<std::int32_t>(*row->counters.cpu) : -1;
-        // acq_rel: the last participant's read comes after every other
-        // participant's end of this period.
+        // acq_rel: each participant's increment releases its end of this
+        // period, and the last one's acquires every other's, so its
+        // interrupt read comes after all of them.
         const bool last = periods_ended[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants;
         if (last && interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
           interrupt_reads[k] = interrupts->read();
