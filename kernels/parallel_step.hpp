@@ -70,6 +70,8 @@
 //                           p spent inside the stage syncs it timed, and how
 //                           many it timed (sync_ns_per_stage = nanoseconds /
 //                           syncs); zero with Timing = off. sync_time() sums them.
+//                           Sampled also splits each timed sync into waiting
+//                           for others and release (stage_sync_time below).
 //   run_team(step, steps [, before])   launches a whole team (team_of<Sync>),
 //                           calls before(id) on each participant's thread
 //                           first (pinning), runs, joins, and returns the
@@ -79,7 +81,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstddef>
-#include <cstdint>
+#include <optional>
 #include <span>
 #include <stdexcept>
 #include <string>
@@ -116,10 +118,75 @@ enum class sync_timing { off, on, sampled };
 inline constexpr std::uint64_t kSyncTimingSampleSteps = 64;
 
 // What a participant accumulated with sync_timing on or sampled.
+//
+// Sampled only, the split of a timed sync span (arrival: the clock reading
+// before the barrier's arrive or the channel's receives; departure: the one
+// after) at the latest arrival among the participants whose arrival its
+// departure waits for (every other participant for a phase_barrier, its
+// producers for a graph_channel):
+//   waiting  arrival -> that latest awaited arrival, clipped to the span (0
+//            when it arrived last): waiting for others;
+//   release  that latest awaited arrival -> departure: what the primitive's
+//            release and wake-up cost (span - waiting).
+// A sync whose awaited arrivals could not all be read for its own step (a
+// stamp of another sampled step: sync_clock<sampled> says when) is counted in
+// unsplit_syncs and left out of the split, never guessed.
 struct stage_sync_time {
   std::uint64_t nanoseconds = 0;  // inside the timed stage syncs (barrier wait or receives)
   std::uint64_t syncs = 0;        // stage syncs timed (on: 4 per step)
+  std::uint64_t split_syncs = 0;          // sampled: timed syncs split into waiting and release
+  std::uint64_t split_nanoseconds = 0;    // their spans (waiting + release)
+  std::uint64_t waiting_nanoseconds = 0;  // of which waiting for others
+  std::uint64_t unsplit_syncs = 0;        // sampled: timed syncs left out of the split
+
+  stage_sync_time& operator+=(const stage_sync_time& other) noexcept {
+    nanoseconds += other.nanoseconds;
+    syncs += other.syncs;
+    split_syncs += other.split_syncs;
+    split_nanoseconds += other.split_nanoseconds;
+    waiting_nanoseconds += other.waiting_nanoseconds;
+    unsplit_syncs += other.unsplit_syncs;
+    return *this;
+  }
+  // What was accumulated since `earlier` (the same participants, read earlier).
+  [[nodiscard]] stage_sync_time since(const stage_sync_time& earlier) const noexcept {
+    return {nanoseconds - earlier.nanoseconds,
+            syncs - earlier.syncs,
+            split_syncs - earlier.split_syncs,
+            split_nanoseconds - earlier.split_nanoseconds,
+            waiting_nanoseconds - earlier.waiting_nanoseconds,
+            unsplit_syncs - earlier.unsplit_syncs};
+  }
 };
+
+// One sync span split at the latest awaited arrival (stage_sync_time says
+// what each part is). The latest awaited arrival is clipped into the span: a
+// participant that arrived last waited 0; an awaited stamp read after the
+// departure (a channel producer reads its clock just after its publish, so
+// its consumer can leave first) counts the whole span as waiting.
+struct sync_split {
+  std::int64_t waiting = 0;
+  std::int64_t release = 0;
+};
+[[nodiscard]] constexpr sync_split split_sync(std::int64_t arrival, std::int64_t departure,
+                                              std::int64_t latest_awaited_arrival) noexcept {
+  const std::int64_t span = std::max<std::int64_t>(departure - arrival, 0);
+  const std::int64_t waiting = std::clamp<std::int64_t>(latest_awaited_arrival - arrival, 0, span);
+  return {waiting, span - waiting};
+}
+
+// The mean waiting for others per stage sync over `time` (one repetition's
+// accumulation, summed over the team), when enough of its timed syncs were
+// split: at least kMinSplitSyncs, and no more than one timed sync in
+// kMaxUnsplitShare left out (a share skipped more often could be a biased
+// one: a stage whose stamps are often late). Otherwise nothing: the caller
+// omits its counters rather than report a made-up figure.
+inline constexpr std::uint64_t kMinSplitSyncs = 16;
+inline constexpr std::uint64_t kMaxUnsplitShare = 10;  // at most 1 in 10 timed syncs unsplit
+[[nodiscard]] inline std::optional<double> waiting_ns_per_stage(const stage_sync_time& time) noexcept {
+  if (time.split_syncs < kMinSplitSyncs || time.unsplit_syncs * kMaxUnsplitShare > time.syncs) return std::nullopt;
+  return static_cast<double>(time.waiting_nanoseconds) / static_cast<double>(time.split_syncs);
+}
 
 struct applicability {
   bool applicable;
@@ -164,44 +231,136 @@ struct exchange_for {
       channel_copy_in<Sync, Layout>>;
 };
 
+// Sampled timing's arrival stamps: one participant's arrivals at the four
+// stage syncs of its last two sampled steps (by the sampled step's ordinal
+// parity), on a line pair of its own: written by its participant once per
+// sampled step, read by the participants that wait for it at the end of that
+// step. A stamp is (arrival - the step object's construction time) << kStampTagBits | the
+// sampled step's ordinal modulo 2^kStampTagBits; -1 before the first.
+inline constexpr unsigned kStampTagBits = 8;
+inline constexpr std::int64_t kStampTagMask = (std::int64_t{1} << kStampTagBits) - 1;
+struct alignas(platform::kPrefetchPair) arrival_stamps {
+  std::atomic<std::int64_t> stamps[2][kRk4Stages];
+  arrival_stamps() noexcept {
+    for (auto& slot : stamps)
+      for (auto& stamp : slot) stamp.store(-1, std::memory_order_relaxed);
+  }
+};
+
+// What a participant's sampled clock reads and writes besides its own record.
+struct stamp_board {
+  arrival_stamps* own = nullptr;                // this participant's stamps
+  const arrival_stamps* all = nullptr;          // every participant's, by id
+  std::span<const unsigned> awaited;            // whose arrivals its departures wait for
+  std::int64_t origin = 0;                      // the stamps' time origin
+  std::uint64_t* sampled_steps = nullptr;       // its sampled steps so far: the next one's ordinal
+};
+
 // The stage-sync clock: a policy so that the step's loop has no branch on it.
 template <sync_timing Timing>
 struct sync_clock {
   void begin_step() noexcept {}
-  void start() noexcept {}
-  void stop(stage_sync_time& /*time*/) noexcept {}
+  void start(unsigned /*stage*/) noexcept {}
+  void stop(unsigned /*stage*/, stage_sync_time& /*time*/) noexcept {}
+  void end_step(stage_sync_time& /*time*/) noexcept {}
 };
 template <>
 struct sync_clock<sync_timing::on> {
   std::int64_t started = 0;
   void begin_step() noexcept {}
-  void start() noexcept { started = platform::now_ns(); }
-  void stop(stage_sync_time& time) noexcept {
+  void start(unsigned /*stage*/) noexcept { started = platform::now_ns(); }
+  void stop(unsigned /*stage*/, stage_sync_time& time) noexcept {
     time.nanoseconds += static_cast<std::uint64_t>(platform::now_ns() - started);
     ++time.syncs;
   }
+  void end_step(stage_sync_time& /*time*/) noexcept {}
 };
+// Sampled: a sampled step reads the clock at each stage sync's arrival and
+// departure (8 readings, as before the split), stores each arrival as a stamp
+// (one relaxed store, to its own line pair) and keeps its arrivals and
+// departures locally; at the end of the step, after its last sync, it reads
+// the stamps of the participants it waits for, once, and splits each span at
+// their latest arrival (stage_sync_time, split_sync). The cross-core reads
+// thus lie outside the four stages; the other steps read no clock.
+//
+// Memory ordering: (1) the stamp's store in start() and (2) its load in
+// end_step() are relaxed; the primitive's release/acquire orders (1) before
+// (2).
+//  * phase_barrier: (1) is sequenced before the writer's arrive_and_wait of
+//    that stage (release), which synchronizes-with every participant's return
+//    from it (acquire); the reader's (2) follows its return from the step's
+//    last stage, so every awaited stamp of that step is visible. The same
+//    slot is written again only two sampled steps on, which nobody begins
+//    before the reader arrives at the next step. A barrier's syncs are always
+//    split.
+//  * graph_channel: the span starts after the publish, so (1) is sequenced
+//    after the stage's publish and before the producer's next publish
+//    (release), which the consumer's receive of the next stage acquires:
+//    stages 0-2 are visible at the end of the step, stage 3's not
+//    necessarily.
+// Each stamp carries the ordinal's low bits: a stamp of another sampled step
+// (not yet written, or rewritten) is recognised, and that sync is counted in
+// unsplit_syncs instead of being split with a guess.
 template <>
 struct sync_clock<sync_timing::sampled> {
   // Samples steps 0, period, 2 period, ...: the one division is here, once per
   // call of run; the step loop only counts down.
-  sync_clock(std::uint64_t sample_period, std::uint64_t first_step) noexcept
-      : period(sample_period), steps_to_sample((sample_period - first_step % sample_period) % sample_period) {}
+  sync_clock(std::uint64_t sample_period, std::uint64_t first_step, stamp_board stamps) noexcept
+      : period(sample_period),
+        steps_to_sample((sample_period - first_step % sample_period) % sample_period),
+        board(stamps) {}
   std::uint64_t period;           // >= 1
   std::uint64_t steps_to_sample;  // steps before the next sampled one
-  std::int64_t started = 0;
+  stamp_board board;
+  std::uint64_t ordinal = 0;      // of the sampled step in progress
   bool sampling = false;
+  std::int64_t arrived[kRk4Stages]{};
+  std::int64_t departed[kRk4Stages]{};
+
   void begin_step() noexcept {
     sampling = steps_to_sample == 0;
     steps_to_sample = sampling ? period - 1 : steps_to_sample - 1;
+    if (sampling) ordinal = *board.sampled_steps;
   }
-  void start() noexcept {
-    if (sampling) started = platform::now_ns();
-  }
-  void stop(stage_sync_time& time) noexcept {
+  void start(unsigned stage) noexcept {
     if (!sampling) return;
-    time.nanoseconds += static_cast<std::uint64_t>(platform::now_ns() - started);
+    arrived[stage] = platform::now_ns();
+    // (1) relaxed: ordered before (2) by the primitive (above).
+    board.own->stamps[ordinal & 1U][stage].store(
+        ((arrived[stage] - board.origin) << kStampTagBits) | (static_cast<std::int64_t>(ordinal) & kStampTagMask),
+        std::memory_order_relaxed);
+  }
+  void stop(unsigned stage, stage_sync_time& time) noexcept {
+    if (!sampling) return;
+    departed[stage] = platform::now_ns();
+    time.nanoseconds += static_cast<std::uint64_t>(departed[stage] - arrived[stage]);
     ++time.syncs;
+  }
+  void end_step(stage_sync_time& time) noexcept {
+    if (!sampling) return;
+    *board.sampled_steps = ordinal + 1;
+    const std::int64_t tag = static_cast<std::int64_t>(ordinal) & kStampTagMask;
+    for (unsigned stage = 0; stage < kRk4Stages; ++stage) {
+      std::int64_t latest = arrived[stage];  // nobody awaited: no waiting
+      bool usable = true;
+      for (const unsigned other : board.awaited) {
+        // (2) relaxed: see (1); the tag says whether it is this step's.
+        const std::int64_t stamp = board.all[other].stamps[ordinal & 1U][stage].load(std::memory_order_relaxed);
+        if (stamp < 0 || (stamp & kStampTagMask) != tag) {
+          usable = false;
+          break;
+        }
+        latest = std::max(latest, board.origin + (stamp >> kStampTagBits));
+      }
+      if (!usable) {
+        ++time.unsplit_syncs;
+        continue;
+      }
+      const sync_split split = split_sync(arrived[stage], departed[stage], latest);
+      ++time.split_syncs;
+      time.split_nanoseconds += static_cast<std::uint64_t>(split.waiting + split.release);
+      time.waiting_nanoseconds += static_cast<std::uint64_t>(split.waiting);
+    }
   }
 };
 
@@ -232,7 +391,17 @@ class parallel_rk4 {
         blocks_(model_.equations(), threads),
         plans_(plan_participants(model_, blocks_)),
         exchange_(blocks_, plans_, std::forward<SyncArgs>(sync_args)...),
-        records_(threads) {
+        records_(threads),
+        awaited_(threads),
+        arrivals_(Timing == sync_timing::sampled ? threads : 0) {
+    for (unsigned participant = 0; participant < threads; ++participant) {
+      if constexpr (sync::phase_barrier<Sync>) {
+        for (unsigned other = 0; other < threads; ++other)
+          if (other != participant) awaited_[participant].push_back(other);
+      } else {
+        awaited_[participant] = plans_[participant].producers;
+      }
+    }
     if (initial_state.size() != model_.equations())
       throw std::invalid_argument("the initial state must hold one value per equation");
     for (std::size_t equation = 0; equation < initial_state.size(); ++equation)
@@ -323,7 +492,7 @@ class parallel_rk4 {
     const layouts::equation_block block = blocks_.block(me);
     participant_record& record = records_[me];
     const std::uint64_t first_step = record.steps_taken;
-    detail::sync_clock<Timing> clock = make_sync_clock(first_step);
+    detail::sync_clock<Timing> clock = make_sync_clock(me, first_step);
     std::uint64_t end = first_step + steps;
     bool stop_requested = false;
     for (;;) {
@@ -358,11 +527,12 @@ class parallel_rk4 {
         }
         const std::uint64_t global_stage = step * kRk4Stages + stage;
         exchange_.publish(me, self, global_stage);
-        clock.start();
+        clock.start(stage);
         exchange_.wait(me, self, global_stage);
-        clock.stop(record.sync_time);
+        clock.stop(stage, record.sync_time);
         exchange_.copy_in(me, stage);
       }
+      clock.end_step(record.sync_time);
       record.steps_taken = step + 1;
     }
     return record.steps_taken - first_step;
@@ -389,10 +559,7 @@ class parallel_rk4 {
   // Summed over the participants.
   [[nodiscard]] stage_sync_time sync_time() const noexcept {
     stage_sync_time total;
-    for (const participant_record& record : records_) {
-      total.nanoseconds += record.sync_time.nanoseconds;
-      total.syncs += record.sync_time.syncs;
-    }
+    for (const participant_record& record : records_) total += record.sync_time;
     return total;
   }
 
@@ -402,14 +569,18 @@ class parallel_rk4 {
   // line prefetch pair) with another's.
   struct alignas(platform::kPrefetchPair) participant_record {
     std::uint64_t steps_taken = 0;
+    std::uint64_t sampled_steps = 0;  // Timing = sampled: the next sampled step's ordinal
     stage_sync_time sync_time{};
   };
   static_assert(sizeof(participant_record) % platform::kPrefetchPair == 0,
                 "participant records in an array must not share a line pair");
 
-  detail::sync_clock<Timing> make_sync_clock(std::uint64_t first_step) const noexcept {
+  detail::sync_clock<Timing> make_sync_clock(unsigned participant, std::uint64_t first_step) noexcept {
     if constexpr (Timing == sync_timing::sampled) {
-      return detail::sync_clock<Timing>(sync_sample_period_, first_step);
+      return detail::sync_clock<Timing>(
+          sync_sample_period_, first_step,
+          detail::stamp_board{&arrivals_[participant], arrivals_.data(), awaited_[participant], stamp_origin_,
+                              &records_[participant].sampled_steps});
     } else {
       return {};
     }
@@ -421,6 +592,9 @@ class parallel_rk4 {
   std::vector<participant_plan> plans_;
   typename detail::exchange_for<Sync, Layout>::type exchange_;
   std::vector<participant_record> records_;
+  std::vector<std::vector<unsigned>> awaited_;  // per participant: whose arrivals its syncs wait for
+  std::vector<detail::arrival_stamps> arrivals_;  // Timing = sampled: per participant (sync_clock<sampled>)
+  std::int64_t stamp_origin_ = platform::now_ns();
   std::uint64_t stop_margin_ = 1;
   std::uint64_t sync_sample_period_ = kSyncTimingSampleSteps;
   bool bounded_supported_ = true;

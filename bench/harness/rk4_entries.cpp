@@ -186,17 +186,30 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   const double step_ns = ns_per_unit(*result);
   state.counters["ns_per_step"] = step_ns;  // vs_serial is derived after the run (run_book::derive_ratios)
   if constexpr (kInstrumented) {
-    const kernels::stage_sync_time sync_after = step.sync_time();
-    const std::uint64_t syncs = sync_after.syncs - sync_before.syncs;
-    if (syncs > 0) {
+    const kernels::stage_sync_time timed = step.sync_time().since(sync_before);
+    if (timed.syncs > 0) {
       // A timed span holds one clock reading's own cost besides the sync (the
       // end of the first reading and the start of the second: what two
       // back-to-back readings are apart), so the run's measured reading cost
       // is taken off each span. vs_c2c is derived after the run
       // (run_book::derive_ratios), from the whole run's calibration.
-      const double timed_per_stage =
-          static_cast<double>(sync_after.nanoseconds - sync_before.nanoseconds) / static_cast<double>(syncs);
-      state.counters["sync_ns_per_stage"] = timed_per_stage - harness.book->clock_read_ns;
+      const double sync_per_stage =
+          static_cast<double>(timed.nanoseconds) / static_cast<double>(timed.syncs) - harness.book->clock_read_ns;
+      state.counters["sync_ns_per_stage"] = sync_per_stage;
+      // The step per participant, split in three (docs/names-and-counters.md):
+      // compute, waiting for others (the mean waiting of the split syncs) and
+      // synchronisation proper, the rest of the four syncs. Waiting is the
+      // difference of two arrival readings, so it holds no clock reading's
+      // cost; the release part has it taken off with sync_ns_per_stage. All
+      // three or none: without enough split syncs (kernels::waiting_ns_per_stage)
+      // they are omitted, never a made-up 0.
+      if (const auto waiting_per_stage = kernels::waiting_ns_per_stage(timed)) {
+        constexpr double kStages = kernels::kRk4Stages;
+        const double waiting = kStages * *waiting_per_stage;
+        state.counters["compute_ns_per_step"] = std::max(step_ns - kStages * sync_per_stage, 0.0);
+        state.counters["waiting_ns_per_step"] = waiting;
+        state.counters["release_ns_per_step"] = kStages * sync_per_stage - waiting;
+      }
     }
   }
   set_accounting_counters(state, *result, "step");
