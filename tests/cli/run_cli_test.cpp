@@ -9,10 +9,12 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -217,10 +219,37 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
       }
       // Migrations: a counter when the machine gives them, absent (never 0 made up) when not.
       EXPECT_EQ(entry.contains("migrations_per_kstep"), migrations) << name;
+      // The step split into compute, waiting for others and synchronisation
+      // (docs/names-and-counters.md): the three together or none, and a
+      // barrier's sampled syncs are always split (kernels/parallel_step.hpp),
+      // so a barrier entry has them. They add up to the step unless compute
+      // was clamped at 0.
+      const char* const parts[] = {"compute_ns_per_step", "waiting_ns_per_step", "release_ns_per_step"};
+      const auto present = std::count_if(std::begin(parts), std::end(parts),
+                                         [&](const char* counter) { return entry.contains(counter); });
+      EXPECT_TRUE(present == 0 || present == 3) << name << " has " << present << " of the step's three parts";
+      if (primitive_of(name).kind == lockstep::sync::primitive_kind::barrier) {
+        EXPECT_EQ(present, 3) << name;
+      }
+      if (present == 3) {
+        const double compute = entry["compute_ns_per_step"].get<double>();
+        const double waiting = entry["waiting_ns_per_step"].get<double>();
+        const double release = entry["release_ns_per_step"].get<double>();
+        EXPECT_GE(compute, 0.0) << name;
+        EXPECT_GE(waiting, 0.0) << name;
+        if (compute > 0.0) {
+          EXPECT_NEAR(compute + waiting + release, entry["ns_per_step"].get<double>(),
+                      1e-6 * entry["ns_per_step"].get<double>())
+              << name;
+        }
+        EXPECT_NEAR(waiting + release, 4.0 * entry["sync_ns_per_stage"].get<double>(), 1e-6 * (1.0 + waiting))
+            << name;
+      }
     }
     if (name.rfind("overhead/accounting:off/", 0) == 0) {
       EXPECT_TRUE(entry.contains("ns_per_step")) << name;
       EXPECT_FALSE(entry.contains("sync_ns_per_stage")) << name << ": instrumentation must be off";
+      EXPECT_FALSE(entry.contains("waiting_ns_per_step")) << name << ": instrumentation must be off";
       EXPECT_FALSE(entry.contains("csw_vol_per_kstep")) << name << ": accounting must be off";
     }
     if (name == "rk4/serial") {
