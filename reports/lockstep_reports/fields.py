@@ -74,10 +74,23 @@ COUNTERS_SHOWN = (
 )
 # `lockstep mpi`'s ping-pong entries: the median one-way time (their real_time is the OSU-style mean).
 PINGPONG_P50_COUNTER = "one_way_p50_ns"
+# The CPU time every participant's thread burned per unit, summed over the team (team_driver.hpp's thread CPU
+# clocks), in the order of UNIT_COUNTERS: team CPU / unit time is the CPUs the team kept busy. A time, but it
+# may be 0 (no clock tick), so it is read as an amount. A file written before it has none.
+TEAM_CPU_COUNTERS = ("team_cpu_ns_per_step", "team_cpu_ns_per_episode")
+# An rk4 entry's step split in three (per participant, adding up to about ns_per_step): computing its stages,
+# waiting for the others to arrive, and the release (from the latest awaited arrival to the departure), with the
+# words the report gives them. The release may read slightly negative, as sync_ns_per_stage may. The writer
+# omits the three from a repetition with too few split syncs, so one repetition of an entry may have them and
+# the next not: they are not READ_COUNTERS (whose presence must agree across repetitions) but taken by the
+# report alone from the checked file (report.step_split_values). A file written before the split has none.
+STEP_SPLIT_COUNTERS = (("compute_ns_per_step", "compute"), ("waiting_ns_per_step", "waiting for the others"),
+                       ("release_ns_per_step", "release"))
 # Every counter the tools read, by what it may hold; all other counters are ignored.
 DURATION_COUNTERS = UNIT_COUNTERS + (C2C_COUNTER, PINGPONG_P50_COUNTER)  # ns, in [SHORTEST_NS, LONGEST_NS]
 SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_NS
-AMOUNT_COUNTERS = tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)  # in [0, LARGEST_AMOUNT]
+AMOUNT_COUNTERS = (tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)
+                   + TEAM_CPU_COUNTERS)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
 
 # ---------------------------------------------------------------- the pace trace and the pairs (docs/pace.md)

@@ -16,6 +16,7 @@ import matplotlib
 
 matplotlib.use("svg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.lines  # noqa: E402
 import matplotlib.patches  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
@@ -23,6 +24,7 @@ from matplotlib.colors import LogNorm  # noqa: E402
 
 from . import paper, statistics  # noqa: E402
 from .compare import median_ratio, run_median, sample  # noqa: E402
+from .fields import STEP_SPLIT_COUNTERS, TEAM_CPU_COUNTERS  # noqa: E402
 from .formatting import format_ns  # noqa: E402
 from .names import BenchmarkKey  # noqa: E402
 
@@ -257,6 +259,235 @@ def bars_with_spread(run_file, pin: str, threads: int, collapsed=frozenset()) ->
     if handles:
         axes.legend(title="layout", fontsize=7, title_fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
                     frameon=False)
+    return to_svg(figure)
+
+
+# ---------------------------------------------------------------- CPU per step, and the step's split
+
+@dataclass(frozen=True)
+class CpuPoint:
+    """One entry of an rk4/ or barrier/ family: its median time per unit (step or episode) and the median CPU
+    time its whole team burned per unit (fields.TEAM_CPU_COUNTERS), both statistics.median over the
+    repetitions (the unit's time as compare.run_median takes it)."""
+
+    key: BenchmarkKey
+    unit_ns: float
+    team_cpu_ns: float
+
+    @property
+    def cpus_busy(self) -> float:
+        return self.team_cpu_ns / self.unit_ns
+
+
+def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
+    """The entries of one family (rk4: the sync/layout/pin/threads matrix; barrier: the bare barriers) with a
+    time and a team CPU time per unit, collapsed entries (the headline's) left out; sorted by name. An entry
+    without the counter (a file written before it) has no point."""
+    points = []
+    for key in sorted(run_file.runs, key=BenchmarkKey.sort_key):
+        if key.family != family or not key.get("sync") or not key.get("pin") or key.threads is None:
+            continue
+        if key in collapsed or run_file.runs[key].errored:
+            continue
+        cpu = next((values for values in (run_file.runs[key].counter_values(name) for name in TEAM_CPU_COUNTERS)
+                    if values), None)
+        unit = run_median(run_file, key)
+        if cpu and unit:
+            team_cpu = statistics.median(cpu)
+            if team_cpu > 0:
+                points.append(CpuPoint(key, unit, team_cpu))
+    return points
+
+
+PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
+# How many points of a panel are named: the fastest entry of each of the fastest primitives (and the entry that
+# keeps the fewest CPUs busy).
+NAMED_FASTEST = 3
+
+
+def _named_points(points: list[CpuPoint]) -> list[CpuPoint]:
+    """The points a panel names by primitive: the fastest entry of each of its NAMED_FASTEST fastest
+    primitives, and the entry that keeps the fewest CPUs busy (team CPU / time: a sleeping primitive)."""
+    named, primitives = [], set()
+    for point in sorted(points, key=lambda point: (point.unit_ns, point.key.sort_key())):
+        if point.key.get("sync") not in primitives and len(primitives) < NAMED_FASTEST:
+            primitives.add(point.key.get("sync"))
+            named.append(point)
+    frugal = min(points, key=lambda point: (point.cpus_busy, point.key.sort_key()), default=None)
+    if frugal is not None and frugal not in named:
+        named.append(frugal)
+    return named
+
+
+# The room a name of a point takes in pixels at figure.dpi 100 and font size 7: a character's width (generous)
+# and a line's height.
+NAME_CHARACTER_PX = 5.6
+NAME_LINE_PX = 11.0
+
+
+def _point_name(point: CpuPoint) -> str:
+    """A named point's words: its primitive, and its layout where it has one ("mailbox (per_thread)")."""
+    return point.key.get("sync") + (f" ({point.key.get('layout')})" if point.key.get("layout") else "")
+
+
+def _place_names(axes, named: list[CpuPoint], members: list[CpuPoint]) -> None:
+    """Each named point's primitive written below and to the right of it, where a panel is mostly empty (no
+    team burns less than a CPU's worth of the fast steps, and a sleeping team's points lie right of the
+    spinners'; near the panel's right edge, under them): the names of points near each other start in one
+    column, and each name moves down until it covers no point of the panel and no other name; a thin line
+    leads to its point. Call it once the panel's limits and place are final (positions are taken in pixels)."""
+    to_pixels = axes.transData.transform
+    spots = sorted(((tuple(to_pixels((point.unit_ns, point.team_cpu_ns))), point) for point in named),
+                   key=lambda spot: spot[0])
+    clusters = []  # named points less than 8 lines apart across share a column of names
+    for spot in spots:
+        if clusters and spot[0][0] - clusters[-1][-1][0][0] < 8.0 * NAME_LINE_PX:
+            clusters[-1].append(spot)
+        else:
+            clusters.append([spot])
+    half = NAME_LINE_PX / 2.0
+    taken = [(x - 4.0, y - 4.0, x + 4.0, y + 4.0)  # every point's marker: (left, bottom, right, top)
+             for x, y in (to_pixels((point.unit_ns, point.team_cpu_ns)) for point in members)]
+    scale = 72.0 / axes.figure.dpi  # pixels to points
+    edge = axes.get_window_extent().x1
+    for cluster in clusters:
+        widest = NAME_CHARACTER_PX * max(len(_point_name(point)) for _, point in cluster)
+        left = max(x for (x, _), _ in cluster) + 2.0 * NAME_LINE_PX
+        left = min(left, edge - widest - 4.0)  # near the right edge: the column moves left, under the points
+        for (x, y), point in sorted(cluster, key=lambda spot: (-spot[0][1], spot[0][0])):
+            text = _point_name(point)
+            right = left + NAME_CHARACTER_PX * len(text)
+            height = y - 2.0 * NAME_LINE_PX
+            for _ in range(200):  # down a little at a time until the name's box is free
+                if not any(left < box[2] and box[0] < right and height - half < box[3] and box[1] < height + half
+                           for box in taken):
+                    break
+                height -= 2.0
+            taken.append((left, height - half, right, height + half))
+            axes.annotate(text, (point.unit_ns, point.team_cpu_ns), xytext=((left - x) * scale, (height - y) * scale),
+                          textcoords="offset points", ha="left", va="center", fontsize=7, color="#222222",
+                          arrowprops=dict(arrowstyle="-", color="#777777", lw=0.5, shrinkA=1, shrinkB=3))
+
+
+def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None) -> str:
+    """Median time per unit (x) against the median CPU time the team burned per unit (y), log-log, one panel
+    per thread count, one point per entry: marker by placement, colour by layout (rk4). The lines y = k x
+    for k = 1 .. threads are "k CPUs busy", named at the panel's right edge (dotted where k exceeds the
+    machine's `cpus`): a spinning team sits on k = its threads (or the CPUs it has), a sleeping one below. The
+    fastest primitives and the one that burns least are named."""
+    thread_counts = sorted({point.key.threads for point in points})
+    layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, LAYOUT_ORDER)
+    pins = ordered({point.key.get("pin") for point in points}, PIN_ORDER)
+    palette = plt.get_cmap("tab10")
+    colors = {layout: palette(index) for index, layout in enumerate(layouts)}
+    figure, axes_row = plt.subplots(1, len(thread_counts), figsize=(5.2 * len(thread_counts), 4.8), squeeze=False)
+    for axes, threads in zip(axes_row[0], thread_counts):
+        members = [point for point in points if point.key.threads == threads]
+        x_low = log_floor(min(point.unit_ns for point in members) / 1.5)
+        x_high = log_ceiling(max(point.unit_ns for point in members) * 1.5)
+        # Every line leaves the panel through its right edge, where it is named; below the lowest point there
+        # is room for the names (half a decade: _place_names writes them below and right of their points).
+        y_low = min([x_low] + [point.team_cpu_ns for point in members]) / 3.0
+        y_high = max(x_high * threads * 1.5, max(point.team_cpu_ns for point in members) * 1.5)
+        axes.set_xscale("log")
+        axes.set_yscale("log")
+        axes.set_xlim(x_low, x_high)
+        axes.set_ylim(y_low, y_high)
+        for busy in range(1, threads + 1):
+            beyond = cpus is not None and busy > cpus
+            color = "#aaaaaa" if beyond else "#555555"
+            axes.plot([y_low / busy, x_high], [y_low, busy * x_high], color=color, lw=0.7, ls=":" if beyond else "--",
+                      zorder=1)
+            axes.annotate(f"{busy} CPU{'s' if busy != 1 else ''} busy", (1.0, busy * x_high),
+                          xycoords=("axes fraction", "data"), xytext=(3, 0), textcoords="offset points",
+                          ha="left", va="center", fontsize=7, color=color, annotation_clip=False)
+        for point in members:
+            axes.scatter([point.unit_ns], [point.team_cpu_ns], s=22, zorder=3,
+                         marker=PIN_MARKERS.get(point.key.get("pin"), "P"),
+                         color=colors.get(point.key.get("layout"), "#4c72b0"), edgecolors="black", linewidths=0.3,
+                         alpha=0.85)
+        duration_axis(axes.xaxis)
+        duration_axis(axes.yaxis)
+        axes.grid(which="major", color="#eeeeee", lw=0.6)
+        axes.set_axisbelow(True)
+        axes.set_xlabel(f"median time per {unit} (log)")
+        axes.set_ylabel(f"median team CPU per {unit} (log)")
+        over = f" on {cpus} CPUs" if cpus is not None and threads > cpus else ""
+        axes.set_title(f"{threads} thread{'s' if threads != 1 else ''}{over}", fontsize=9)
+    handles = [matplotlib.lines.Line2D([], [], ls="none", marker=PIN_MARKERS.get(pin, "P"), color="white",
+                                       markeredgecolor="black", label=f"pin:{pin}") for pin in pins]
+    handles += [matplotlib.patches.Patch(color=colors[layout], label=layout) for layout in layouts]
+    handles.append(matplotlib.lines.Line2D([], [], ls="--", color="#555555", lw=0.7, label="k CPUs busy: y = k x"))
+    if cpus is not None and max(thread_counts) > cpus:
+        handles.append(matplotlib.lines.Line2D([], [], ls=":", color="#aaaaaa", lw=0.7,
+                                               label=f"more than the machine's {cpus} CPUs"))
+    figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,
+                  ncol=min(len(handles), 5))
+    figure.suptitle(f"time per {unit} against the CPU the team burns per {unit} (one point per entry)", fontsize=9)
+    figure.tight_layout(w_pad=4.0)
+    for axes, threads in zip(axes_row[0], thread_counts):  # the panels' places are final
+        members = [point for point in points if point.key.threads == threads]
+        _place_names(axes, _named_points(members), members)
+    return to_svg(figure)
+
+
+@dataclass(frozen=True)
+class StepSplit:
+    """An rk4 entry's median step time and the medians of its split (fields.STEP_SPLIT_COUNTERS, in their
+    order): computing, waiting for the others, the release."""
+
+    key: BenchmarkKey
+    step_ns: float
+    parts_ns: tuple[float, ...]
+
+
+def step_splits(run_file, pin: str, threads: int, split_values, collapsed=frozenset()) -> list[StepSplit]:
+    """Per primitive of one placement and thread count (fastest first), its fastest layout's split: the median
+    of each part over the repetitions that carry the three (split_values: {key: [(compute, waiting, release),
+    ...]}); collapsed entries left out. Empty for a file written before the split."""
+    _, layouts = _syncs_layouts(run_file)
+    splits = []
+    for sync in ranked_syncs(run_file, pin, threads, layouts, collapsed):
+        measured = []
+        for layout in layouts:
+            key = _rk4_key(run_file, sync, layout, pin, threads)
+            step = run_median(run_file, key) if key not in collapsed else None
+            repetitions = split_values.get(key)
+            if step is not None and repetitions:
+                measured.append(StepSplit(key, step, tuple(statistics.median(part) for part in zip(*repetitions))))
+        if measured:
+            splits.append(min(measured, key=lambda split: split.step_ns))
+    return splits
+
+
+SPLIT_COLORS = ("#4c72b0", "#dd8452", "#c44e52")
+
+
+def step_split_bars(splits: list[StepSplit], title: str) -> str:
+    """One horizontal bar per entry (top: the fastest), split into its parts' shares of their sum (a part
+    below 0, a clock's noise, counts as 0), the entry's step time written at the bar's end."""
+    figure, axes = plt.subplots(figsize=(7.6, 0.28 * len(splits) + 1.4))
+    for row, split in enumerate(splits):
+        parts = [max(0.0, part) for part in split.parts_ns]
+        total = sum(parts)
+        left = 0.0
+        for index, part in enumerate(parts):
+            share = 100.0 * part / total if total > 0 else 0.0
+            axes.barh(row, share, 0.7, left=left, color=SPLIT_COLORS[index], lw=0,
+                      label=STEP_SPLIT_COUNTERS[index][1] if row == 0 else None)
+            if share >= 12.0:
+                axes.text(left + share / 2, row, f"{share:.0f} %", ha="center", va="center", fontsize=6,
+                          color="white")
+            left += share
+        axes.text(101.0, row, format_ns(split.step_ns, CELL_DIGITS), ha="left", va="center", fontsize=7)
+    labels = [f"{split.key.get('sync')} ({split.key.get('layout')})" for split in splits]
+    axes.set_yticks(range(len(splits)), labels, fontsize=7)
+    axes.set_ylim(len(splits) - 0.5, -0.5)
+    axes.set_xlim(0.0, 112.0)
+    axes.set_xticks([0, 25, 50, 75, 100], ["0 %", "25 %", "50 %", "75 %", "100 %"])
+    axes.set_xlabel("share of the step (the median step time at the bar's end)")
+    axes.set_title(title, fontsize=9)
+    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return to_svg(figure)
 
 

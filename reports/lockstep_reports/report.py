@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import functools
 import json
+import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -25,8 +26,8 @@ import markupsafe
 
 from . import delay_causes, figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, per_mode_medians, rank_tables, run_median
-from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER, SERIAL_CONTEXT,
-                     UNAVAILABLE)
+from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LONGEST_NS, PINGPONG_P50_COUNTER,
+                     SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .inputs import (C2cFile, DelayExtras, DelayFile, RunFile, VerifyFile, against_best_other_views, load_any,
                      unique_labels)
@@ -176,7 +177,10 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                                                    recommended_cell(run_file, pin, threads))))
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.bars_with_spread(run_file, pin, threads, collapsed)))
-    sections += [heat, bars]
+    sections += [heat, bars, cpu_section(run_file, counter)]
+    split = split_section(run_file, counter)
+    if split:
+        sections.append(split)
     if run_file.pairs:
         best_other = best_other_section(run_file, counter)
         if best_other:
@@ -203,6 +207,106 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                             tables=[Table(["group", "rank", "sync/layout", "step (median)", "x serial"], rank_rows)]))
     counter[0] += 1
     return sections
+
+
+def _machine_cpus(run_file: RunFile) -> int | None:
+    """The CPUs of the machine the run measured on (its context's num_cpus), None when the file lacks it."""
+    cpus = run_file.context.get("num_cpus")
+    return cpus if isinstance(cpus, int) and not isinstance(cpus, bool) and cpus > 0 else None
+
+
+# What the CPU figure tells a user who shares the machine, said under its title.
+CPU_FIGURE_READING = (
+    "One point per entry: its median time per step (x) against the median CPU time its whole team burned per step "
+    "(y: every participant's thread CPU clock, summed; team_cpu_ns_per_step), marker by placement, colour by "
+    "layout, one panel per thread count. On the dashed line k the team kept k CPUs busy the whole step. A "
+    "spinning primitive sits on k = its threads (or on the CPUs there are, when the threads outnumber them): it "
+    "burns threads x its step whether or not the others have arrived, and takes those CPUs from anything else "
+    "on the machine. A primitive that sleeps while it waits sits below: it leaves the rest of the step's CPU "
+    "to other programs, at the price of the wake-up in its step time. Sharing the machine, read the fastest "
+    "point that sits low enough; alone on it, read x only. Named: the fastest primitives (each at its fastest "
+    "entry) and the entry that burns the least.")
+
+
+def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
+    """Step time against the team's CPU per step, one figure for the rk4 entries and one for the bare
+    barriers; a file without team_cpu_* (written before it) gets one line saying why there is no figure."""
+    title = f"Step time against CPU per step: {run_file.label}"
+    collapsed = run_file.collapsed
+    families = [(family, unit, figures.cpu_points(run_file, family, collapsed))
+                for family, unit in (("rk4", "step"), ("barrier", "episode"))]
+    if not any(points for _, _, points in families):
+        return Section(title, paragraphs=[
+            f"No figure: {run_file.label} has no team CPU time per step (the counter team_cpu_ns_per_step, "
+            f"{UNAVAILABLE} in this file: its `lockstep run` is older than the counter)."])
+    section = Section(title, paragraphs=[CPU_FIGURE_READING])
+    left_out = sum(1 for key in collapsed if key.family in ("rk4", "barrier"))
+    if left_out:
+        section.paragraphs.append(f"Not drawn: the {left_out} collapsed entries (the run's headline lists them).")
+    cpus = _machine_cpus(run_file)
+    for family, unit, points in families:
+        if points:
+            what = "the RK4 step (rk4/ entries)" if family == "rk4" else "the bare barrier (barrier/ entries)"
+            section.figures.append(Figure(f"cpu-{counter[0]}-{family}", f"{what}, {len(points)} entries",
+                                          figures.cpu_against_time(points, unit, cpus)))
+    if any(family == "barrier" and points for family, _, points in families):
+        section.paragraphs.append("The barrier/ entries time the bare barrier, without the RK4 stages: per episode "
+                                  "(one arrive_and_wait by every participant), read the same way.")
+    return section
+
+
+def step_split_values(path: str) -> dict:
+    """{entry key: [(compute, waiting, release) per repetition that carries all three]} of a run file
+    (fields.STEP_SPLIT_COUNTERS). inputs.py has read and checked the file once already; the split is taken again
+    here because a repetition may lack it where the next has it, which the reader's rule for its counters
+    refuses. A part that is not a finite number within fields.LONGEST_NS leaves its repetition out."""
+    try:
+        with open(path, encoding="utf-8") as handle:
+            document = json.load(handle)
+    except (OSError, ValueError, RecursionError):
+        return {}
+    entries = document.get("benchmarks") if isinstance(document, dict) else None
+    values: dict = {}
+    for raw in entries if isinstance(entries, list) else []:
+        if not isinstance(raw, dict) or raw.get("run_type") != "iteration" or raw.get("error_occurred") \
+                or raw.get("skipped"):
+            continue
+        name = raw.get("run_name") or raw.get("name")
+        parts = [raw.get(counter) for counter, _ in STEP_SPLIT_COUNTERS]
+        if isinstance(name, str) and all(isinstance(part, (int, float)) and not isinstance(part, bool)
+                                         and math.isfinite(part) and abs(part) <= LONGEST_NS for part in parts):
+            values.setdefault(parse_name(name), []).append(tuple(float(part) for part in parts))
+    return values
+
+
+def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
+    """Where an rk4 step's time goes (compute, waiting for the others, release), per primitive at its fastest
+    layout, one figure per placement and thread count, and the medians in a table; None for a file without
+    the split (written before it)."""
+    split_values = step_split_values(run_file.path)
+    groups = [(pin, threads, figures.step_splits(run_file, pin, threads, split_values, run_file.collapsed))
+              for pin, threads in figures.rk4_groups(run_file)] if split_values else []
+    if not any(splits for _, _, splits in groups):
+        return None
+    names = [word for _, word in STEP_SPLIT_COUNTERS]
+    section = Section(f"Where a step's time goes: {run_file.label}", paragraphs=[
+        "Each primitive at its fastest layout, its step split in three (medians over the repetitions, each the "
+        "team's mean per step): computing the stages, waiting for the others to arrive, and the release (from "
+        "the last awaited arrival to the departure: the synchronisation itself). The bars are shares of the "
+        "three parts' sum, the step time at each bar's end; the table gives the times. A step late for "
+        "waiting is late because another participant was; a long release is the primitive's own cost."])
+    rows = []
+    for pin, threads, splits in groups:
+        if not splits:
+            continue
+        where = f"pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
+        section.figures.append(Figure(f"split-{counter[0]}-{pin}-{threads}", where, figures.step_split_bars(
+            splits, f"where the step goes, each primitive at its fastest layout, {where}")))
+        rows += [[where, f"{split.key.get('sync')} + {split.key.get('layout')}", format_ns(split.step_ns)]
+                 + [format_ns(part) for part in split.parts_ns] for split in splits]
+    section.tables.append(Table(["group", "sync + layout", "step (median)"] + names, rows,
+                                caption="The split's medians; the three add up to about the step."))
+    return section
 
 
 def _pingpong_one_way(run_file: RunFile) -> tuple[float | None, str]:

@@ -10,9 +10,12 @@ from unittest import mock
 
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import figures, paper
+from lockstep_reports import figures, paper, report
+from lockstep_reports.compare import run_median
 from lockstep_reports.inputs import load_any, load_run_file
 
+# headline.json with team_cpu_* and the split of a step: fixtures/make_cpu_fixture.py.
+CPU_SPLIT = "cpu_split.json"
 ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "delay_a.json", "verify_a.csv"]
 
 
@@ -406,6 +409,132 @@ class Figures(unittest.TestCase):
                 self.assertTrue(all(low <= tick <= high for tick in ticks))
         self.assertEqual([figures.ratio_text(t) for t in figures.ratio_ticks(0.5, 3500.0)],
                          ["1x", "10x", "100x", "1,000x"])
+
+
+class CpuPerStep(Scratch):
+    """Step time against the team's CPU per step (report.cpu_section, figures.cpu_against_time) and the split of
+    a step (report.split_section), on fixtures/cpu_split.json: headline.json with team_cpu_* and the split
+    (fixtures/make_cpu_fixture.py: every entry's team CPU is a fixed number of CPUs busy x its time)."""
+
+    CPUS_BUSY = {"ck_tas": {2: 2.0, 4: 2.0}, "seqlock": {2: 2.0, 4: 2.0}, "futex_spin": {2: 1.9, 4: 1.6},
+                 "std_barrier": {2: 0.5, 4: 0.8}}  # as make_cpu_fixture.py writes them
+
+    def document(self):
+        with open(fixture(CPU_SPLIT), encoding="utf-8") as stream:
+            return json.load(stream)
+
+    def test_one_point_per_entry_but_the_collapsed_at_its_medians(self):
+        run_file = load_run_file(fixture(CPU_SPLIT))
+        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        entries = [key for key in run_file.runs if key.family == "rk4" and key.get("sync")]
+        self.assertEqual(len(entries), 48)  # 4 primitives x 3 layouts x 2 placements x 2 thread counts
+        self.assertEqual(len(run_file.collapsed), 12)  # ck_tas and seqlock at 4 threads
+        self.assertEqual({point.key for point in points}, {key for key in entries if key not in run_file.collapsed})
+        self.assertEqual(len(points), 36)
+        for point in points:
+            self.assertEqual(point.unit_ns, run_median(run_file, point.key))  # the median every table shows
+            self.assertAlmostEqual(point.cpus_busy, self.CPUS_BUSY[point.key.get("sync")][point.key.threads],
+                                   places=4)
+        barrier = figures.cpu_points(run_file, "barrier", run_file.collapsed)
+        self.assertEqual(len(barrier), 4)
+        self.assertEqual({point.key.get("sync"): round(point.cpus_busy, 4) for point in barrier},
+                         {sync: busy[2] for sync, busy in self.CPUS_BUSY.items()})
+
+    def test_the_figure_draws_them_log_log_with_a_line_per_cpu_count(self):
+        run_file = load_run_file(fixture(CPU_SPLIT))
+        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            figures.cpu_against_time(points, "step", 2)
+        panels = captured[0].axes
+        self.assertEqual([axes.get_title() for axes in panels], ["2 threads", "4 threads on 2 CPUs"])
+        for axes, threads in zip(panels, (2, 4)):
+            self.assertEqual((axes.get_xscale(), axes.get_yscale()), ("log", "log"))
+            drawn = sorted(tuple(offset) for collection in axes.collections for offset in collection.get_offsets())
+            expected = sorted((point.unit_ns, point.team_cpu_ns) for point in points if point.key.threads == threads)
+            self.assertEqual(len(drawn), len(expected))
+            for (x, y), (unit, cpu) in zip(drawn, expected):
+                self.assertAlmostEqual(x / unit, 1.0, places=9)
+                self.assertAlmostEqual(y / cpu, 1.0, places=9)
+            texts = [text.get_text() for text in axes.texts]
+            self.assertEqual([text for text in texts if text.endswith("busy")],
+                             ["1 CPU busy"] + [f"{k} CPUs busy" for k in range(2, threads + 1)])
+            named = [text for text in texts if not text.endswith("busy")]
+            self.assertIn("std_barrier (padded128)" if threads == 4 else "std_barrier (packed)", named)  # fewest CPUs
+            low, high = axes.get_xlim()
+            self.assertTrue(all(low < x < high for x, _ in drawn))
+        self.assertIn("ck_tas (padded128)", [text.get_text() for text in panels[0].texts])  # the fastest
+
+    def test_the_report_shows_it_with_what_a_user_reads_from_it(self):
+        html, markdown = self.report(fixture(CPU_SPLIT))
+        self.assertIn('<figure id="cpu-0-rk4"', html)
+        self.assertIn('<figure id="cpu-0-barrier"', html)
+        section = markdown.split("## Step time against CPU per step: cpu_split.json")[1].split("\n## ")[0]
+        self.assertIn("A spinning primitive sits on k = its threads", section)
+        self.assertIn("Not drawn: the 12 collapsed entries", section)
+        self.assertNotIn("No figure", section)
+
+    def test_an_older_file_gets_no_figure_and_one_line_saying_why(self):
+        html, markdown = self.report(fixture(HEADLINE))
+        self.assertNotIn('<figure id="cpu-', html)
+        said = [line for line in markdown.splitlines() if line.startswith("No figure: headline.json")]
+        self.assertEqual(len(said), 1)
+        self.assertIn("team_cpu_ns_per_step", said[0])
+        self.assertNotIn("## Where a step's time goes", markdown)
+
+    def split_rows(self, markdown):
+        section = markdown.split("## Where a step's time goes: ")[1].split("\n## ")[0]
+        return section, [line.split(" | ") for line in section.splitlines() if line.startswith("| pin:")]
+
+    def test_the_split_renders_when_present(self):
+        html, markdown = self.report(fixture(CPU_SPLIT))
+        self.assertEqual(html.count('<figure id="split-'), 4)  # one per placement and thread count
+        _, rows = self.split_rows(markdown)
+        # Each primitive at its fastest layout (the collapsed ones left out): 4 + 2 primitives per placement.
+        self.assertEqual(len(rows), 12)
+        first = rows[0]
+        self.assertEqual(first[:2], ["| pin:compact, 2 threads", "ck_tas + padded128"])
+        step, compute, waiting, release = (float(cell.split()[0]) for cell in first[2:6])
+        self.assertAlmostEqual(compute / step, 0.5, places=3)
+        self.assertAlmostEqual(waiting / step, 0.3, places=3)
+        self.assertAlmostEqual(release / step, 0.2, places=2)
+        futex = next(row for row in rows if row[0] == "| pin:none, 2 threads" and row[1].startswith("futex_spin"))
+        self.assertEqual(futex[5], "-0.5 ns |")  # a release just below 0, as the writer may measure it
+
+    def test_the_split_of_some_repetitions_only_still_reads(self):
+        document = self.document()
+        for entry in document["benchmarks"]:  # one repetition without the split, as the writer may leave it
+            if entry["name"] == "rk4/sync:ck_tas/layout:padded128/pin:compact/threads:2" \
+                    and entry.get("repetition_index") == 0:
+                for counter in ("compute_ns_per_step", "waiting_ns_per_step", "release_ns_per_step"):
+                    del entry[counter]
+        _, markdown = self.report(self.write("split_partly.json", document))
+        _, rows = self.split_rows(markdown)
+        self.assertEqual(rows[0][1], "ck_tas + padded128")
+
+    def test_no_split_without_its_counters(self):
+        document = self.document()
+        for entry in document["benchmarks"]:
+            for counter in ("compute_ns_per_step", "waiting_ns_per_step", "release_ns_per_step"):
+                entry.pop(counter, None)
+        html, markdown = self.report(self.write("cpu_only.json", document))
+        self.assertNotIn("## Where a step's time goes", markdown)
+        self.assertIn('<figure id="cpu-0-rk4"', html)
+
+    def test_split_bars_are_shares_of_the_parts(self):
+        run_file = load_run_file(fixture(CPU_SPLIT))
+        splits = figures.step_splits(run_file, "none", 2, report.step_split_values(fixture(CPU_SPLIT)),
+                                     run_file.collapsed)
+        self.assertEqual([split.key.get("sync") for split in splits],
+                         ["ck_tas", "seqlock", "futex_spin", "std_barrier"])  # fastest first
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            figures.step_split_bars(splits, "title")
+        bars = captured[0].axes[0].patches
+        widths = [[round(bar.get_width(), 3) for bar in bars[row * 3:row * 3 + 3]] for row in range(len(splits))]
+        self.assertEqual(widths[0], [50.0, 30.0, 20.0])
+        self.assertEqual(widths[2], [50.0, 50.0, 0.0])  # futex_spin's negative release drawn as 0
+
 
 if __name__ == "__main__":
     unittest.main()
