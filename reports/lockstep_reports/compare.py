@@ -43,9 +43,14 @@ smallest change it could have shown (statistics.detectable_change).
 
 The answer first: the geometric mean of B/A over the matched combinations
 (the beyond-the-pace ratio of each; calibrations and collapsed entries apart)
-with its bootstrap interval over the entries and a verdict, overall and per
-primitive, thread count and placement (Aggregate). A uniform change that no
-single entry can show is called there. Entries that either file's headline
+with an interval and a verdict, overall and per primitive, thread count and
+placement (Aggregate). A uniform change that no single entry can show is called
+there. The interval is a two-stage bootstrap over clusters (cluster_key: a
+primitive at one thread count), then the entries of each drawn cluster, because
+between two runs whole clusters drift together: a block of primitives that
+slowed reads as spread, a shift common to every cluster stays tight. A group of
+fewer than MIN_AGGREGATE_CLUSTERS clusters (a primitive's own) also carries the
+file pair's spread of whole clusters (cluster_drifts), which it cannot show. Entries that either file's headline
 calls collapsed (they ran oversubscribed at 100 times the best of their kind
 or more, with one repetition) are "collapsed", never "untested", and stay out
 of the aggregates and --fail-above.
@@ -96,6 +101,9 @@ VERDICTS = ("slower", "faster", "unsure", "within noise", "untested", COLLAPSED)
 MIN_IN_MODE = 3
 # An aggregate (Aggregate) of fewer entries has no interval: the bootstrap over entries needs some to resample.
 MIN_AGGREGATE_ENTRIES = 5
+# A group spanning fewer clusters (cluster_key) than this adds the file pair's spread of whole clusters to its
+# interval (statistics.cluster_geometric_mean_interval, borrowed): a per-primitive group holds one or two.
+MIN_AGGREGATE_CLUSTERS = 5
 
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")
@@ -190,10 +198,41 @@ class Aggregate:
     ratio: float
     interval: tuple[float, float] | None
     verdict: str
+    clusters: int = 1  # the primitive x thread count cells it spans (cluster_key)
 
     def detectable(self, noise_percent: float) -> float | None:
         change = statistics.detectable_change(self.interval, noise_percent / 100.0)
         return None if change is None else change * 100.0
+
+
+def cluster_key(key: BenchmarkKey) -> tuple[str, str]:
+    """The cell whose entries drift together between two runs: the primitive (an MPI file's exchange) at one
+    thread count (rank count). Measured on this VM, two default runs of one build back to back: the sleeping
+    primitives and the oversubscribed thread counts moved by 20-40 % as blocks while the spinning ones at
+    threads:2 stayed within a few percent."""
+    return (key.get("sync") or key.get("exchange") or key.family, key.get("threads") or key.get("ranks") or "")
+
+
+def clustered(rows: list) -> list[list]:
+    """The rows grouped by cluster_key, in the order of the keys."""
+    cells: dict[tuple[str, str], list] = {}
+    for row in rows:
+        cells.setdefault(cluster_key(row.key), []).append(row)
+    return [cells[cell] for cell in sorted(cells)]
+
+
+def cluster_drifts(rows: list) -> list[float]:
+    """The mean log ratio of each cluster of the rows (beyond the pace), less the mean of those means: how far
+    whole clusters moved apart between the two runs; empty with fewer than two clusters."""
+    means = []
+    for cluster in clustered(rows):
+        logs = [math.log(r) for r in (row.beyond_pace_ratio() for row in cluster) if math.isfinite(r) and r > 0]
+        if logs:
+            means.append(sum(logs) / len(logs))
+    if len(means) < 2:
+        return []
+    centre = sum(means) / len(means)
+    return [mean - centre for mean in means]
 
 
 # The segments an aggregate groups by: per primitive, per thread count, per placement (an MPI file's
@@ -237,15 +276,20 @@ class Comparison:
                             key=lambda value: (len(value), value) if segment == "threads" else (0, value))
             for value in values:
                 groups[f"{segment}:{value}"] = [row for row in self.combinations if row.key.get(segment) == value]
+        borrowed = cluster_drifts(self.combinations)
         result = []
         for group, rows in groups.items():
-            ratios = [row.beyond_pace_ratio() for row in rows]
-            estimate = statistics.geometric_mean_interval(ratios, statistics.seed_of(group))
+            clusters = clustered(rows)
+            # A group of too few clusters cannot show how far whole clusters drift: it borrows the file pair's.
+            few = group != "all" and len(clusters) < MIN_AGGREGATE_CLUSTERS
+            estimate = statistics.cluster_geometric_mean_interval(
+                [[row.beyond_pace_ratio() for row in cluster] for cluster in clusters], statistics.seed_of(group),
+                borrowed=borrowed if few else ())
             if estimate is None:
                 continue
             interval = estimate[1:] if len(rows) >= MIN_AGGREGATE_ENTRIES else None
             result.append(Aggregate(group, len(rows), estimate[0], interval,
-                                    verdict_of(interval, self.noise_percent)))
+                                    verdict_of(interval, self.noise_percent), len(clusters)))
         return result
 
     def failed_groups(self, percent: float) -> list[Aggregate]:

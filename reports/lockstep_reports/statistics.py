@@ -45,8 +45,10 @@ Besides, for comparing two runs:
   as soon as there are 7 tests, so it could never call anything in a matrix.
 - Geometric mean of the ratios over matched pairs only; with an interval (geometric_mean_interval): the
   percentile bootstrap of the mean log ratio over the entries (bootstrap_indices from a seed per group), so
-  the entry-to-entry spread, drift included, is in it. The drift common to every entry of a run is what the
-  noise band stands for.
+  the entry-to-entry spread, drift included, is in it. compare's aggregates resample in two stages
+  (cluster_geometric_mean_interval): clusters of entries that drift together between runs, then the entries
+  of each drawn cluster, so that a block of clusters that moved reads as spread rather than as a change. The
+  drift common to every entry of a run is what the noise band stands for.
 - An entry's interval from the whole file pair's evidence (pooled_interval): the log ratio of the medians
   with a t interval whose variance is (1) the entry's own variance of log times, moderated towards the
   file pair's typical variance (Smyth 2004, limma's empirical Bayes: prior_variance fits a scaled inverse
@@ -425,6 +427,45 @@ def geometric_mean_interval(ratios, seed: int, confidence: float = CONFIDENCE,
         return whole, whole, whole
     means = [sum(logs[i] for i in indices) / len(indices)
              for indices in bootstrap_indices(len(logs), resamples, seed)]
+    low, high = percentile_interval(means, confidence)
+    return whole, math.exp(low), math.exp(high)
+
+
+def cluster_geometric_mean_interval(clusters, seed: int, confidence: float = CONFIDENCE,
+                                    resamples: int = BOOTSTRAP_RESAMPLES,
+                                    borrowed=()) -> tuple[float, float, float] | None:
+    """(geometric mean, low, high) of the positive finite ratios of `clusters` (lists of ratios that drift
+    together between two runs: one primitive at one thread count), with the percentile interval of a
+    two-stage bootstrap: each resample draws as many clusters as there are, with replacement, then within
+    each drawn cluster as many of its ratios as it holds, and takes the mean log ratio of everything drawn.
+    A block of clusters that moved together reads as spread; a shift common to every cluster stays tight.
+
+    `borrowed`: the centred mean log ratios of the clusters of a wider family (the whole file pair), for a
+    group of too few clusters to show their spread: each resample adds the mean of len(clusters) draws from
+    them, the drift a group of that many clusters would share. Draws: splitmix64 from `seed` (bootstrap_indices'
+    rule), per resample the clusters, then each drawn cluster's ratios in turn, then the borrowed ones.
+    None with no ratio; one ratio: the interval is the ratio itself."""
+    groups = [[math.log(r) for r in cluster if r is not None and math.isfinite(r) and r > 0] for cluster in clusters]
+    groups = [group for group in groups if group]
+    if not groups:
+        return None
+    every = [value for group in groups for value in group]
+    whole = math.exp(sum(every) / len(every))
+    borrowed = [float(value) for value in borrowed]
+    if len(every) < 2 and not borrowed:
+        return whole, whole, whole
+    outputs = _splitmix64(seed)
+    means = []
+    for _ in range(resamples):
+        total, count = 0.0, 0
+        for _ in range(len(groups)):
+            group = groups[_index_of(next(outputs), len(groups))]
+            for _ in range(len(group)):
+                total += group[_index_of(next(outputs), len(group))]
+            count += len(group)
+        shared = (sum(borrowed[_index_of(next(outputs), len(borrowed))] for _ in groups) / len(groups)
+                  if borrowed else 0.0)
+        means.append(total / count + shared)
     low, high = percentile_interval(means, confidence)
     return whole, math.exp(low), math.exp(high)
 

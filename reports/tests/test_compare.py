@@ -927,6 +927,46 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertNotIn("every matched combination", err)  # an entry may drift; no group fails
         self.assertNotIn("the group", err)
 
+    def drifted(self, shift, cells):
+        """A against B (B/A = shift on average) where B's entries of the given (primitive, thread count) cells
+        moved together by a factor each: a block drift between the runs, or a real change of those cells."""
+        a = self.write("a.json", synthetic_runs.matrix_document(1, drift=0.03, spread=0.05))
+        document = synthetic_runs.matrix_document(2, shift=shift, drift=0.03, spread=0.05)
+        for benchmark in document["benchmarks"]:
+            key = parse_name(benchmark["name"])
+            factor = cells.get((key.get("sync"), key.threads), 1.0)
+            for name in ("real_time", "cpu_time", "ns_per_step"):
+                benchmark[name] *= factor
+        b = self.write("b.json", document)
+        return compare_pair(load_run_file(a), load_run_file(b))
+
+    def test_a_block_of_primitives_drifting_together_is_spread_not_a_change(self):
+        # 4 of the 12 primitive x thread count cells 30 % slower as blocks, the rest unchanged (an A/A pair whose
+        # sleeping primitives slowed between the runs): the entries' bootstrap would call the mean slower.
+        block = {(sync, threads): 1.3 for sync in ("std_barrier", "ck_mcs") for threads in synthetic_runs.THREADS}
+        comparison = self.drifted(1.0, block)
+        overall = self.overall(comparison)
+        self.assertEqual(overall.clusters, 12)
+        self.assertEqual(overall.verdict, "unsure")
+        ratios = [row.beyond_pace_ratio() for row in comparison.combinations]
+        entries_only = statistics.geometric_mean_interval(ratios, statistics.seed_of("all"))
+        self.assertEqual(compare.verdict_of(entries_only[1:], 5.0), "slower")
+        # A one-cluster drift is not called either; a uniform shift on top of the block still is.
+        self.assertNotEqual(self.overall(self.drifted(1.0, {("futex_spin", 4): 2.0})).verdict, "slower")
+        shifted = self.overall(self.drifted(1.15, block))
+        self.assertEqual(shifted.verdict, "slower")
+        self.assertGreater(shifted.interval[0], 1.05)
+
+    def test_a_primitive_group_borrows_the_spread_of_whole_clusters(self):
+        comparison = self.drifted(1.0, {(sync, 2): 1.3 for sync in ("std_barrier", "ck_mcs", "mailbox")})
+        groups = {aggregate.group: aggregate for aggregate in comparison.aggregates()}
+        seqlock = groups["sync:seqlock"]
+        self.assertEqual(seqlock.clusters, 2)
+        # seqlock did not move; its interval is as wide as two cells of this pair could have drifted
+        self.assertLess(seqlock.interval[0], 0.96)
+        self.assertGreater(seqlock.interval[1], 1.04)
+        self.assertNotIn(groups["all"].verdict, ("slower", "faster"))
+
     def test_collapsed_entries_are_collapsed_not_untested(self):
         a, b, comparison = self.compared(1.15)
         collapsed = [row for row in comparison.rows if row.collapsed]

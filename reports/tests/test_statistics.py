@@ -216,3 +216,34 @@ class PooledEvidence(unittest.TestCase):
         self.assertAlmostEqual(moderated, (24 * 0.01 + 8 * 0.04) / 32)
         self.assertEqual(degrees, 32)
         self.assertIsNone(statistics.prior_variance(variances[:5], [8] * 5))
+
+    def test_the_cluster_interval_reads_a_block_of_drifting_clusters_as_spread(self):
+        noise = random.Random(5)
+
+        def clusters(shift, drifts):
+            return [[shift * math.exp(drift + noise.gauss(0.0, 0.03)) for _ in range(8)] for drift in drifts]
+
+        # 12 clusters of 8 ratios; a shift common to every cluster stays tight and is called.
+        uniform = clusters(1.15, [0.0] * 12)
+        mean, low, high = statistics.cluster_geometric_mean_interval(uniform, statistics.seed_of("all"))
+        self.assertEqual((mean, low, high), statistics.cluster_geometric_mean_interval(uniform, statistics.seed_of("all")))
+        self.assertAlmostEqual(mean, statistics.geometric_mean([r for cluster in uniform for r in cluster]))
+        self.assertLess(low, 1.15)
+        self.assertGreater(high, 1.15)
+        self.assertGreater(low, 1.12)
+        self.assertEqual(statistics.verdict(low, high, 0.05), statistics.PENALTY)
+        # A third of the clusters moved 30 % together, the rest not at all: the entries' bootstrap calls it
+        # slower, the clusters' sees the block as spread.
+        block = clusters(1.0, [math.log(1.3)] * 4 + [0.0] * 8)
+        flat = [r for cluster in block for r in cluster]
+        self.assertEqual(statistics.verdict(*statistics.geometric_mean_interval(flat, 1)[1:], 0.05), statistics.PENALTY)
+        self.assertEqual(statistics.verdict(*statistics.cluster_geometric_mean_interval(block, 1)[1:], 0.05),
+                         statistics.UNSURE)
+        # One cluster borrows the spread of whole clusters it cannot show on its own.
+        alone = statistics.cluster_geometric_mean_interval(block[4:5], 1)
+        borrowed = statistics.cluster_geometric_mean_interval(block[4:5], 1, borrowed=[0.2, -0.1, -0.1])
+        self.assertEqual(alone[0], borrowed[0])
+        self.assertLess(borrowed[1], alone[1])
+        self.assertGreater(borrowed[2], alone[2])
+        self.assertIsNone(statistics.cluster_geometric_mean_interval([[], [float("nan")]], 1))
+        self.assertEqual(statistics.cluster_geometric_mean_interval([[1.2]], 1), (1.2, 1.2, 1.2))
