@@ -300,6 +300,17 @@ def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
 
 
 PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
+# Up to this many threads a panel draws every line k CPUs busy; beyond, the powers of two and the thread count
+# (the lines of 15 and 16 would lie on each other).
+EVERY_BUSY_LINE = 8
+
+
+def busy_lines(threads: int) -> list[int]:
+    """The k of the lines "k CPUs busy" a panel of this thread count draws: 1 .. threads, or past
+    EVERY_BUSY_LINE the powers of two below the thread count and the count itself."""
+    if threads <= EVERY_BUSY_LINE:
+        return list(range(1, threads + 1))
+    return [2 ** power for power in range(threads.bit_length()) if 2 ** power < threads] + [threads]
 # How many points of a panel are named: the fastest entry of each of the fastest primitives (and the entry that
 # keeps the fewest CPUs busy).
 NAMED_FASTEST = 3
@@ -369,12 +380,13 @@ def _place_names(axes, named: list[CpuPoint], members: list[CpuPoint]) -> None:
                           arrowprops=dict(arrowstyle="-", color="#777777", lw=0.5, shrinkA=1, shrinkB=3))
 
 
-def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None) -> str:
+def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, recommended=frozenset()) -> str:
     """Median time per unit (x) against the median CPU time the team burned per unit (y), log-log, one panel
     per thread count, one point per entry: marker by placement, colour by layout (rk4). The lines y = k x
-    for k = 1 .. threads are "k CPUs busy", named at the panel's right edge (dotted where k exceeds the
+    for k = 1 .. threads (busy_lines) are "k CPUs busy", named at the panel's right edge (dotted where k exceeds the
     machine's `cpus`): a spinning team sits on k = its threads (or the CPUs it has), a sleeping one below. The
-    fastest primitives and the one that burns least are named."""
+    fastest primitives and the one that burns least are named; the `recommended` entries (keys: the headline's
+    choices) are ringed in red, as the heat maps outline them."""
     thread_counts = sorted({point.key.threads for point in points})
     layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, LAYOUT_ORDER)
     pins = ordered({point.key.get("pin") for point in points}, PIN_ORDER)
@@ -393,7 +405,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None)
         axes.set_yscale("log")
         axes.set_xlim(x_low, x_high)
         axes.set_ylim(y_low, y_high)
-        for busy in range(1, threads + 1):
+        for busy in busy_lines(threads):
             beyond = cpus is not None and busy > cpus
             color = "#aaaaaa" if beyond else "#555555"
             axes.plot([y_low / busy, x_high], [y_low, busy * x_high], color=color, lw=0.7, ls=":" if beyond else "--",
@@ -406,6 +418,10 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None)
                          marker=PIN_MARKERS.get(point.key.get("pin"), "P"),
                          color=colors.get(point.key.get("layout"), "#4c72b0"), edgecolors="black", linewidths=0.3,
                          alpha=0.85)
+        for point in members:
+            if point.key in recommended:
+                axes.plot([point.unit_ns], [point.team_cpu_ns], marker="o", ms=11, mfc="none", mec="#d62728",
+                          mew=1.6, ls="none", zorder=4)
         duration_axis(axes.xaxis)
         duration_axis(axes.yaxis)
         axes.grid(which="major", color="#eeeeee", lw=0.6)
@@ -421,6 +437,9 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None)
     if cpus is not None and max(thread_counts) > cpus:
         handles.append(matplotlib.lines.Line2D([], [], ls=":", color="#aaaaaa", lw=0.7,
                                                label=f"more than the machine's {cpus} CPUs"))
+    if any(point.key in recommended for point in points):
+        handles.append(matplotlib.lines.Line2D([], [], ls="none", marker="o", ms=9, mfc="none", mec="#d62728",
+                                               mew=1.6, label="the run recommends it"))
     figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,
                   ncol=min(len(handles), 5))
     figure.suptitle(f"time per {unit} against the CPU the team burns per {unit} (one point per entry)", fontsize=9)

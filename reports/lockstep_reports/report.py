@@ -244,11 +244,16 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     if left_out:
         section.paragraphs.append(f"Not drawn: the {left_out} collapsed entries (the run's headline lists them).")
     cpus = _machine_cpus(run_file)
+    recommended = frozenset(item.entry_key for item in run_file.headline.recommendations) if run_file.headline \
+        else frozenset()
+    if any(point.key in recommended for _, _, points in families for point in points):
+        section.paragraphs.append("Ringed in red: the combination the run recommends at each placement and thread "
+                                  "count (its headline).")
     for family, unit, points in families:
         if points:
             what = "the RK4 step (rk4/ entries)" if family == "rk4" else "the bare barrier (barrier/ entries)"
             section.figures.append(Figure(f"cpu-{counter[0]}-{family}", f"{what}, {len(points)} entries",
-                                          figures.cpu_against_time(points, unit, cpus)))
+                                          figures.cpu_against_time(points, unit, cpus, recommended)))
     if any(family == "barrier" and points for family, _, points in families):
         section.paragraphs.append("The barrier/ entries time the bare barrier, without the RK4 stages: per episode "
                                   "(one arrive_and_wait by every participant), read the same way.")

@@ -444,8 +444,9 @@ class CpuPerStep(Scratch):
         run_file = load_run_file(fixture(CPU_SPLIT))
         points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
         captured = []
+        recommended = frozenset(item.entry_key for item in run_file.headline.recommendations)
         with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
-            figures.cpu_against_time(points, "step", 2)
+            figures.cpu_against_time(points, "step", 2, recommended)
         panels = captured[0].axes
         self.assertEqual([axes.get_title() for axes in panels], ["2 threads", "4 threads on 2 CPUs"])
         for axes, threads in zip(panels, (2, 4)):
@@ -464,6 +465,10 @@ class CpuPerStep(Scratch):
             low, high = axes.get_xlim()
             self.assertTrue(all(low < x < high for x, _ in drawn))
         self.assertIn("ck_tas (padded128)", [text.get_text() for text in panels[0].texts])  # the fastest
+        ringed = {(float(line.get_xdata()[0]), float(line.get_ydata()[0])) for axes in panels for line in axes.lines
+                  if line.get_markeredgecolor() == "#d62728"}
+        self.assertEqual(ringed, {(point.unit_ns, point.team_cpu_ns) for point in points if point.key in recommended})
+        self.assertEqual(len(ringed), 4)  # one per placement and thread count
 
     def test_the_report_shows_it_with_what_a_user_reads_from_it(self):
         html, markdown = self.report(fixture(CPU_SPLIT))
