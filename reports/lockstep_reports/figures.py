@@ -300,17 +300,24 @@ def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
 
 
 PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
-# Up to this many threads a panel draws every line k CPUs busy; beyond, the powers of two and the thread count
-# (the lines of 15 and 16 would lie on each other).
+# Panels of one CPU figure side by side (one per thread count); more wrap to the next row.
+CPU_PANELS_PER_ROW = 3
+# Up to this many CPUs a panel draws every line k CPUs busy; beyond, the powers of two (the lines of 15 and 16
+# would lie on each other).
 EVERY_BUSY_LINE = 8
 
 
-def busy_lines(threads: int) -> list[int]:
-    """The k of the lines "k CPUs busy" a panel of this thread count draws: 1 .. threads, or past
-    EVERY_BUSY_LINE the powers of two below the thread count and the count itself."""
-    if threads <= EVERY_BUSY_LINE:
-        return list(range(1, threads + 1))
-    return [2 ** power for power in range(threads.bit_length()) if 2 ** power < threads] + [threads]
+def busy_lines(threads: int, cpus: int | None = None) -> list[int]:
+    """The k of the lines "k CPUs busy" a panel of this thread count draws: 1 .. threads, or 1 .. the machine's
+    `cpus` and the thread count itself when the threads outnumber them (a team cannot keep more CPUs busy than
+    there are: the last line says where it would sit if each thread had one); past EVERY_BUSY_LINE, the powers
+    of two below that and the count."""
+    reach = threads if cpus is None else min(threads, cpus)
+    lines = list(range(1, reach + 1)) if reach <= EVERY_BUSY_LINE else \
+        [2 ** power for power in range(reach.bit_length()) if 2 ** power < reach] + [reach]
+    return lines + ([threads] if threads > reach else [])
+
+
 # How many points of a panel are named: the fastest entry of each of the fastest primitives (and the entry that
 # keeps the fewest CPUs busy).
 NAMED_FASTEST = 3
@@ -382,18 +389,24 @@ def _place_names(axes, named: list[CpuPoint], members: list[CpuPoint]) -> None:
 
 def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, recommended=frozenset()) -> str:
     """Median time per unit (x) against the median CPU time the team burned per unit (y), log-log, one panel
-    per thread count, one point per entry: marker by placement, colour by layout (rk4). The lines y = k x
-    for k = 1 .. threads (busy_lines) are "k CPUs busy", named at the panel's right edge (dotted where k exceeds the
-    machine's `cpus`): a spinning team sits on k = its threads (or the CPUs it has), a sleeping one below. The
-    fastest primitives and the one that burns least are named; the `recommended` entries (keys: the headline's
-    choices) are ringed in red, as the heat maps outline them."""
+    per thread count (CPU_PANELS_PER_ROW to a row), one point per entry: marker by placement, colour by layout
+    (rk4). The lines y = k x for k = 1 .. threads (busy_lines: up to the machine's `cpus`, and the thread count
+    dotted beyond them) are "k CPUs busy", named at the panel's right edge: a spinning team sits on k = its
+    threads (or the CPUs it has), a sleeping one below. The fastest primitives and the entry that keeps the
+    fewest CPUs busy are named; the `recommended` entries (keys: the headline's choices) are ringed in red, as
+    the heat maps outline them."""
     thread_counts = sorted({point.key.threads for point in points})
     layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, LAYOUT_ORDER)
     pins = ordered({point.key.get("pin") for point in points}, PIN_ORDER)
     palette = plt.get_cmap("tab10")
     colors = {layout: palette(index) for index, layout in enumerate(layouts)}
-    figure, axes_row = plt.subplots(1, len(thread_counts), figsize=(5.2 * len(thread_counts), 4.8), squeeze=False)
-    for axes, threads in zip(axes_row[0], thread_counts):
+    columns = min(len(thread_counts), CPU_PANELS_PER_ROW)
+    rows = math.ceil(len(thread_counts) / columns)
+    figure, grid = plt.subplots(rows, columns, figsize=(5.2 * columns, 4.4 * rows + 0.4), squeeze=False)
+    panels = list(grid.flat)
+    for axes in panels[len(thread_counts):]:
+        axes.set_visible(False)
+    for axes, threads in zip(panels, thread_counts):
         members = [point for point in points if point.key.threads == threads]
         x_low = log_floor(min(point.unit_ns for point in members) / 1.5)
         x_high = log_ceiling(max(point.unit_ns for point in members) * 1.5)
@@ -405,7 +418,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
         axes.set_yscale("log")
         axes.set_xlim(x_low, x_high)
         axes.set_ylim(y_low, y_high)
-        for busy in busy_lines(threads):
+        for busy in busy_lines(threads, cpus):
             beyond = cpus is not None and busy > cpus
             color = "#aaaaaa" if beyond else "#555555"
             axes.plot([y_low / busy, x_high], [y_low, busy * x_high], color=color, lw=0.7, ls=":" if beyond else "--",
@@ -443,8 +456,8 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
     figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,
                   ncol=min(len(handles), 5))
     figure.suptitle(f"time per {unit} against the CPU the team burns per {unit} (one point per entry)", fontsize=9)
-    figure.tight_layout(w_pad=4.0)
-    for axes, threads in zip(axes_row[0], thread_counts):  # the panels' places are final
+    figure.tight_layout(w_pad=4.0, h_pad=2.0)
+    for axes, threads in zip(panels, thread_counts):  # the panels' places are final
         members = [point for point in points if point.key.threads == threads]
         _place_names(axes, _named_points(members), members)
     return to_svg(figure)

@@ -225,7 +225,7 @@ CPU_FIGURE_READING = (
     "on the machine. A primitive that sleeps while it waits sits below: it leaves the rest of the step's CPU "
     "to other programs, at the price of the wake-up in its step time. Sharing the machine, read the fastest "
     "point that sits low enough; alone on it, read x only. Named: the fastest primitives (each at its fastest "
-    "entry) and the entry that burns the least.")
+    "entry) and the entry that keeps the fewest CPUs busy.")
 
 
 def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
@@ -295,9 +295,9 @@ def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
         return None
     names = [word for _, word in STEP_SPLIT_COUNTERS]
     section = Section(f"Where a step's time goes: {run_file.label}", paragraphs=[
-        "Each primitive at its fastest layout, its step split in three (medians over the repetitions, each the "
-        "team's mean per step): computing the stages, waiting for the others to arrive, and the release (from "
-        "the last awaited arrival to the departure: the synchronisation itself). The bars are shares of the "
+        "Each primitive at its fastest layout, its step split in three (medians over the repetitions, each a "
+        "participant's mean per step): computing the stages, waiting for the others to arrive, and the release "
+        "(from the latest awaited arrival to the departure: the synchronisation itself). The bars are shares of the "
         "three parts' sum, the step time at each bar's end; the table gives the times. A step late for "
         "waiting is late because another participant was; a long release is the primitive's own cost."])
     rows = []
