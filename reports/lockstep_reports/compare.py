@@ -25,7 +25,11 @@ modes, and every entry also gets a pace-aware verdict: the raw one where all
 its repetitions ran in one matching mode; else within the matching modes
 (only the repetitions of the best-filled pair of matching modes) when each
 side keeps MIN_IN_MODE there (MIN_REPETITIONS where the evidence is not
-pooled, below); else on the pace-normalised figure, each
+pooled, below); within one c2c state where the repetitions so chosen (all of
+them when no mode matches) ran in more than one state of the machine and each
+side keeps as many in one (their own c2c reading within STATE_WIDTH of one
+reference: a mode of the trace can join two states its readings bridge); else
+on the pace-normalised figure, each
 repetition's time divided by the c2c reading taken around it (pace_c2c_ns).
 The headline count of changed entries counts what changed beyond the pace:
 the pace-aware verdict where there is one, else the raw one.
@@ -93,6 +97,11 @@ NOISE_RATIONALE = (
 MODE_TOLERANCE = 1.5
 # How a pace-aware figure was made (PaceAware.method).
 PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_NORMALISED = "one mode", "matching modes", "pace-normalised"
+PACE_ONE_STATE = "one c2c state"
+# One c2c state (PACE_ONE_STATE): the repetitions whose own c2c reading lies within this factor of one
+# reference. This VM's c2c states are 14, 32 and 102 ns; one state's readings around a repetition spread by
+# about +-7 % (10th to 90th percentile), and the spinning primitives' steps follow them (elasticity 0.8-1.2).
+STATE_WIDTH = 1.2
 COLLAPSED = "collapsed"
 VERDICTS = ("slower", "faster", "unsure", "within noise", "untested", COLLAPSED)
 # Within matching modes needs this many repetitions a side: the median of 3 when the file pair's pooled variance
@@ -128,7 +137,8 @@ def verdict_of(interval: tuple[float, float] | None, noise_percent: float) -> st
 @dataclass
 class PaceAware:
     """An entry's comparison that the pace cannot explain: how it was made (PACE_ONE_MODE,
-    PACE_MATCHING_MODES, PACE_NORMALISED), which modes or figure, B/A of the medians and its interval."""
+    PACE_MATCHING_MODES, PACE_ONE_STATE, PACE_NORMALISED), which modes or figure, B/A of the medians and its
+    interval."""
 
     method: str
     detail: str
@@ -456,43 +466,75 @@ def _paced_values(run, time_kind: str) -> list[tuple[float, object]] | None:
     return values or None
 
 
+def _one_state(values_a, values_b, need: int):
+    """The repetitions of both sides whose own c2c reading (pace_c2c_ns) lies within STATE_WIDTH of one
+    reference, the reference that keeps the most on the scarcer side (then the most in all, then the fastest):
+    (reference ns, times of A, times of B), or None when a reading is missing or a side keeps fewer than
+    `need`."""
+    if any(pace.c2c_ns is None for _, pace in values_a + values_b):
+        return None
+    best = None
+    for reference in sorted({pace.c2c_ns for _, pace in values_a + values_b}):
+        kept = [[time for time, pace in values if reference / STATE_WIDTH <= pace.c2c_ns <= reference * STATE_WIDTH]
+                for values in (values_a, values_b)]
+        score = (min(len(kept[0]), len(kept[1])), len(kept[0]) + len(kept[1]))
+        if best is None or score > best[0]:
+            best = (score, reference, kept)
+    (scarcer, _), reference, (times_a, times_b) = best
+    return (reference, times_a, times_b) if scarcer >= need else None
+
+
 def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, time_kind: str,
                min_in_mode: int = statistics.MIN_REPETITIONS) -> PaceAware | None:
     """The entry compared beyond the pace (see the module's text), or None where the pace is unavailable.
     Within matching modes when each side keeps `min_in_mode` repetitions there (MIN_IN_MODE when the file
-    pair's evidence is pooled)."""
+    pair's evidence is pooled); within one c2c state (_one_state) where the repetitions so chosen, or all of
+    them when no mode matches, ran in more than one state and each side keeps `min_in_mode` in one."""
     values_a, values_b = _paced_values(run_a, time_kind), _paced_values(run_b, time_kind)
     if values_a is None or values_b is None:
         return None
 
     def in_mode(values, mode):
-        return [time for time, pace in values if pace.mode == mode]
+        return [(time, pace) for time, pace in values if pace.mode == mode]
 
     modes_a, modes_b = {pace.mode for _, pace in values_a}, {pace.mode for _, pace in values_b}
+    chosen = None  # (method, detail, the chosen (time, pace) of A, of B)
     if len(modes_a) == 1 and len(modes_b) == 1 and (next(iter(modes_a)), next(iter(modes_b))) in matches:
-        times_a, times_b = [t for t, _ in values_a], [t for t, _ in values_b]
         mode_a, mode_b = (f.pace.modes[next(iter(m))] for f, m in ((baseline, modes_a), (contender, modes_b)))
-        detail = f"every repetition in one mode (c2c {_short(mode_a.c2c_ns)} / {_short(mode_b.c2c_ns)} ns)"
-        method = PACE_ONE_MODE
+        chosen = (PACE_ONE_MODE, f"every repetition in one mode (c2c {_short(mode_a.c2c_ns)} / "
+                                 f"{_short(mode_b.c2c_ns)} ns)", values_a, values_b)
     else:
         best = max(matches, key=lambda pair: (min(len(in_mode(values_a, pair[0])), len(in_mode(values_b, pair[1]))),
                                               -pair[0], -pair[1]), default=None)
         filled = best and min(len(in_mode(values_a, best[0])), len(in_mode(values_b, best[1])))
         if best and filled >= min_in_mode:
-            times_a, times_b = in_mode(values_a, best[0]), in_mode(values_b, best[1])
-            detail = (f"the repetitions in matching modes A {best[0]} / B {best[1]} (c2c "
-                      f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / {_short(contender.pace.modes[best[1]].c2c_ns)} ns)")
-            method = PACE_MATCHING_MODES
-        else:
-            by_c2c = all(p.c2c_ns is not None for _, p in values_a + values_b)
-            by_serial = all(p.serial_ns is not None for _, p in values_a + values_b)
-            if not (by_c2c or by_serial):
-                return None
-            reading = "c2c_ns" if by_c2c else "serial_ns"
-            times_a = [time / getattr(pace, reading) for time, pace in values_a]
-            times_b = [time / getattr(pace, reading) for time, pace in values_b]
-            detail = f"time / pace_{reading} of each repetition"
-            method = PACE_NORMALISED
+            chosen = (PACE_MATCHING_MODES,
+                      f"the repetitions in matching modes A {best[0]} / B {best[1]} (c2c "
+                      f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / {_short(contender.pace.modes[best[1]].c2c_ns)} ns)",
+                      in_mode(values_a, best[0]), in_mode(values_b, best[1]))
+    # A mode of the trace can join two states of the machine that its readings bridge (this VM: c2c 14 and
+    # 32 ns in one mode, the spinning primitives 2x apart between them); a repetition's own reading tells them
+    # apart.
+    pool_a, pool_b = (chosen[2], chosen[3]) if chosen else (values_a, values_b)
+    state = _one_state(pool_a, pool_b, min_in_mode)
+    if state and len(state[1]) + len(state[2]) < len(pool_a) + len(pool_b):
+        reference, times_a, times_b = state
+        method = PACE_ONE_STATE
+        detail = (f"the repetitions whose c2c reading is within {STATE_WIDTH:g}x of {reference:.0f} ns "
+                  f"(A {len(times_a)} of {len(values_a)}, B {len(times_b)} of {len(values_b)})")
+    elif chosen:
+        method, detail = chosen[0], chosen[1]
+        times_a, times_b = [time for time, _ in chosen[2]], [time for time, _ in chosen[3]]
+    else:
+        by_c2c = all(p.c2c_ns is not None for _, p in values_a + values_b)
+        by_serial = all(p.serial_ns is not None for _, p in values_a + values_b)
+        if not (by_c2c or by_serial):
+            return None
+        reading = "c2c_ns" if by_c2c else "serial_ns"
+        times_a = [time / getattr(pace, reading) for time, pace in values_a]
+        times_b = [time / getattr(pace, reading) for time, pace in values_b]
+        detail = f"time / pace_{reading} of each repetition"
+        method = PACE_NORMALISED
     ratio = statistics.median(times_b) / statistics.median(times_a)
     return PaceAware(method, detail, ratio, statistics.shift_interval(times_a, times_b), len(times_a), len(times_b),
                      tuple(times_a), tuple(times_b))
@@ -863,7 +905,8 @@ def _row_cells(comparison: Comparison, row: Row) -> list[str]:
             f"{row.repetitions_a}/{row.repetitions_b}", _p(row.p_adjusted), comparison.verdict(row)]
 
 
-PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_NORMALISED: "/ pace c2c"}
+PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
+            PACE_NORMALISED: "/ pace c2c"}
 
 
 def _pace_cells(comparison: Comparison, row: Row) -> list[str]:
@@ -1038,7 +1081,8 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
         paced_rows = [row for row in comparison.rows if row.pace]
         pace_counts = {name: sum(comparison.pace_verdict(row) == name for row in paced_rows) for name in VERDICTS}
         methods = ", ".join(f"{sum(row.pace.method == method for row in paced_rows)} {method}"
-                            for method in (PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_NORMALISED))
+                            for method in (PACE_ONE_MODE, PACE_MATCHING_MODES, PACE_ONE_STATE,
+                                                   PACE_NORMALISED))
         unpaced = len(comparison.rows) - len(paced_rows)
         out.append(f"pace-aware verdicts: {_counts_text(pace_counts)} ({methods}"
                    + (f"; {unpaced} {UNAVAILABLE}" if unpaced else "") + ")")

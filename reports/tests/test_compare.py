@@ -967,6 +967,37 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertGreater(seqlock.interval[1], 1.04)
         self.assertNotIn(groups["all"].verdict, ("slower", "faster"))
 
+    def two_states(self, shift):
+        """A against B, each entry's first repetition on both sides run in a second state of the machine (c2c
+        14 ns instead of 30, the step 2x faster) that the trace's one mode does not tell apart."""
+        paths = []
+        for seed, factor in ((1, 1.0), (2, shift)):
+            document = synthetic_runs.matrix_document(seed, shift=factor, drift=0.01, spread=0.02)
+            for benchmark in document["benchmarks"]:
+                if benchmark["repetition_index"] == 0:
+                    for name in ("real_time", "cpu_time", "ns_per_step"):
+                        benchmark[name] *= 0.5
+                    benchmark["pace_c2c_ns"] = 14.0
+            paths.append(self.write(f"{seed}.json", document))
+        return compare_pair(load_run_file(paths[0]), load_run_file(paths[1]))
+
+    def test_repetitions_in_another_c2c_state_of_one_mode_are_set_apart(self):
+        shifted = self.two_states(1.15)
+        self.assertEqual({row.pace.method for row in shifted.rows}, {compare.PACE_ONE_STATE})
+        self.assertEqual({(row.pace.repetitions_a, row.pace.repetitions_b) for row in shifted.rows}, {(4, 4)})
+        self.assertIn("within 1.2x of 30 ns (A 4 of 5, B 4 of 5)", shifted.rows[0].pace.detail)
+        slower = [row for row in shifted.rows if shifted.beyond_pace(row) == "slower"]
+        self.assertGreaterEqual(len(slower), 0.9 * len(shifted.rows))
+        # All five repetitions, the fast one included, leave every entry's interval too wide to call it.
+        for row in shifted.rows:
+            row.pace = compare.PaceAware("one mode", "", row.ratio, None, 5, 5, *(
+                tuple(run.times_ns("real")) for run in (shifted.baseline.runs[row.key], shifted.contender.runs[row.key])))
+        compare.pool_evidence(shifted.rows)
+        self.assertLess(sum(shifted.beyond_pace(row) == "slower" for row in shifted.rows), 0.5 * len(shifted.rows))
+        same = self.two_states(1.0)
+        called = [row for row in same.rows if same.beyond_pace(row) in ("slower", "faster")]
+        self.assertLessEqual(len(called), 0.05 * len(same.rows))
+
     def test_collapsed_entries_are_collapsed_not_untested(self):
         a, b, comparison = self.compared(1.15)
         collapsed = [row for row in comparison.rows if row.collapsed]
