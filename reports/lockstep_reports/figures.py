@@ -325,14 +325,15 @@ NAMED_FASTEST = 3
 
 def _named_points(points: list[CpuPoint]) -> list[CpuPoint]:
     """The points a panel names by primitive: the fastest entry of each of its NAMED_FASTEST fastest
-    primitives, and the entry that keeps the fewest CPUs busy (team CPU / time: a sleeping primitive)."""
+    primitives, and the entry that keeps the fewest CPUs busy (team CPU / time: a sleeping primitive) unless
+    its primitive is named already."""
     named, primitives = [], set()
     for point in sorted(points, key=lambda point: (point.unit_ns, point.key.sort_key())):
         if point.key.get("sync") not in primitives and len(primitives) < NAMED_FASTEST:
             primitives.add(point.key.get("sync"))
             named.append(point)
     frugal = min(points, key=lambda point: (point.cpus_busy, point.key.sort_key()), default=None)
-    if frugal is not None and frugal not in named:
+    if frugal is not None and frugal.key.get("sync") not in primitives:  # a primitive is named once
         named.append(frugal)
     return named
 
@@ -454,7 +455,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
         handles.append(matplotlib.lines.Line2D([], [], ls="none", marker="o", ms=9, mfc="none", mec="#d62728",
                                                mew=1.6, label="the run recommends it"))
     figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,
-                  ncol=min(len(handles), 5))
+                  ncol=min(len(handles), 2 + 2 * columns))  # about as wide as the panels
     figure.suptitle(f"time per {unit} against the CPU the team burns per {unit} (one point per entry)", fontsize=9)
     figure.tight_layout(w_pad=4.0, h_pad=2.0)
     for axes, threads in zip(panels, thread_counts):  # the panels' places are final
@@ -517,7 +518,7 @@ def step_split_bars(splits: list[StepSplit], title: str) -> str:
     axes.set_ylim(len(splits) - 0.5, -0.5)
     axes.set_xlim(0.0, 112.0)
     axes.set_xticks([0, 25, 50, 75, 100], ["0 %", "25 %", "50 %", "75 %", "100 %"])
-    axes.set_xlabel("share of the step (the median step time at the bar's end)")
+    axes.set_xlabel("share of the three parts' sum (the median step time at the bar's end)")
     axes.set_title(title, fontsize=9)
     axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return to_svg(figure)

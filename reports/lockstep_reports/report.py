@@ -308,9 +308,13 @@ def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
         section.figures.append(Figure(f"split-{counter[0]}-{pin}-{threads}", where, figures.step_split_bars(
             splits, f"where the step goes, each primitive at its fastest layout, {where}")))
         rows += [[where, f"{split.key.get('sync')} + {split.key.get('layout')}", format_ns(split.step_ns)]
-                 + [format_ns(part) for part in split.parts_ns] for split in splits]
-    section.tables.append(Table(["group", "sync + layout", "step (median)"] + names, rows,
-                                caption="The split's medians; the three add up to about the step."))
+                 + [format_ns(part) for part in split.parts_ns] + [format_ns(sum(split.parts_ns))]
+                 for split in splits]
+    section.tables.append(Table(
+        ["group", "sync + layout", "step (median)"] + names + ["the three"], rows,
+        caption="The split's medians. Compute is the step less its four stage syncs, clamped at 0 "
+                "(docs/names-and-counters.md): where it reads 0 the syncs took the whole step, and the three add up "
+                "to more than the step; otherwise they add up to it."))
     return section
 
 

@@ -16,6 +16,8 @@ from lockstep_reports.inputs import load_any, load_run_file
 
 # headline.json with team_cpu_* and the split of a step: fixtures/make_cpu_fixture.py.
 CPU_SPLIT = "cpu_split.json"
+# A real `lockstep run --quick` file with team_cpu_* and the split (3 primitives, 2 threads).
+REAL_SPLIT = "run_quick_split.json"
 ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "delay_a.json", "verify_a.csv"]
 
 
@@ -505,7 +507,8 @@ class CpuPerStep(Scratch):
         self.assertAlmostEqual(waiting / step, 0.3, places=3)
         self.assertAlmostEqual(release / step, 0.2, places=2)
         futex = next(row for row in rows if row[0] == "| pin:none, 2 threads" and row[1].startswith("futex_spin"))
-        self.assertEqual(futex[5], "-0.5 ns |")  # a release just below 0, as the writer may measure it
+        self.assertEqual(futex[5], "-0.5 ns")  # a release just below 0, as the writer may measure it
+        self.assertAlmostEqual(float(first[6].split()[0]), compute + waiting + release, places=1)  # the three
 
     def test_the_split_of_some_repetitions_only_still_reads(self):
         document = self.document()
@@ -526,6 +529,19 @@ class CpuPerStep(Scratch):
         html, markdown = self.report(self.write("cpu_only.json", document))
         self.assertNotIn("## Where a step's time goes", markdown)
         self.assertIn('<figure id="cpu-0-rk4"', html)
+
+    def test_a_real_run_file_with_both(self):
+        """fixtures/run_quick_split.json: `lockstep run --quick --threads 2 --sync mailbox,std_barrier,futex_spin
+        --pairs 0` on a 2-CPU VM, as bench/harness/rk4_entries.cpp writes the split."""
+        run_file = load_run_file(fixture(REAL_SPLIT))
+        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        self.assertEqual(len(points), 18)  # 3 primitives x (4 layouts, mailbox 1) x 2 placements, at 2 threads
+        self.assertTrue(all(0.0 < point.cpus_busy < 2.1 for point in points))  # the team has the VM's 2 CPUs
+        html, markdown = self.report(fixture(REAL_SPLIT))
+        self.assertIn('<figure id="cpu-0-rk4"', html)
+        _, rows = self.split_rows(markdown)
+        self.assertEqual([row[1] for row in rows if row[0] == "| pin:compact, 2 threads"],
+                         ["mailbox + per_thread", "futex_spin + per_thread", "std_barrier + packed"])
 
     def test_split_bars_are_shares_of_the_parts(self):
         run_file = load_run_file(fixture(CPU_SPLIT))
