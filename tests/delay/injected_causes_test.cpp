@@ -11,6 +11,10 @@
 // late; the machine is shared). No time is asserted; the threshold comes
 // from the run.
 // Each run is about a second of 1 ms periods; a watchdog bounds it.
+// One run holds 9 to 40 late injected steps, too few for the 90 % rule on a
+// VM that stalls for milliseconds: the cases that fell under it in some runs
+// are disabled here, and scripts/check-injected-causes.sh runs every case
+// several times and holds the pooled count to 90 %.
 #include <gtest/gtest.h>
 #include <sys/mman.h>
 
