@@ -537,6 +537,13 @@ class CpuPerStep(Scratch):
         points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
         self.assertEqual(len(points), 18)  # 3 primitives x (4 layouts, mailbox 1) x 2 placements, at 2 threads
         self.assertTrue(all(0.0 < point.cpus_busy < 2.1 for point in points))  # the team has the VM's 2 CPUs
+        # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/harness/headline.hpp, the
+        # medians' ratio) is the point's, to the bit.
+        by_key = {point.key: point for point in points}
+        with open(fixture(REAL_SPLIT), encoding="utf-8") as stream:
+            written = json.load(stream)["lockstep_headline"]["recommendations"]
+        for read, raw in zip(run_file.headline.recommendations, written):
+            self.assertEqual(by_key[read.entry_key].cpus_busy, raw["cpus_busy"], read.entry)
         html, markdown = self.report(fixture(REAL_SPLIT))
         self.assertIn('<figure id="cpu-0-rk4"', html)
         _, rows = self.split_rows(markdown)
