@@ -92,6 +92,10 @@ SIGNED_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)  # finite, |value| <= LONGEST_N
 AMOUNT_COUNTERS = (tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTER,)
                    + TEAM_CPU_COUNTERS)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
+# Read counters the writer may omit from one repetition and keep in the next: sync_ns_per_stage (and vs_c2c,
+# derived from it) when the repetition's sampled steps timed no stage sync (bench/harness/rk4_entries.cpp).
+# A repetition without one is read without it; every other read counter must agree across repetitions.
+PER_REPETITION_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)
 
 # ---------------------------------------------------------------- the pace trace and the pairs (docs/pace.md)
 

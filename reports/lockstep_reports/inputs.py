@@ -741,12 +741,14 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
         scale = fields.TIME_UNIT_NS[raw["time_unit"]]
         if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
             continue  # stddev, cv and other statistics: not read
-        # The repetitions of one benchmark carry the same read counters, and every entry read (repetitions,
+        # The repetitions of one benchmark carry the same read counters (but fields.PER_REPETITION_COUNTERS,
+        # which the writer may omit from one repetition), and every entry read (repetitions,
         # median, mean) the same per-unit counter: a counter missing from one of them is a damaged file,
         # and a time per batch read as a time per step would be off by the batch size.
         present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
         if aggregate is None:
-            paced = present | frozenset(name for name in fields.PACE_COUNTERS if name in entry.value)
+            paced = (present - frozenset(fields.PER_REPETITION_COUNTERS)) | frozenset(
+                name for name in fields.PACE_COUNTERS if name in entry.value)
             _same_counters(entry, paced, first_repetition.setdefault(key, (index, paced)))
         units = present & frozenset(fields.UNIT_COUNTERS)
         _same_counters(entry, units, first_read.setdefault(key, (index, units)))

@@ -57,6 +57,37 @@ class RunFiles(unittest.TestCase):
         for got, want in zip(batched.runs[key].times_ns("cpu"), plain.runs[key].times_ns("cpu"), strict=True):
             self.assertAlmostEqual(got, want, delta=want * 1e-12)
 
+    def _with_second_repetition_lacking(self, *counters):
+        with open(fixture("machine_a.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        name = "rk4/sync:seqlock/layout:padded128/pin:compact/threads:2"
+        repetitions = [entry for entry in document["benchmarks"]
+                       if entry.get("run_name") == name and entry["run_type"] == "iteration"]
+        for counter in counters:
+            del repetitions[1][counter]
+        directory = tempfile.TemporaryDirectory()
+        self.addCleanup(directory.cleanup)
+        path = os.path.join(directory.name, "partial.json")
+        with open(path, "w", encoding="utf-8") as stream:
+            json.dump(document, stream)
+        return path, parse_name(name)
+
+    def test_a_repetition_without_its_sync_time_is_read_without_it(self):
+        # lockstep run omits sync_ns_per_stage (and vs_c2c, derived from it) from a repetition whose sampled
+        # steps timed no stage sync, and keeps it in the next: the file is whole, the counter is read where
+        # it was measured.
+        path, key = self._with_second_repetition_lacking("sync_ns_per_stage", "vs_c2c")
+        run = load_run_file(path).runs[key]
+        self.assertEqual(len(run.repetitions), 10)
+        self.assertEqual(len(run.counter_values("sync_ns_per_stage")), 9)
+        self.assertEqual(len(run.counter_values("ns_per_step")), 10)
+
+    def test_a_repetition_without_its_step_time_is_a_damaged_file(self):
+        path, _ = self._with_second_repetition_lacking("ns_per_step")
+        with self.assertRaises(InputError) as caught:
+            load_run_file(path)
+        self.assertIn("lacks ns_per_step", str(caught.exception))
+
     def test_from_schema_2_real_time_and_cpu_time_are_per_step(self):
         # lockstep schema 2 (bench/harness/team_driver.hpp): real_time is ns_per_step, cpu_time is per step too,
         # and neither is rescaled, whatever real_time / ns_per_step would say.
