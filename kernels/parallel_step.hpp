@@ -320,7 +320,13 @@ struct sync_clock<sync_timing::sampled> {
   void begin_step() noexcept {
     sampling = steps_to_sample == 0;
     steps_to_sample = sampling ? period - 1 : steps_to_sample - 1;
-    if (sampling) ordinal = *board.sampled_steps;
+    if (!sampling) return;
+    ordinal = *board.sampled_steps;
+    // The stamps' line is shared by its readers since the last sampled step:
+    // ask for it in exclusive state now, so that the first stage's store does
+    // not wait for it at its sync (an atomic read-modify-write drains the
+    // store buffer first) but during the stage's work.
+    __builtin_prefetch(&board.own->stamps[ordinal & 1U][0], 1);
   }
   void start(unsigned stage) noexcept {
     if (!sampling) return;
