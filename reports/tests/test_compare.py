@@ -1,5 +1,6 @@
 """`lockstep compare` on the fixtures: matching, statistics, listings, machines, exit status."""
 import json
+import math
 import os
 import re
 import shutil
@@ -997,6 +998,56 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         same = self.two_states(1.0)
         called = [row for row in same.rows if same.beyond_pace(row) in ("slower", "faster")]
         self.assertLessEqual(len(called), 0.05 * len(same.rows))
+
+    STATES = (14.0, 30.0, 100.0)  # c2c of the machine's three states, fastest first: the trace's three modes
+
+    def states_document(self, seed, shift, states):
+        """A synthetic run whose repetitions ran in the given states (indices into STATES, one per repetition):
+        std_barrier's steps do not follow the c2c reading at all, every other primitive's in proportion."""
+        document = synthetic_runs.matrix_document(seed, shift=shift, drift=0.01, spread=0.02)
+        for benchmark in document["benchmarks"]:
+            state = states[benchmark["repetition_index"]]
+            follows = 0.0 if "std_barrier" in benchmark["name"] else 1.0
+            for name in ("real_time", "cpu_time", "ns_per_step"):
+                benchmark[name] *= (self.STATES[state] / 30.0) ** follows
+            benchmark.update(pace_c2c_ns=self.STATES[state], pace_mode=state)
+        document["lockstep_pace"].update(
+            readings=[{"t_s": 0.1 * index, "c2c_ns": self.STATES[index % 3], "serial_ns": 20.0, "mode": index % 3}
+                      for index in range(30)],
+            modes=[{"mode": index, "c2c_ns": c2c, "serial_ns": 20.0, "share": 1 / 3, "readings": 10}
+                   for index, c2c in enumerate(self.STATES)], changes=29,
+            summary="c2c 14 ns for 33 % of the run, 30 ns for 33 %, 100 ns for 33 %; 29 changes")
+        return document
+
+    def test_a_step_is_divided_by_the_pace_as_far_as_its_cluster_follows_it(self):
+        # No state or mode holds 3 repetitions of both sides: every entry is pace-normalised. B ran more of
+        # its repetitions in the slow state, which std_barrier's steps do not feel.
+        a = self.write("a.json", self.states_document(1, 1.0, (0, 1, 2, 0, 1)))
+        for shift in (1.0, 1.15):
+            b = self.write("b.json", self.states_document(2, shift, (0, 2, 2, 1, 2)))
+            comparison = compare_pair(load_run_file(a), load_run_file(b))
+            self.assertEqual({row.pace.method for row in comparison.rows}, {compare.PACE_NORMALISED})
+            elasticities = compare.pace_elasticities(comparison.baseline, comparison.contender, "real")
+            for (sync, threads), elasticity in elasticities.items():
+                if sync == "std_barrier":
+                    self.assertLess(elasticity, 0.1, threads)
+                else:
+                    self.assertGreater(elasticity, 0.9, (sync, threads))
+            for row in comparison.rows:
+                self.assertAlmostEqual(math.log(row.pace.ratio), math.log(shift), delta=0.1, msg=row.key.display)
+            barrier = [row for row in comparison.rows if row.key.get("sync") == "std_barrier"]
+            self.assertEqual(len(barrier), 16)
+            if shift == 1.0:
+                self.assertFalse([row.key.display for row in comparison.rows
+                                  if comparison.beyond_pace(row) in ("slower", "faster")])
+                # Divided by the whole reading, std_barrier's entries would read 2-3x faster.
+                row = barrier[0]
+                whole = compare.pace_aware(comparison.baseline.runs[row.key], comparison.contender.runs[row.key],
+                                           comparison.baseline, comparison.contender, [(0, 0), (1, 1), (2, 2)], "real")
+                self.assertLess(whole.ratio, 0.5)
+            else:
+                slower = [row for row in comparison.rows if comparison.beyond_pace(row) == "slower"]
+                self.assertGreaterEqual(len(slower), 0.8 * len(comparison.rows))
 
     def test_collapsed_entries_are_collapsed_not_untested(self):
         a, b, comparison = self.compared(1.15)
