@@ -235,18 +235,31 @@ TEST_F(InjectedCauses, ACpuHogIsRunQueueWaitOnItsCpu) {
   const auto plan = platform::plan_placement(machine_, platform::placement::compact, 2);
   const auto victim_cpu = plan.pu_at(kVictim);
   ASSERT_TRUE(victim_cpu.has_value());
-  // The hog runs in bursts: busy through periods 50-69 of every 100 (it
-  // reads the period from participant 0's hook), so that the run has steps
-  // without it to compare with.
+  // The hog runs in bursts, so that the run has steps without it to compare
+  // with: busy from about half a period after period 49 of every 100 began
+  // (step 49 has ended by then) until period 51 begins, so that the
+  // participant wakes for period 50 behind it. It reads the period from
+  // participant 0's hook. One step a burst: in longer bursts (periods 50-69)
+  // the first step overran, every later one started late and inherited its
+  // causes, and the judge, which leaves inherited steps out, had none to
+  // judge in ten quiet runs.
   // relaxed: the hog only needs to see each value eventually; it reads no
   // other data by them, and the join orders the end.
   std::atomic<bool> stop{false};
   std::atomic<std::int64_t> period_now{-1};
-  const auto hogging = [](std::int64_t period) { return period >= 0 && period % 100 >= 50 && period % 100 < 70; };
+  const auto hogged_period = [](std::int64_t period) { return period >= 0 && period % 100 == 50; };
   std::thread hog([&] {
     platform::pin_current_thread_to_pu(*victim_cpu);
+    std::int64_t seen = -1;
+    std::int64_t seen_at = 0;
     while (!stop.load(std::memory_order_relaxed)) {
-      if (hogging(period_now.load(std::memory_order_relaxed))) continue;  // busy
+      const std::int64_t period = period_now.load(std::memory_order_relaxed);
+      if (period != seen) {
+        seen = period;
+        seen_at = platform::now_ns();
+      }
+      const bool before = hogged_period(period + 1) && platform::now_ns() - seen_at > 500'000;
+      if (before || hogged_period(period)) continue;  // busy
       std::this_thread::sleep_for(std::chrono::microseconds(100));
     }
   });
@@ -263,7 +276,7 @@ TEST_F(InjectedCauses, ACpuHogIsRunQueueWaitOnItsCpu) {
   if (!run.record->schedstat_available) GTEST_SKIP() << "no /proc/thread-self/schedstat: run-queue wait unavailable";
   std::vector<std::int64_t> hogged;
   for (std::int64_t k = 0; k < kPeriods; ++k)
-    if (hogging(k - 1) && hogging(k)) hogged.push_back(k);  // the hog was busy since the period before
+    if (hogged_period(k)) hogged.push_back(k);
   const verdict result = judge(
       run, hogged, [](const late_step& step) { return step.participant == kVictim; },
       [&](const late_step& step) { return step.top == delay_cause::run_queue_wait && step.cpu == *victim_cpu; });
