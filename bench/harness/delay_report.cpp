@@ -484,6 +484,7 @@ struct window_budget {
   std::int64_t fault_excess = 0;
   std::int64_t major_faults = 0;
   bool switched = false;  // more switches than its median: the guest scheduled it differently
+  std::int64_t extra_switches = 0;  // voluntary and involuntary switches above their medians
   bool migrated = false;  // it changed CPU somewhere in its window: the move's IPIs and cold caches are the move's
 };
 
@@ -499,8 +500,12 @@ window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
   budget.fault_excess = row.counters.minor_faults + row.counters.major_faults -
                         static_cast<std::int64_t>(std::llround(median.faults));
   budget.major_faults = row.counters.major_faults;
-  budget.switched = row.counters.voluntary_switches > static_cast<std::int64_t>(std::llround(median.voluntary)) ||
-                    row.counters.involuntary_switches > static_cast<std::int64_t>(std::llround(median.involuntary));
+  const std::int64_t extra_voluntary =
+      std::max<std::int64_t>(0, row.counters.voluntary_switches - static_cast<std::int64_t>(std::llround(median.voluntary)));
+  const std::int64_t extra_involuntary = std::max<std::int64_t>(
+      0, row.counters.involuntary_switches - static_cast<std::int64_t>(std::llround(median.involuntary)));
+  budget.extra_switches = extra_voluntary + extra_involuntary;
+  budget.switched = budget.extra_switches > 0;
   const std::int32_t woke_on = row.wake_cpu;
   const auto moved = [&](std::int32_t cpu) { return cpu >= 0 && woke_on >= 0 && cpu != woke_on; };
   if (k > 0 && reader.row(k - 1, p).recorded) budget.migrated = moved(reader.row(k - 1, p).end_cpu);
@@ -534,6 +539,19 @@ void split_part(const step_reader& reader, std::int64_t k, const part& piece, do
   // event delayed (the timer or the waker's signal was not delivered while
   // the vCPU did not run: a stall). Major faults block too.
   const bool guest_event = budget.switched || more_interrupts;
+  // What the guest's wake-up path can account for: each switch or interrupt
+  // above the usual at most one more typical length of this part (the
+  // wake-up run again: preempted once more, an interrupt served first). A
+  // wake-up later than that is a wake-up nothing the guest did delayed: a
+  // timer or a waker's signal that arrived while the vCPU did not run.
+  const double events = static_cast<double>(budget.extra_switches + (more_interrupts ? *interrupts : 0));
+  double wakeup_allowance = events * std::max(0.0, piece.typical);
+  const auto credit_wakeup = [&](double ns) {
+    const double wakeup = std::min(ns, wakeup_allowance);
+    wakeup_allowance -= wakeup;
+    split[cause_index(delay_cause::wakeup_latency)] += wakeup;
+    split[cause_index(delay_cause::machine_stall)] += ns - wakeup;
+  };
   const delay_cause blocked = budget.major_faults > 0           ? delay_cause::page_faults
                               : piece.kind == part_kind::compute ? delay_cause::compute
                               : guest_event                      ? delay_cause::wakeup_latency
@@ -551,16 +569,23 @@ void split_part(const step_reader& reader, std::int64_t k, const part& piece, do
     const double off = timer ? 0.0 : budget.blocked * share;
     split[cause_index(delay_cause::run_queue_wait)] += run_queue;
     split[cause_index(on_cpu)] += cpu;
-    split[cause_index(blocked)] += off;
+    if (blocked == delay_cause::wakeup_latency)
+      credit_wakeup(off);
+    else
+      split[cause_index(blocked)] += off;
     budget.run_queue -= run_queue;
     budget.on_cpu -= cpu;
     budget.blocked -= off;
     left -= run_queue + cpu + off;
   }
-  if (left > 0)
-    split[cause_index(piece.kind == part_kind::compute ? delay_cause::unexplained
-                      : guest_event                    ? delay_cause::wakeup_latency
-                                                       : delay_cause::machine_stall)] += left;
+  if (left > 0) {
+    if (piece.kind == part_kind::compute)
+      split[cause_index(delay_cause::unexplained)] += left;
+    else if (guest_event)
+      credit_wakeup(left);
+    else
+      split[cause_index(delay_cause::machine_stall)] += left;
+  }
 }
 
 delay_cause top_of(const cause_split& split) {

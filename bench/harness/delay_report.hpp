@@ -88,6 +88,12 @@ struct search_reading {
 //                    shows its wake-up path at work, else machine stall; in
 //                    a compute part, unexplained; and the step's excess the
 //                    parts do not cover is unexplained.
+// The wake-up path accounts for at most one typical length of the part (its
+// median) per switch or interrupt above the usual, in a part's blocked time
+// and what is left together; a wake-up later than that is machine stall
+// beyond it (a 25 ms timer wake-up with five more switches and three more
+// interrupts than usual is not the guest's doing: the timer fired while the
+// vCPU did not run).
 // A timer wake-up lies in the sleep before the step: of the window's time
 // only its run-queue wait is shared with it; blocked time is the step's
 // (from its wake-up to its end).

@@ -189,11 +189,32 @@ TEST(DelayCauses, ALateTimerWakeUpIsWakeUpLatency) {
   constructed_run built;
   for (unsigned p = 0; p < kParticipants; ++p) built.run.wakeup_ns[30 * kParticipants + p] += p == 1 ? 80'000 : 0;
   built.arrive_late(30, 1, 0, 80'000);  // its work took the usual time after the late wake-up
-  built.row(30, 1).counters.involuntary_switches = 1;  // the guest's wake-up path at work
+  // The guest's wake-up path at work: one more switch and eight more
+  // interrupts on its CPU than usual, each worth up to one usual wake-up
+  // (10 us): 90 us, more than the 80 us.
+  built.row(30, 1).counters.involuntary_switches = 1;
+  built.run.record->interrupts[30 * 2 + 1] = 3 + 8;  // CPU 1's column
   const late_step step = attribute_step(built.run, 30);
   EXPECT_EQ(step.kind, part_kind::timer_wakeup);
   EXPECT_EQ(step.top, delay_cause::wakeup_latency);
   EXPECT_EQ(step.participant, 1u);
+  EXPECT_DOUBLE_EQ(of(step, delay_cause::machine_stall), 0.0);
+}
+
+TEST(DelayCauses, AWakeUpLaterThanItsGuestEventsCanExplainIsMostlyAMachineStall) {
+  // 25 ms late with five more switches and three more interrupts than usual:
+  // eight events explain at most eight usual wake-ups (80 us); the rest is a
+  // timer that fired while the vCPU did not run.
+  constructed_run built;
+  for (unsigned p = 0; p < kParticipants; ++p)
+    built.run.wakeup_ns[30 * kParticipants + p] += p == 1 ? 25'000'000 : 0;
+  built.arrive_late(30, 1, 0, 25'000'000);
+  built.row(30, 1).counters.involuntary_switches = 5;
+  built.run.record->interrupts[30 * 2 + 1] = 3 + 3;
+  const late_step step = attribute_step(built.run, 30);
+  EXPECT_EQ(step.kind, part_kind::timer_wakeup);
+  EXPECT_EQ(step.top, delay_cause::machine_stall);
+  EXPECT_DOUBLE_EQ(of(step, delay_cause::wakeup_latency), 8 * kWake);
 }
 
 TEST(DelayCauses, ALateWakeUpNoGuestEventExplainsIsAMachineStall) {
