@@ -483,8 +483,9 @@ struct window_budget {
   double blocked = 0;
   std::int64_t fault_excess = 0;
   std::int64_t major_faults = 0;
-  bool switched = false;  // more switches than its median: the guest scheduled it differently
-  std::int64_t extra_switches = 0;  // voluntary and involuntary switches above their medians
+  // Voluntary and involuntary switches above their medians: more than none,
+  // the guest scheduled it differently.
+  std::int64_t extra_switches = 0;
   bool migrated = false;  // it changed CPU somewhere in its window: the move's IPIs and cold caches are the move's
 };
 
@@ -505,7 +506,6 @@ window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
   const std::int64_t extra_involuntary = std::max<std::int64_t>(
       0, row.counters.involuntary_switches - static_cast<std::int64_t>(std::llround(median.involuntary)));
   budget.extra_switches = extra_voluntary + extra_involuntary;
-  budget.switched = budget.extra_switches > 0;
   const std::int32_t woke_on = row.wake_cpu;
   const auto moved = [&](std::int32_t cpu) { return cpu >= 0 && woke_on >= 0 && cpu != woke_on; };
   if (k > 0 && reader.row(k - 1, p).recorded) budget.migrated = moved(reader.row(k - 1, p).end_cpu);
@@ -538,7 +538,7 @@ void split_part(const step_reader& reader, std::int64_t k, const part& piece, do
   // (more switches or interrupts than usual), otherwise a wake-up no guest
   // event delayed (the timer or the waker's signal was not delivered while
   // the vCPU did not run: a stall). Major faults block too.
-  const bool guest_event = budget.switched || more_interrupts;
+  const bool guest_event = budget.extra_switches > 0 || more_interrupts;
   // What the guest's wake-up path can account for: each switch or interrupt
   // above the usual at most one more typical length of this part (the
   // wake-up run again: preempted once more, an interrupt served first). A
