@@ -2,8 +2,7 @@
 #include "platform/step_counters.hpp"
 
 #include <fcntl.h>
-#include <sched.h>
-#include <sys/resource.h>
+#include <pthread.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -48,12 +47,9 @@ thread_step_counters operator-(const thread_step_counters& after, const thread_s
   thread_step_counters delta;
   delta.on_cpu_ns = difference(after.on_cpu_ns, before.on_cpu_ns);
   delta.run_queue_wait_ns = difference(after.run_queue_wait_ns, before.run_queue_wait_ns);
-  delta.timeslices = difference(after.timeslices, before.timeslices);
-  delta.voluntary_switches = after.voluntary_switches - before.voluntary_switches;
-  delta.involuntary_switches = after.involuntary_switches - before.involuntary_switches;
-  delta.minor_faults = after.minor_faults - before.minor_faults;
-  delta.major_faults = after.major_faults - before.major_faults;
-  delta.cpu = after.cpu;
+  delta.switches = difference(after.switches, before.switches);
+  delta.minor_faults = difference(after.minor_faults, before.minor_faults);
+  delta.major_faults = difference(after.major_faults, before.major_faults);
   return delta;
 }
 
@@ -69,35 +65,69 @@ std::optional<schedstat_fields> parse_schedstat(std::string_view text) noexcept 
   return schedstat_fields{values[0], values[1], values[2]};
 }
 
+std::optional<fault_fields> parse_stat_faults(std::string_view text) noexcept {
+  // The command name is in parentheses and may hold spaces and ')': the
+  // fields resume after the last ')'. Then state (3), ppid (4), pgrp (5),
+  // session (6), tty_nr (7), tpgid (8), flags (9), minflt (10), cminflt (11),
+  // majflt (12).
+  const std::size_t close = text.rfind(')');
+  if (close == std::string_view::npos) return std::nullopt;
+  std::size_t at = close + 1;
+  std::int64_t fields[10] = {};  // 3..12; the state (3) is a letter, skipped
+  for (int field = 3; field <= 12; ++field) {
+    at = skip_spaces(text, at);
+    if (at >= text.size()) return std::nullopt;
+    if (field == 3) {
+      while (at < text.size() && text[at] != ' ') ++at;
+      continue;
+    }
+    const auto [end, error] = std::from_chars(text.data() + at, text.data() + text.size(), fields[field - 3]);
+    if (error != std::errc{}) return std::nullopt;
+    at = static_cast<std::size_t>(end - text.data());
+  }
+  return fault_fields{fields[10 - 3], fields[12 - 3]};
+}
+
 thread_counter_reader::thread_counter_reader()
-    : schedstat_fd_(::open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC)) {}
+    : schedstat_fd_(::open("/proc/thread-self/schedstat", O_RDONLY | O_CLOEXEC)),
+      stat_fd_(::open("/proc/thread-self/stat", O_RDONLY | O_CLOEXEC)) {
+  clockid_t clock{};
+  if (::pthread_getcpuclockid(::pthread_self(), &clock) == 0) cpu_clock_ = clock;
+}
 
 thread_counter_reader::~thread_counter_reader() {
   if (schedstat_fd_ >= 0) ::close(schedstat_fd_);
+  if (stat_fd_ >= 0) ::close(stat_fd_);
 }
 
-thread_step_counters thread_counter_reader::read() noexcept {
+namespace {
+
+// The short procfs file at `fd` read whole with one pread at offset 0 (it is
+// regenerated per read) and parsed by `parse`; nullopt when either fails.
+template <std::size_t Capacity, class Parse>
+auto parse_small_file(int fd, Parse&& parse) noexcept -> decltype(parse(std::string_view())) {
+  if (fd < 0) return std::nullopt;
+  char text[Capacity];
+  const ssize_t got = ::pread(fd, text, sizeof text - 1, 0);
+  if (got <= 0) return std::nullopt;
+  return parse(std::string_view(text, static_cast<std::size_t>(got)));
+}
+
+}  // namespace
+
+thread_step_counters thread_counter_reader::read() const noexcept {
   thread_step_counters counters;
-  if (schedstat_fd_ >= 0) {
-    // One pread at offset 0: the file is one short line, regenerated per read.
-    char text[96];
-    const ssize_t got = ::pread(schedstat_fd_, text, sizeof text - 1, 0);
-    if (got > 0) {
-      if (const auto fields = parse_schedstat(std::string_view(text, static_cast<std::size_t>(got)))) {
-        counters.on_cpu_ns = fields->on_cpu_ns;
-        counters.run_queue_wait_ns = fields->run_queue_wait_ns;
-        counters.timeslices = fields->timeslices;
-      }
-    }
+  if (const auto fields = parse_small_file<96>(schedstat_fd_, parse_schedstat)) {
+    counters.run_queue_wait_ns = fields->run_queue_wait_ns;
+    counters.switches = fields->timeslices;
   }
-  rusage usage{};
-  if (::getrusage(RUSAGE_THREAD, &usage) == 0) {
-    counters.voluntary_switches = usage.ru_nvcsw;
-    counters.involuntary_switches = usage.ru_nivcsw;
-    counters.minor_faults = usage.ru_minflt;
-    counters.major_faults = usage.ru_majflt;
+  timespec on_cpu{};
+  if (cpu_clock_ && ::clock_gettime(*cpu_clock_, &on_cpu) == 0)
+    counters.on_cpu_ns = static_cast<std::int64_t>(on_cpu.tv_sec) * 1'000'000'000 + on_cpu.tv_nsec;
+  if (const auto faults = parse_small_file<1024>(stat_fd_, parse_stat_faults)) {
+    counters.minor_faults = faults->minor;
+    counters.major_faults = faults->major;
   }
-  if (const int cpu = ::sched_getcpu(); cpu >= 0) counters.cpu = static_cast<unsigned>(cpu);
   return counters;
 }
 
@@ -169,32 +199,32 @@ cpu_interrupt_totals interrupt_reader::read() {
   return totals;
 }
 
-double snapshot_cost_ns(int rounds) {
-  thread_counter_reader reader;
+namespace {
+
+// The median in nanoseconds of `rounds` calls of `read`.
+template <class Read>
+double median_cost_ns(int rounds, Read&& read) {
   std::vector<double> costs;
   costs.reserve(static_cast<std::size_t>(rounds));
   for (int round = 0; round < rounds; ++round) {
     const std::int64_t start = now_ns();
-    const thread_step_counters counters = reader.read();
+    read();
     costs.push_back(static_cast<double>(now_ns() - start));
-    (void)counters;
   }
   std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(costs.size() / 2), costs.end());
   return costs[costs.size() / 2];
 }
 
+}  // namespace
+
+double snapshot_cost_ns(int rounds) {
+  const thread_counter_reader reader;
+  return median_cost_ns(rounds, [&] { (void)reader.read(); });
+}
+
 double interrupt_read_cost_ns(int rounds) {
   interrupt_reader reader;
-  std::vector<double> costs;
-  costs.reserve(static_cast<std::size_t>(rounds));
-  for (int round = 0; round < rounds; ++round) {
-    const std::int64_t start = now_ns();
-    const cpu_interrupt_totals totals = reader.read();
-    costs.push_back(static_cast<double>(now_ns() - start));
-    (void)totals;
-  }
-  std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(costs.size() / 2), costs.end());
-  return costs[costs.size() / 2];
+  return median_cost_ns(rounds, [&] { (void)reader.read(); });
 }
 
 }  // namespace lockstep::platform

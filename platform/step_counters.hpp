@@ -1,28 +1,37 @@
 #pragma once
 // Cheap per-thread and per-CPU counters for a per-step record: what the
-// kernel says happened to the calling thread between two snapshots, and the
+// kernel says happened to a thread between two snapshots, and the
 // interrupts each CPU took. platform/thread_accounting.hpp counts a whole run
 // (a snapshot there opens a /proc file each time); this file is for one
 // snapshot per period, so it keeps its files open and rereads them.
 //
 // Sources (Linux), each "unavailable" where the machine lacks it:
-//   /proc/thread-self/schedstat   three numbers: time on the CPU (ns), time
-//       waiting on a run queue (ns), timeslices run (sched_info: needs
-//       CONFIG_SCHED_INFO; the file is absent without it). Opened by the
-//       thread it describes: /proc/thread-self resolves to the opener.
-//   getrusage(RUSAGE_THREAD)      voluntary and involuntary context switches,
-//       minor and major page faults of the calling thread.
-//   sched_getcpu                  the CPU the thread runs on at the snapshot.
+//   the thread's CPU clock (pthread_getcpuclockid)   its time on the CPU,
+//       up to date when it is running (the kernel brings the running
+//       thread's account up to date for the clock; schedstat's first field
+//       lags by the slice in progress, so it is not used).
+//   /proc/thread-self/schedstat   time waiting on a run queue (ns, field 2),
+//       and how many times the thread was scheduled in (field 3: one per
+//       context switch, voluntary or not; sched_info: needs
+//       CONFIG_SCHED_INFO, the file is absent without it).
+//   /proc/thread-self/stat        minor and major page faults (fields 10
+//       and 12).
+//   Both are opened by the thread they describe (/proc/thread-self
+//   resolves to the opener) and the open files keep naming it, so any
+//   thread can reread them: the thread itself does not have to stop for its
+//   snapshot.
 //   /proc/interrupts, /proc/softirqs   per-CPU counts, summed over every
 //       interrupt line (hardware, local timer, IPIs) and every softirq kind.
 //       Read by one thread for all CPUs.
 //
 // Cost (measured by snapshot_cost_ns and interrupt_read_cost_ns on the
-// machine that runs; lockstep delay prints both): a thread snapshot is a
-// pread of a small file plus a getrusage call, about 1-3 us in a VM; the
-// per-CPU interrupt totals parse two tables, tens of microseconds. Take the
-// thread snapshot once per period, outside the step; read the interrupts
-// from one thread, once per period or every N periods.
+// machine that runs; lockstep delay prints both): a thread's snapshot is
+// two preads of small procfs files, a few microseconds in a VM; the per-CPU
+// interrupt totals parse two tables, tens of microseconds. Take them once
+// per period, outside the step, from one thread once everyone has ended,
+// so that nobody still stepping waits behind them.
+#include <time.h>
+
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -30,23 +39,6 @@
 #include <vector>
 
 namespace lockstep::platform {
-
-// One thread's counters at one moment (absolute values since the thread
-// started). Fields a source could not give are nullopt.
-struct thread_step_counters {
-  std::optional<std::int64_t> on_cpu_ns;          // schedstat 1
-  std::optional<std::int64_t> run_queue_wait_ns;  // schedstat 2
-  std::optional<std::int64_t> timeslices;         // schedstat 3
-  std::int64_t voluntary_switches = 0;
-  std::int64_t involuntary_switches = 0;
-  std::int64_t minor_faults = 0;
-  std::int64_t major_faults = 0;
-  std::optional<unsigned> cpu;  // where the snapshot ran
-};
-
-// after - before, field by field (a field is unavailable if it is in either;
-// cpu is after's).
-thread_step_counters operator-(const thread_step_counters& after, const thread_step_counters& before) noexcept;
 
 // "a b c\n" from /proc/thread-self/schedstat: on-CPU ns, run-queue wait ns,
 // timeslices; nullopt when the text is not three integers.
@@ -57,9 +49,33 @@ struct schedstat_fields {
 };
 std::optional<schedstat_fields> parse_schedstat(std::string_view text) noexcept;
 
-// Snapshots of the thread that constructed it. Construct it on the thread it
-// reads (it opens /proc/thread-self/schedstat there) and call read() only on
-// that thread. Not copyable: it owns a file descriptor.
+// "... (comm) S ppid ... minflt cminflt majflt ..." from /proc/<tid>/stat:
+// the thread's own minor and major faults (fields 10 and 12, counted after
+// the command name's closing parenthesis, which the name itself may
+// contain); nullopt when the text does not have them.
+struct fault_fields {
+  std::int64_t minor = 0;
+  std::int64_t major = 0;
+};
+std::optional<fault_fields> parse_stat_faults(std::string_view text) noexcept;
+
+// One thread's counters at one moment (absolute values since the thread
+// started). Fields a source could not give are nullopt.
+struct thread_step_counters {
+  std::optional<std::int64_t> on_cpu_ns;          // the thread's CPU clock
+  std::optional<std::int64_t> run_queue_wait_ns;  // schedstat 2
+  std::optional<std::int64_t> switches;           // schedstat 3: times scheduled in
+  std::optional<std::int64_t> minor_faults;       // stat 10
+  std::optional<std::int64_t> major_faults;       // stat 12
+};
+
+// after - before, field by field (a field is unavailable if it is in either).
+thread_step_counters operator-(const thread_step_counters& after, const thread_step_counters& before) noexcept;
+
+// Snapshots of the thread that constructed it (its owner). Construct it on
+// the thread it reads: it opens /proc/thread-self/schedstat and stat there.
+// read() may then be called from any thread, at any time (the open files
+// keep naming the owner). Not copyable: it owns file descriptors.
 class thread_counter_reader {
  public:
   thread_counter_reader();
@@ -67,13 +83,16 @@ class thread_counter_reader {
   thread_counter_reader(const thread_counter_reader&) = delete;
   thread_counter_reader& operator=(const thread_counter_reader&) = delete;
 
-  // Whether schedstat could be opened (run-queue wait and on-CPU time).
+  // Whether schedstat could be opened (run-queue wait and switches).
   [[nodiscard]] bool schedstat_available() const noexcept { return schedstat_fd_ >= 0; }
-  // The counters now. Never throws; a failing source leaves its fields empty.
-  thread_step_counters read() noexcept;
+  // The owner's counters now. Never throws; a failing source leaves its
+  // fields empty.
+  [[nodiscard]] thread_step_counters read() const noexcept;
 
  private:
   int schedstat_fd_ = -1;
+  int stat_fd_ = -1;
+  std::optional<clockid_t> cpu_clock_;
 };
 
 // Per-CPU totals: cpus[i] is the CPU number of column i; interrupts[i] the
@@ -115,8 +134,8 @@ class interrupt_reader {
   std::string buffer_;
 };
 
-// The median cost in nanoseconds of one thread_counter_reader::read() on
-// the calling thread, and of one interrupt_reader::read(), over `rounds`.
+// The median cost in nanoseconds, over `rounds`, of one
+// thread_counter_reader::read() and of one interrupt_reader::read().
 double snapshot_cost_ns(int rounds = 201);
 double interrupt_read_cost_ns(int rounds = 51);
 

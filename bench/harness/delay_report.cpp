@@ -280,6 +280,12 @@ double median_or(std::vector<double> samples, double otherwise) {
   return platform::summarize(std::move(samples)).p50;
 }
 
+// Minor and major faults together, when the window has both.
+std::optional<std::int64_t> faults_of(const platform::thread_step_counters& counters) {
+  if (!counters.minor_faults || !counters.major_faults) return std::nullopt;
+  return *counters.minor_faults + *counters.major_faults;
+}
+
 struct part {
   part_kind kind = part_kind::compute;
   unsigned participant = 0;
@@ -304,7 +310,7 @@ class step_reader {
     std::vector<std::vector<double>> compute(participants_ * kStages), resume(participants_ * kStages),
         timer(participants_);
     std::vector<std::vector<double>> on_cpu(participants_), run_queue(participants_), blocked_time(participants_),
-        voluntary(participants_), involuntary(participants_), faults(participants_);
+        switches(participants_), faults(participants_);
     for (std::int64_t k = 0; k < periods_; ++k) {
       for (unsigned p = 0; p < participants_; ++p) {
         const participant_period& row = record_.at(k, p);
@@ -319,9 +325,8 @@ class step_reader {
         if (row.counters.on_cpu_ns) on_cpu[p].push_back(static_cast<double>(*row.counters.on_cpu_ns));
         if (row.counters.run_queue_wait_ns) run_queue[p].push_back(static_cast<double>(*row.counters.run_queue_wait_ns));
         if (const auto b = blocked(k, p)) blocked_time[p].push_back(*b);
-        voluntary[p].push_back(static_cast<double>(row.counters.voluntary_switches));
-        involuntary[p].push_back(static_cast<double>(row.counters.involuntary_switches));
-        faults[p].push_back(static_cast<double>(row.counters.minor_faults + row.counters.major_faults));
+        if (row.counters.switches) switches[p].push_back(static_cast<double>(*row.counters.switches));
+        if (const auto f = faults_of(row.counters)) faults[p].push_back(static_cast<double>(*f));
       }
     }
     typical_compute_.resize(compute.size());
@@ -331,7 +336,7 @@ class step_reader {
     for (unsigned p = 0; p < participants_; ++p) {
       typical_timer_.push_back(median_or(timer[p], 0));
       medians_.push_back({median_or(on_cpu[p], 0), median_or(run_queue[p], 0), median_or(blocked_time[p], 0),
-                          median_or(voluntary[p], 0), median_or(involuntary[p], 0), median_or(faults[p], 0)});
+                          median_or(switches[p], 0), median_or(faults[p], 0)});
     }
     for (std::size_t column = 0; column < columns_; ++column) {
       std::vector<double> counts;
@@ -426,7 +431,7 @@ class step_reader {
   }
 
   struct counter_medians {
-    double on_cpu = 0, run_queue = 0, blocked = 0, voluntary = 0, involuntary = 0, faults = 0;
+    double on_cpu = 0, run_queue = 0, blocked = 0, switches = 0, faults = 0;
   };
   const counter_medians& medians(unsigned p) const { return medians_[p]; }
   const participant_period& row(std::int64_t k, unsigned p) const { return record_.at(k, p); }
@@ -483,8 +488,8 @@ struct window_budget {
   double blocked = 0;
   std::int64_t fault_excess = 0;
   std::int64_t major_faults = 0;
-  // Voluntary and involuntary switches above their medians: more than none,
-  // the guest scheduled it differently.
+  // Switches (voluntary or not) above their median: more than none, the
+  // guest scheduled it differently.
   std::int64_t extra_switches = 0;
   bool migrated = false;  // it changed CPU somewhere in its window: the move's IPIs and cold caches are the move's
 };
@@ -498,14 +503,12 @@ window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
     budget.run_queue = std::max(0.0, static_cast<double>(*row.counters.run_queue_wait_ns) - median.run_queue);
   if (row.counters.on_cpu_ns) budget.on_cpu = std::max(0.0, static_cast<double>(*row.counters.on_cpu_ns) - median.on_cpu);
   if (const auto blocked = reader.blocked(k, p)) budget.blocked = std::max(0.0, *blocked - median.blocked);
-  budget.fault_excess = row.counters.minor_faults + row.counters.major_faults -
-                        static_cast<std::int64_t>(std::llround(median.faults));
-  budget.major_faults = row.counters.major_faults;
-  const std::int64_t extra_voluntary =
-      std::max<std::int64_t>(0, row.counters.voluntary_switches - static_cast<std::int64_t>(std::llround(median.voluntary)));
-  const std::int64_t extra_involuntary = std::max<std::int64_t>(
-      0, row.counters.involuntary_switches - static_cast<std::int64_t>(std::llround(median.involuntary)));
-  budget.extra_switches = extra_voluntary + extra_involuntary;
+  if (const auto faults = faults_of(row.counters))
+    budget.fault_excess = *faults - static_cast<std::int64_t>(std::llround(median.faults));
+  budget.major_faults = row.counters.major_faults.value_or(0);
+  if (row.counters.switches)
+    budget.extra_switches =
+        std::max<std::int64_t>(0, *row.counters.switches - static_cast<std::int64_t>(std::llround(median.switches)));
   const std::int32_t woke_on = row.wake_cpu;
   const auto moved = [&](std::int32_t cpu) { return cpu >= 0 && woke_on >= 0 && cpu != woke_on; };
   if (k > 0 && reader.row(k - 1, p).recorded) budget.migrated = moved(reader.row(k - 1, p).end_cpu);
@@ -677,12 +680,12 @@ late_step attribute_with(const step_reader& reader, std::int64_t k, const late_s
     const participant_period& row = reader.row(k, dominant->participant);
     if (row.counters_valid) {
       const auto& median = reader.medians(dominant->participant);
-      step.voluntary_switches = std::max<std::int64_t>(
-          0, row.counters.voluntary_switches - static_cast<std::int64_t>(std::llround(median.voluntary)));
-      step.involuntary_switches = std::max<std::int64_t>(
-          0, row.counters.involuntary_switches - static_cast<std::int64_t>(std::llround(median.involuntary)));
-      step.page_faults = std::max<std::int64_t>(0, row.counters.minor_faults + row.counters.major_faults -
-                                                       static_cast<std::int64_t>(std::llround(median.faults)));
+      if (row.counters.switches)
+        step.switches = std::max<std::int64_t>(
+            0, *row.counters.switches - static_cast<std::int64_t>(std::llround(median.switches)));
+      if (const auto faults = faults_of(row.counters))
+        step.page_faults =
+            std::max<std::int64_t>(0, *faults - static_cast<std::int64_t>(std::llround(median.faults)));
       if (row.counters.run_queue_wait_ns)
         step.run_queue_wait_ns = std::max(0.0, static_cast<double>(*row.counters.run_queue_wait_ns) - median.run_queue);
     }
@@ -873,14 +876,19 @@ std::string late_step_line(const late_step& step) {
   std::vector<std::string> evidence;
   if (step.inherited) evidence.push_back("as in the step before, whose overrun delayed this one's start");
   if (step.moved_from) evidence.push_back(fmt::format("moved from CPU {}", *step.moved_from));
-  const std::int64_t switches = step.voluntary_switches + step.involuntary_switches;
-  evidence.push_back(switches == 0 ? "no switch"
-                                   : fmt::format("{} switch{} ({} involuntary)", switches, switches == 1 ? "" : "es",
-                                                 step.involuntary_switches));
+  if (!step.switches)
+    evidence.push_back("switches unknown");
+  else
+    evidence.push_back(*step.switches == 0 ? "no switch"
+                                           : fmt::format("{} switch{}", *step.switches, *step.switches == 1 ? "" : "es"));
   if (step.run_queue_wait_ns && *step.run_queue_wait_ns >= 1000)
     evidence.push_back(fmt::format("{} waiting to run", duration_words(*step.run_queue_wait_ns)));
-  evidence.push_back(step.page_faults == 0 ? "no fault"
-                                           : fmt::format("{} page fault{}", step.page_faults, step.page_faults == 1 ? "" : "s"));
+  if (!step.page_faults)
+    evidence.push_back("faults unknown");
+  else
+    evidence.push_back(*step.page_faults == 0 ? "no fault"
+                                              : fmt::format("{} page fault{}", *step.page_faults,
+                                                            *step.page_faults == 1 ? "" : "s"));
   if (!step.interrupts)
     evidence.push_back("interrupts unknown");
   else
@@ -947,9 +955,10 @@ std::string causes_text(const delay_causes& causes, const std::string& title, st
       out += "  " + late_step_line(causes.worst[index]) + "\n";
   }
   out += fmt::format(
-      "record: per stage 2 clock reads and 2 CPU reads in the sync; after each step's end one counter snapshot "
-      "per participant ({:.1f} us) and the interrupt tables by the last to end ({:.1f} us), outside the completion; "
-      "run-queue wait and on-CPU time {}; per-CPU interrupts {}\n",
+      "record: per stage 2 clock reads and 2 CPU reads in the sync and a CPU read after the step's end; once every "
+      "participant has ended, the last one reads everyone's counters ({:.1f} us each) and the interrupt tables "
+      "({:.1f} us), outside the completion; run-queue wait and switches {}; on-CPU time from each thread's CPU "
+      "clock; page faults from /proc/thread-self/stat; per-CPU interrupts {}\n",
       causes.snapshot_cost_ns / 1e3, causes.interrupt_read_cost_ns / 1e3,
       causes.schedstat ? "from /proc/thread-self/schedstat" : "unavailable (no /proc/thread-self/schedstat)",
       causes.interrupts ? "from /proc/interrupts and /proc/softirqs" : "unavailable");
@@ -1016,9 +1025,8 @@ nlohmann::json causes_json(const delay_causes& causes) {
                      {"stage", step.stage},
                      {"part_excess_ns", step.part_excess_ns},
                      {"lead_ns", step.lead_ns},
-                     {"voluntary_switches", step.voluntary_switches},
-                     {"involuntary_switches", step.involuntary_switches},
-                     {"page_faults", step.page_faults},
+                     {"switches", step.switches ? nlohmann::json(*step.switches) : nullptr},
+                     {"page_faults", step.page_faults ? nlohmann::json(*step.page_faults) : nullptr},
                      {"interrupts", step.interrupts ? nlohmann::json(*step.interrupts) : nullptr},
                      {"run_queue_wait_ns", step.run_queue_wait_ns ? nlohmann::json(*step.run_queue_wait_ns) : nullptr},
                      {"moved_from", step.moved_from ? nlohmann::json(*step.moved_from) : nullptr},

@@ -140,9 +140,8 @@ struct late_step {
   double part_excess_ns = 0;
   double lead_ns = 0;           // compute part: how long after the others it arrived
   // Evidence in that participant's window (above its medians; nullopt: unavailable).
-  std::int64_t voluntary_switches = 0;
-  std::int64_t involuntary_switches = 0;
-  std::int64_t page_faults = 0;
+  std::optional<std::int64_t> switches;  // times it was scheduled in, voluntary or not
+  std::optional<std::int64_t> page_faults;
   std::optional<std::int64_t> interrupts;  // on its CPU, above that CPU's median
   std::optional<double> run_queue_wait_ns;
   std::optional<unsigned> moved_from;      // the part began on this CPU (a migration)
@@ -179,7 +178,7 @@ struct delay_causes {
   double median_completion_ns = 0;
   bool schedstat = false;   // run-queue wait and on-CPU time were read
   bool interrupts = false;
-  double snapshot_cost_ns = 0;
+  double snapshot_cost_ns = 0;  // one participant's counters
   double interrupt_read_cost_ns = 0;
   std::vector<cause_row> tail;       // above p99, above p99.9, maximum (the ones with steps)
   std::optional<cause_row> misses;   // the deadline misses, when there were any

@@ -43,11 +43,12 @@ void finish_record(step_record& record, std::size_t kept,
         // Its window holds the lead before the first period and the pin:
         // kept, but not compared with the others.
         row.counters = row.counters - first_snapshot[p];
-      } else if (record.at(k - 1, p).recorded) {
-        row.counters = row.counters - record.at(k - 1, p).counters;
+      } else if (const participant_period& previous = record.at(k - 1, p); previous.recorded) {
+        row.counters = row.counters - previous.resumed.value_or(previous.counters);
         row.counters_valid = true;
       }
     }
+    for (std::int64_t k = 0; k < periods; ++k) record.at(k, p).resumed.reset();
   }
   // Per-CPU interrupts between consecutive reads (the columns of the first).
   record.cpus = interrupt_start.cpus;

@@ -67,16 +67,18 @@
 // every period and participant, the arrival at and the departure from each
 // stage's synchronisation (ns from the period's target, with the CPU read at
 // each), the CPU it woke on and ended on, and its counters
-// (platform/step_counters.hpp) over the window from its previous step's end
-// to this one's (so a period's window holds its sleep, its wake-up and its
-// step); and per CPU the interrupts and softirqs of the window between two
-// reads, each by the last participant to end its period. What it costs on
-// the measured path: per stage two clock reads and two sched_getcpu calls in
-// the sync (stage_recorder, around the primitive's wait); after the step's
-// end, outside the completion time, one counter snapshot per participant and
-// the last one's read of the interrupt tables (a participant sharing a CPU
-// with one that has not ended yet can delay it by its snapshot). recording = alternate_blocks records every other block
-// of periods, so that one run gives its cost as a pair (on against off).
+// (platform/step_counters.hpp) over the window from the previous period's
+// end to this one's (so a period's window holds its sleep, its wake-up and
+// its step); and per CPU the interrupts and softirqs of the window between
+// two reads. The last participant to end a period reads the counters of
+// every participant, the interrupt tables, and its own counters again: its
+// next window starts there, so that the reading lies in no window. What it
+// costs on the measured path: per stage two clock reads and two
+// sched_getcpu calls in the sync (stage_recorder, around the primitive's
+// wait), and a CPU read after each step's end; the reads of the counters and
+// tables come when nobody is stepping, outside the completion time.
+// recording = alternate_blocks records every other block of periods, so
+// that one run gives its cost as a pair (on against off).
 // bench/harness/delay_report.hpp turns the record into causes.
 #include <time.h>
 
@@ -165,6 +167,10 @@ struct participant_period {
   // Over the window from the previous period's end to this one's (after the
   // run: a difference; during it the snapshot itself).
   platform::thread_step_counters counters;
+  // The last participant to end the period: its counters again after it
+  // read everyone's and the interrupt tables; its next window starts here,
+  // so that the reading lies in no window (during the run only).
+  std::optional<platform::thread_step_counters> resumed;
 };
 
 struct step_record {
@@ -186,7 +192,7 @@ struct step_record {
   std::int64_t interrupt_every = 1;
   bool schedstat_available = false;
   bool interrupts_available = false;
-  double snapshot_cost_ns = 0;        // one thread snapshot, median (platform::snapshot_cost_ns)
+  double snapshot_cost_ns = 0;        // one participant's counters, median (platform::snapshot_cost_ns)
   double interrupt_read_cost_ns = 0;  // one read of both interrupt tables
   step_recording mode = step_recording::off;
   std::int64_t block_periods = 0;     // alternate_blocks
@@ -393,6 +399,11 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   // How many participants have ended each period: the last one reads the
   // interrupt tables, so that nobody's end waits behind the read.
   std::vector<std::atomic<unsigned>> periods_ended(keep_record ? periods : 0);
+  // Each participant's counters, opened on its own thread (/proc/thread-self
+  // is the opener) before its first period; the last participant to end a
+  // period reads everyone's schedstat through them (its periods_ended
+  // acquire orders each emplace before that read).
+  std::vector<std::optional<platform::thread_counter_reader>> counter_readers(keep_record ? participants : 0);
   std::vector<std::int64_t> wake(periods * participants, 0);
   std::vector<std::int64_t> end(periods * participants, 0);
   std::vector<std::optional<unsigned>> cpus(participants);
@@ -434,14 +445,14 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       errors[id] = e.what();
     }
     // Opened on this thread (after the pin): /proc/thread-self is the opener.
-    std::optional<platform::thread_counter_reader> counters;
+    std::optional<platform::thread_counter_reader>* counters = keep_record ? &counter_readers[id] : nullptr;
     std::optional<platform::interrupt_reader> interrupts;
     if (keep_record) {
-      counters.emplace();
-      if (counters->schedstat_available()) schedstat_seen.store(true, std::memory_order_relaxed);
+      counters->emplace();
+      if ((*counters)->schedstat_available()) schedstat_seen.store(true, std::memory_order_relaxed);
       interrupts.emplace();  // one per participant: two periods' last participants may read at once
       if (interrupts->available()) interrupts_seen.store(true, std::memory_order_relaxed);
-      first_snapshot[id] = counters->read();
+      first_snapshot[id] = (*counters)->read();
       if (id == 0 && interrupts->available()) interrupt_start = interrupts->read();
     }
     bool reported_late = false;
@@ -478,16 +489,27 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       const std::int64_t ended = platform::now_ns() - target;
       end[k * participants + id] = ended;
       if (row != nullptr) {
-        // After the end was read: outside the completion time.
+        // After the end was read: outside the completion time. Nothing
+        // slower than a CPU read here: a participant sharing a CPU with one
+        // still stepping would delay it.
         row->recorded = true;
-        row->counters = counters->read();
-        row->end_cpu = row->counters.cpu ? static_cast<std::int32_t>(*row->counters.cpu) : -1;
-        // acq_rel: each participant's increment releases its end of this
-        // period, and the last one's acquires every other's, so its
-        // interrupt read comes after all of them.
+        const auto cpu = platform::current_cpu();
+        row->end_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
+        // acq_rel: each participant's increment releases its row of this
+        // period (and its reader), and the last one's acquires every
+        // other's, so its reads below come after every end of the period
+        // and its writes into the others' rows after theirs.
         const bool last = periods_ended[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants;
-        if (last && interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
-          interrupt_reads[k] = interrupts->read();
+        if (last) {
+          // Everyone's counters, then the interrupt tables, by the last to
+          // end: nobody still stepping waits behind them. Then its own
+          // again: its next window starts after the reading.
+          for (unsigned other = 0; other < participants; ++other)
+            record->at(static_cast<std::int64_t>(k), other).counters = counter_readers[other]->read();
+          if (interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
+            interrupt_reads[k] = interrupts->read();
+          row->resumed = (*counters)->read();
+        }
       }
       if (settings.stop_after_misses && settings.stop_margin_periods > 0 && ended > settings.period_ns) {
         const auto period = static_cast<std::int64_t>(k);

@@ -66,8 +66,9 @@ class constructed_run {
         run.end_ns[k * kParticipants + p] = now + 500;
         row.counters.on_cpu_ns = 20'000;
         row.counters.run_queue_wait_ns = 5'000;
-        row.counters.voluntary_switches = 2;
-        row.counters.cpu = p;
+        row.counters.switches = 2;
+        row.counters.minor_faults = 0;
+        row.counters.major_faults = 0;
       }
     }
     run.record = std::move(record);
@@ -109,7 +110,7 @@ TEST(DelayCauses, ASleepInsideAStageIsThatParticipantsCompute) {
   constructed_run built;
   built.arrive_late(50, 1, 2, 200'000);
   auto& row = built.row(50, 1);
-  row.counters.voluntary_switches = 3;  // the sleep; on-CPU and run-queue time as usual: the window grew
+  row.counters.switches = 2 + 1;  // the sleep; on-CPU and run-queue time as usual: the window grew
   const late_step step = attribute_step(built.run, 50);
   EXPECT_EQ(step.top, delay_cause::compute);
   EXPECT_EQ(step.kind, part_kind::compute);
@@ -142,7 +143,7 @@ TEST(DelayCauses, WaitingOnARunQueueIsRunQueueWait) {
   constructed_run built;
   built.arrive_late(70, 1, 1, 300'000);
   built.row(70, 1).counters.run_queue_wait_ns = 5'000 + 300'000;
-  built.row(70, 1).counters.involuntary_switches = 1;
+  built.row(70, 1).counters.switches = 2 + 1;
   const late_step step = attribute_step(built.run, 70);
   EXPECT_EQ(step.top, delay_cause::run_queue_wait);
   EXPECT_EQ(step.participant, 1u);
@@ -192,7 +193,7 @@ TEST(DelayCauses, ALateTimerWakeUpIsWakeUpLatency) {
   // The guest's wake-up path at work: one more switch and eight more
   // interrupts on its CPU than usual, each worth up to one usual wake-up
   // (10 us): 90 us, more than the 80 us.
-  built.row(30, 1).counters.involuntary_switches = 1;
+  built.row(30, 1).counters.switches = 2 + 1;
   built.run.record->interrupts[30 * 2 + 1] = 3 + 8;  // CPU 1's column
   const late_step step = attribute_step(built.run, 30);
   EXPECT_EQ(step.kind, part_kind::timer_wakeup);
@@ -209,7 +210,7 @@ TEST(DelayCauses, AWakeUpLaterThanItsGuestEventsCanExplainIsMostlyAMachineStall)
   for (unsigned p = 0; p < kParticipants; ++p)
     built.run.wakeup_ns[30 * kParticipants + p] += p == 1 ? 25'000'000 : 0;
   built.arrive_late(30, 1, 0, 25'000'000);
-  built.row(30, 1).counters.involuntary_switches = 5;
+  built.row(30, 1).counters.switches = 2 + 5;
   built.run.record->interrupts[30 * 2 + 1] = 3 + 3;
   const late_step step = attribute_step(built.run, 30);
   EXPECT_EQ(step.kind, part_kind::timer_wakeup);
@@ -231,7 +232,7 @@ TEST(DelayCauses, TheTailTableSumsItsStepsAndNamesTheTopCause) {
   built.arrive_late(60, 0, 3, 7'800'000);
   built.row(60, 0).counters.on_cpu_ns = 20'000 + 7'800'000;
   built.arrive_late(50, 1, 2, 200'000);
-  built.row(50, 1).counters.voluntary_switches = 3;
+  built.row(50, 1).counters.switches = 2 + 1;
   const auto causes = attribute_delay(built.run, 5);
   ASSERT_TRUE(causes.unavailable.empty());
   ASSERT_FALSE(causes.tail.empty());

@@ -8,7 +8,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdio>
+#include <latch>
+#include <optional>
 #include <thread>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -20,6 +23,7 @@ using lockstep::platform::cpu_interrupt_totals;
 using lockstep::platform::interrupt_reader;
 using lockstep::platform::parse_per_cpu_table;
 using lockstep::platform::parse_schedstat;
+using lockstep::platform::parse_stat_faults;
 using lockstep::platform::thread_counter_reader;
 using lockstep::platform::thread_step_counters;
 
@@ -52,11 +56,11 @@ TEST(StepCounters, DifferenceKeepsUnavailableFieldsUnavailable) {
   thread_step_counters after;
   after.on_cpu_ns = 500;
   after.minor_faults = 3;
-  after.cpu = 1;
+  before.minor_faults = 1;
   const thread_step_counters delta = after - before;
   EXPECT_FALSE(delta.on_cpu_ns.has_value()) << "before had no on-CPU time: no difference";
-  EXPECT_EQ(delta.minor_faults, 3);
-  EXPECT_EQ(delta.cpu, 1u);
+  EXPECT_EQ(delta.minor_faults, 2);
+  EXPECT_FALSE(delta.major_faults.has_value());
 }
 
 TEST(StepCounters, ASleepAndFreshPagesShowInTheSnapshot) {
@@ -77,14 +81,57 @@ TEST(StepCounters, ASleepAndFreshPagesShowInTheSnapshot) {
     ::munmap(memory, kPages * 4096);
   });
   reader_thread.join();
-  EXPECT_GE(delta.voluntary_switches, 1) << "the sleep blocked the thread";
-  EXPECT_GE(delta.minor_faults, static_cast<std::int64_t>(kPages) / 2)
+  ASSERT_TRUE(delta.minor_faults.has_value()) << "/proc/thread-self/stat names the faults";
+  EXPECT_GE(*delta.minor_faults, static_cast<std::int64_t>(kPages) / 2)
       << "touching fresh anonymous pages faults them in (transparent huge pages may merge some)";
-  EXPECT_TRUE(delta.cpu.has_value());
   if (!schedstat) GTEST_SKIP() << "/proc/thread-self/schedstat is not readable here: on-CPU and run-queue time unavailable";
   ASSERT_TRUE(delta.on_cpu_ns.has_value());
   EXPECT_GT(*delta.on_cpu_ns, 0) << "touching pages ran on the CPU";
-  EXPECT_GE(*delta.timeslices, 1) << "the sleep ended a timeslice";
+  EXPECT_GE(*delta.switches, 1) << "the sleep switched the thread out and back in";
+}
+
+TEST(StepCounters, ParsesTheFaultsOfAStatLine) {
+  // A command name with a space and a ')' of its own: the fields resume
+  // after the last ')'.
+  const auto faults =
+      parse_stat_faults("4242 (a b) c) S 1 4242 4242 0 -1 4194560 17 3 5 0 12 4 0 0 20 0 1 0 99 1000 50\n");
+  ASSERT_TRUE(faults.has_value());
+  EXPECT_EQ(faults->minor, 17) << "field 10";
+  EXPECT_EQ(faults->major, 5) << "field 12 (11 is the children's minor faults)";
+  EXPECT_FALSE(parse_stat_faults("4242 (lockstep) S 1 4242\n").has_value()) << "too few fields";
+  EXPECT_FALSE(parse_stat_faults("no parenthesis 1 2 3 4 5 6 7 8 9 10\n").has_value());
+}
+
+TEST(StepCounters, AnotherThreadReadsTheOwnersCounters) {
+  // The per-step record's reads: the last participant to end reads
+  // everyone's counters. The owner touches fresh pages; the reader (this
+  // thread) touches none, so the faults it reads are the owner's. The owner
+  // waits until it has been read (a thread that has exited cannot be).
+  lockstep::testing::watchdog guard(std::chrono::seconds(10 * lockstep::testing::kSlowdown), "owner thread");
+  constexpr std::size_t kPages = 64;
+  std::optional<thread_counter_reader> reader;
+  thread_step_counters before;
+  std::latch touched(1);
+  std::latch read(1);
+  std::thread owner([&] {
+    reader.emplace();
+    before = std::as_const(*reader).read();
+    void* memory = ::mmap(nullptr, kPages * 4096, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+    if (memory != MAP_FAILED) {
+      auto* bytes = static_cast<volatile char*>(memory);
+      for (std::size_t page = 0; page < kPages; ++page) bytes[page * 4096] = 1;
+      ::munmap(memory, kPages * 4096);
+    }
+    touched.count_down();
+    read.wait();
+  });
+  touched.wait();
+  const thread_step_counters after = reader->read();
+  read.count_down();
+  owner.join();
+  const thread_step_counters delta = after - before;
+  ASSERT_TRUE(delta.minor_faults.has_value());
+  EXPECT_GE(*delta.minor_faults, static_cast<std::int64_t>(kPages) / 2) << "the owner's faults, read from here";
 }
 
 TEST(StepCounters, InterruptTotalsNameEveryColumn) {
