@@ -1,8 +1,8 @@
 """What each lockstep command writes against its kind's schema (docs/schemas/<kind>.schema.json).
 
 Runs one kind's commands with the smallest settings that still write every shape of the file (delay: plain,
---compare-pinning, --per-cpu, --find-period; run: plain and --scaling; verify: two masses and a chain;
-topology: this machine and a synthetic one), and checks each file as a writer's test does: strictly, so a key
+--compare-pinning, --per-cpu, --find-period with and without an answer; run: plain and --scaling; verify: two
+masses and a chain; topology: this machine and a synthetic one), and checks each file as a writer's test does: strictly, so a key
 a writer adds or misspells without its schema fails here (reports/lockstep_reports/schemas.py, strict=True).
 The reader checks the same schemas when it reads a file (reports/lockstep_reports/inputs.py, read_document).
 
@@ -36,6 +36,9 @@ SHAPES = {
         ("per-cpu", ["delay", "--period", "1ms", "--duration", "50ms", "--per-cpu"], [], {}),
         ("find-period", ["delay", "--period", "1ms", "--find-period", "--miss-rate", "0.1",
                          "--search-budget", "2s"], [], {}),
+        # A search whose budget cannot show the rate: no answer, no confirming run (figure5 empty).
+        ("find-period, no answer", ["delay", "--period", "30us", "--find-period", "--miss-rate", "0.0001",
+                                    "--search-budget", "1s"], [], {}),
     ],
     "falseshare": [("plain", ["falseshare", "--strides", "8,64", "--window", "5ms", "--repeats", "2"], [], {})],
     "migrate": [("plain", ["migrate", "--repeats", "5", "--bytes", "4096"], [], {})],
