@@ -396,12 +396,13 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
   // them, so relaxed (the flags carry no data of their own).
   std::atomic<bool> schedstat_seen{false};
   std::atomic<bool> interrupts_seen{false};
-  // How many participants have ended each period: the last one reads the
-  // interrupt tables, so that nobody's end waits behind the read.
+  // How many participants have ended each period: the last one reads
+  // everyone's counters and the interrupt tables, so that nobody's end
+  // waits behind the reads.
   std::vector<std::atomic<unsigned>> periods_ended(keep_record ? periods : 0);
   // Each participant's counters, opened on its own thread (/proc/thread-self
   // is the opener) before its first period; the last participant to end a
-  // period reads everyone's schedstat through them (its periods_ended
+  // period reads everyone's counters through them (its periods_ended
   // acquire orders each emplace before that read).
   std::vector<std::optional<platform::thread_counter_reader>> counter_readers(keep_record ? participants : 0);
   std::vector<std::int64_t> wake(periods * participants, 0);
