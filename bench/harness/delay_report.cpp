@@ -286,6 +286,13 @@ std::optional<std::int64_t> faults_of(const platform::thread_step_counters& coun
   return *counters.minor_faults + *counters.major_faults;
 }
 
+// A window's count above the participant's median of it (never below 0),
+// when the window has the count.
+std::optional<std::int64_t> above_median(std::optional<std::int64_t> count, double median) {
+  if (!count) return std::nullopt;
+  return std::max<std::int64_t>(0, *count - static_cast<std::int64_t>(std::llround(median)));
+}
+
 struct part {
   part_kind kind = part_kind::compute;
   unsigned participant = 0;
@@ -486,7 +493,7 @@ struct window_budget {
   double run_queue = 0;
   double on_cpu = 0;
   double blocked = 0;
-  std::int64_t fault_excess = 0;
+  std::int64_t fault_excess = 0;  // faults above the median
   std::int64_t major_faults = 0;
   // Switches (voluntary or not) above their median: more than none, the
   // guest scheduled it differently.
@@ -503,12 +510,9 @@ window_budget budget_of(const step_reader& reader, std::int64_t k, unsigned p) {
     budget.run_queue = std::max(0.0, static_cast<double>(*row.counters.run_queue_wait_ns) - median.run_queue);
   if (row.counters.on_cpu_ns) budget.on_cpu = std::max(0.0, static_cast<double>(*row.counters.on_cpu_ns) - median.on_cpu);
   if (const auto blocked = reader.blocked(k, p)) budget.blocked = std::max(0.0, *blocked - median.blocked);
-  if (const auto faults = faults_of(row.counters))
-    budget.fault_excess = *faults - static_cast<std::int64_t>(std::llround(median.faults));
+  budget.fault_excess = above_median(faults_of(row.counters), median.faults).value_or(0);
   budget.major_faults = row.counters.major_faults.value_or(0);
-  if (row.counters.switches)
-    budget.extra_switches =
-        std::max<std::int64_t>(0, *row.counters.switches - static_cast<std::int64_t>(std::llround(median.switches)));
+  budget.extra_switches = above_median(row.counters.switches, median.switches).value_or(0);
   const std::int32_t woke_on = row.wake_cpu;
   const auto moved = [&](std::int32_t cpu) { return cpu >= 0 && woke_on >= 0 && cpu != woke_on; };
   if (k > 0 && reader.row(k - 1, p).recorded) budget.migrated = moved(reader.row(k - 1, p).end_cpu);
@@ -680,12 +684,8 @@ late_step attribute_with(const step_reader& reader, std::int64_t k, const late_s
     const participant_period& row = reader.row(k, dominant->participant);
     if (row.counters_valid) {
       const auto& median = reader.medians(dominant->participant);
-      if (row.counters.switches)
-        step.switches = std::max<std::int64_t>(
-            0, *row.counters.switches - static_cast<std::int64_t>(std::llround(median.switches)));
-      if (const auto faults = faults_of(row.counters))
-        step.page_faults =
-            std::max<std::int64_t>(0, *faults - static_cast<std::int64_t>(std::llround(median.faults)));
+      step.switches = above_median(row.counters.switches, median.switches);
+      step.page_faults = above_median(faults_of(row.counters), median.faults);
       if (row.counters.run_queue_wait_ns)
         step.run_queue_wait_ns = std::max(0.0, static_cast<double>(*row.counters.run_queue_wait_ns) - median.run_queue);
     }
