@@ -102,6 +102,10 @@ std::vector<headline_choice> choose(const run_book& book) {
     choice.ns_per_step = chosen->median("ns_per_step").value_or(0.0);
     if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0)
       choice.spread_pct = (range->second - range->first) / 2.0 / choice.ns_per_step * 100.0;
+    for (const auto& [mode, values] : chosen->by_pace_mode("ns_per_step")) {
+      if (mode < 0) choice.straddles_pace_change = true;
+      else ++choice.paces;
+    }
     choice.vs_c2c = chosen->median("vs_c2c");
     if (const auto cpu = chosen->median("team_cpu_ns_per_step"); cpu && choice.ns_per_step > 0.0)
       choice.cpus_busy = *cpu / choice.ns_per_step;
@@ -121,10 +125,20 @@ std::vector<headline_choice> choose(const run_book& book) {
   return choices;
 }
 
+// "+-4.2 %", and where the spread comes from when the machine changed pace
+// under the repetitions (lockstep run --verbose splits them: "Median per pace
+// mode").
+std::string spread_words(const headline_choice& choice) {
+  std::string words = fmt::format("+-{:.1f} %", choice.spread_pct);
+  if (choice.paces >= 2) return words + fmt::format(" over {} paces", choice.paces);
+  if (choice.straddles_pace_change) return words + ", straddles a pace change";
+  return words;
+}
+
 void choice_lines(std::vector<std::string>& lines, const headline_choice& choice, unsigned cpus) {
-  std::string first = fmt::format("  {}threads:{} pin:{:<8} {} + {}: {} a step (+-{:.1f} %)", model_words(choice.model),
+  std::string first = fmt::format("  {}threads:{} pin:{:<8} {} + {}: {} a step ({})", model_words(choice.model),
                                   choice.threads, choice.pin, choice.sync, choice.layout, format_ns(choice.ns_per_step),
-                                  choice.spread_pct);
+                                  spread_words(choice));
   if (choice.cpus_busy) first += fmt::format(", {:.1f} CPUs busy", *choice.cpus_busy);
   if (choice.oversubscribed) first += fmt::format(" ({} threads on {} CPUs)", choice.threads, cpus);
   lines.push_back(first);
@@ -323,6 +337,8 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"layout", choice.layout},
                                {"ns_per_step", choice.ns_per_step},
                                {"spread_pct", choice.spread_pct},
+                               {"paces", choice.paces},
+                               {"straddles_pace_change", choice.straddles_pace_change},
                                {"vs_c2c", choice.vs_c2c ? nlohmann::json(*choice.vs_c2c) : nlohmann::json(nullptr)},
                                {"cpus_busy", choice.cpus_busy ? nlohmann::json(*choice.cpus_busy) : nlohmann::json(nullptr)},
                                {"oversubscribed", choice.oversubscribed},

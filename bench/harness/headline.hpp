@@ -59,6 +59,11 @@ struct headline_choice {
   std::string layout;
   double ns_per_step = 0.0;
   double spread_pct = 0.0;          // half the min..max range over repetitions, of the median
+  // The pace modes its repetitions ran in (run_book.hpp: by_pace_mode; 0
+  // before the trace is analysed) and whether one straddled a change: a
+  // spread over two paces is the machine's, not the combination's.
+  std::size_t paces = 0;
+  bool straddles_pace_change = false;
   std::optional<double> vs_c2c;     // stage sync in one-way core-to-core transfers
   // The CPUs the team kept busy: team_cpu_ns_per_step / ns_per_step (medians).
   std::optional<double> cpus_busy;

@@ -56,6 +56,17 @@ std::optional<std::pair<double, double>> captured_entry::range(const std::string
   return std::pair{*low, *high};
 }
 
+std::map<int, std::vector<double>> captured_entry::by_pace_mode(const std::string& counter) const {
+  std::map<int, std::vector<double>> modes;
+  for (const auto& repetition : repetitions) {
+    const auto mode = repetition.find("pace_mode");
+    const auto value = repetition.find(counter);
+    if (mode != repetition.end() && value != repetition.end())
+      modes[static_cast<int>(mode->second)].push_back(value->second);
+  }
+  return modes;
+}
+
 std::string captured_entry::field(const std::string& key) const {
   const auto found = fields.find(key);
   return found == fields.end() ? std::string{} : found->second;

@@ -122,6 +122,10 @@ struct captured_entry {
   std::optional<double> median(const std::string& counter) const;
   // min and max over repetitions (empty as above).
   std::optional<std::pair<double, double>> range(const std::string& counter) const;
+  // The pace modes the repetitions ran in (their "pace_mode" counter, set
+  // once the run's trace is analysed; -1: the repetition straddles a change),
+  // each with its repetitions' values of `counter`; empty before the analysis.
+  std::map<int, std::vector<double>> by_pace_mode(const std::string& counter) const;
   std::string field(const std::string& key) const;
 };
 

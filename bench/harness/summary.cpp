@@ -49,23 +49,11 @@ std::string cpus_busy(const captured_entry& entry, const char* unit) {
   return fmt::format("{:.1f}", *cpu / *wall);
 }
 
-// The pace modes an entry's repetitions ran in: mode -> their values of `counter`.
-std::map<int, std::vector<double>> by_mode(const captured_entry& entry, const std::string& counter) {
-  std::map<int, std::vector<double>> modes;
-  for (const auto& repetition : entry.repetitions) {
-    const auto mode = repetition.find("pace_mode");
-    const auto value = repetition.find(counter);
-    if (mode != repetition.end() && value != repetition.end())
-      modes[static_cast<int>(mode->second)].push_back(value->second);
-  }
-  return modes;
-}
-
 // "  [oversubscribed] [straddles a pace change] [short batches]"
 std::string entry_flags(const captured_entry& entry) {
   std::string flags;
   if (entry.median("oversubscribed").value_or(0.0) > 0.5) flags += "  [oversubscribed]";
-  const auto modes = by_mode(entry, entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  const auto modes = entry.by_pace_mode(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
   if (modes.count(-1) > 0) flags += "  [straddles a pace change]";
   if (entry.median("short_batches").value_or(0.0) > 0.5) flags += "  [short batches: the harness barrier weighs in]";
   return flags;
@@ -81,7 +69,7 @@ void per_mode_medians(std::string& out, const run_book& book) {
     const std::string kind = entry.field("kind");
     if (kind != "rk4" && kind != "barrier") continue;
     const std::string counter = kind == "barrier" ? "ns_per_episode" : "ns_per_step";
-    const auto modes = by_mode(entry, counter);
+    const auto modes = entry.by_pace_mode(counter);
     std::size_t moded = 0;
     for (const auto& [mode, values] : modes) moded += mode >= 0 ? 1 : 0;
     if (moded < 2) continue;

@@ -3,6 +3,7 @@
 // entries collapse, that each unordered comparison is planned once and read
 // the same both ways, and that the combination the headline recommends is the
 // one the paired comparisons put first. No timing is measured or asserted.
+#include <fmt/core.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -190,6 +191,49 @@ TEST(Headline, SaysMigrationWasNotMeasuredWhenNothingMigrated) {
   add_step(book, "mailbox", "per_thread", "none", 2, 1010.0, false, 0.0);
   const std::string text = bench::headline_text(bench::make_headline(book, {}, 2, "results/x.json"));
   EXPECT_NE(text.find("the OS migrated none of the 1 pin:none entries"), std::string::npos) << text;
+}
+
+// One rk4 entry at threads:2 whose repetitions ran in the pace modes given
+// (-1: the repetition straddles a change; kNoMode: no trace was analysed),
+// 1000 ns a step in mode 0 and 3000 ns in any other.
+constexpr int kNoMode = -2;
+bench::run_book book_in_modes(const std::vector<int>& modes) {
+  bench::run_book book;
+  bench::captured_entry entry;
+  entry.name = step_name("mailbox", "per_thread", "compact", 2);
+  entry.fields = {{"kind", "rk4"}, {"sync", "mailbox"}, {"layout", "per_thread"}, {"pin", "compact"}, {"threads", "2"}};
+  for (const int mode : modes) {
+    entry.repetitions.push_back({{"ns_per_step", mode == 0 ? 1000.0 : 3000.0}});
+    if (mode != kNoMode) entry.repetitions.back()["pace_mode"] = mode;
+  }
+  book.record(std::move(entry));
+  return book;
+}
+
+TEST(Headline, SaysWhenTheSpreadComesFromTheMachinesPace) {
+  struct known {
+    std::vector<int> modes;
+    std::size_t paces;
+    bool straddles;
+    const char* words;  // after the spread; empty: nothing after it
+  };
+  for (const known& answer : {known{{0, 0, 0, 0, 0}, 1, false, ""}, known{{0, 0, 1, 0, 0}, 2, false, " over 2 paces"},
+                              known{{0, -1, 0, 0, 0}, 1, true, ", straddles a pace change"},
+                              known{{0, 1, 2, -1, 0}, 3, true, " over 3 paces"},
+                              known{{kNoMode, kNoMode, kNoMode}, 0, false, ""}}) {
+    const bench::run_book book = book_in_modes(answer.modes);
+    const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
+    ASSERT_EQ(headline.choices.size(), 1u);
+    const bench::headline_choice& choice = headline.choices.front();
+    EXPECT_EQ(choice.paces, answer.paces);
+    EXPECT_EQ(choice.straddles_pace_change, answer.straddles);
+    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct, answer.words);
+    EXPECT_NE(bench::headline_text(headline).find(spread), std::string::npos) << spread << "\n"
+                                                                              << bench::headline_text(headline);
+    const nlohmann::json json = bench::headline_json(headline);
+    EXPECT_EQ(json["recommendations"][0]["paces"], answer.paces);
+    EXPECT_EQ(json["recommendations"][0]["straddles_pace_change"], answer.straddles);
+  }
 }
 
 TEST(Headline, StaysWithinItsLinesForAManyThreadMatrix) {
