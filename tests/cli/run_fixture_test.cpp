@@ -15,7 +15,9 @@
 
 #include <fmt/core.h>
 
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <regex>
 #include <set>
@@ -25,6 +27,7 @@
 #include <tuple>
 #include <vector>
 
+#include "bench/harness/headline.hpp"
 #include "bench/harness/paired_blocks.hpp"
 #include "bench/harness/paired_ratio.hpp"
 #include "bench/harness/reporters.hpp"
@@ -235,6 +238,59 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
     }
   }
   EXPECT_GT(found, 0u);
+}
+
+// The probes of the file's headline, as the run measured them.
+bench::known_answers probes_of(const nlohmann::json& file) {
+  bench::known_answers probes;
+  const auto& headline = file.at("lockstep_headline");
+  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+    bench::false_sharing_probe fs;
+    fs.cpus = probe.at("cpus").get<std::string>();
+    fs.sharing_stride = probe.at("sharing_stride_bytes").get<std::size_t>();
+    fs.apart_stride = probe.at("apart_stride_bytes").get<std::size_t>();
+    fs.estimate = {probe.at("median").get<double>(), probe.at("ci_low").get<double>(),
+                   probe.at("ci_high").get<double>()};
+    fs.verdict = bench::verdict_of(fs.estimate, bench::kDefaultNoise);
+    fs.pairs = probe.at("pairs").get<std::size_t>();
+    probes.false_sharing = fs;
+  }
+  if (const auto& probe = headline.at("migration_probe"); !probe.is_null()) {
+    bench::migration_probe migration;
+    migration.cpus = probe.at("cpus").get<std::string>();
+    migration.bytes = probe.at("bytes").get<std::size_t>();
+    migration.move.count = probe.at("moves").get<std::size_t>();
+    migration.move.p50 = probe.at("move_p50_ns").get<double>();
+    migration.refill.p50 = probe.at("refill_p50_ns").get<double>();
+    probes.migration = migration;
+  }
+  return probes;
+}
+
+// Compares `text` with the golden file tests/fixtures/run/<name>; with
+// LOCKSTEP_UPDATE_GOLDEN=1 in the environment it writes the file instead.
+void expect_golden(const std::string& name, const std::string& text) {
+  const std::string path = std::string(LOCKSTEP_SOURCE_DIR) + "/tests/fixtures/run/" + name;
+  if (const char* update = std::getenv("LOCKSTEP_UPDATE_GOLDEN"); update && std::string(update) == "1") {
+    std::ofstream(path) << text;
+    return;
+  }
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << path << " is missing: run with LOCKSTEP_UPDATE_GOLDEN=1 to write it";
+  const std::string golden((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, golden) << "the output differs from " << path
+                          << " (LOCKSTEP_UPDATE_GOLDEN=1 rewrites it where the change is meant)";
+}
+
+// What the run prints and derives from the fixture's book, held to golden
+// files: a change of structure must not change a character of it; a change
+// of behaviour rewrites the golden files in the same commit.
+TEST(RunFixture, TheSummaryHeadlineAndTheirJsonMatchTheGoldenFiles) {
+  bench::run_book book = book_of(fixture());
+  book.headline = bench::make_headline(book, probes_of(fixture()), /*cpus=*/2, "quick-pairs.json");
+  expect_golden("quick-pairs.summary.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/false));
+  expect_golden("quick-pairs.summary-verbose.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/true));
+  expect_golden("quick-pairs.headline.json", bench::headline_json(book.headline).dump(2) + "\n");
 }
 
 }  // namespace
