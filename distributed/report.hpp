@@ -5,7 +5,7 @@
 // (medians over rounds, platform/statistics.hpp; each round's ratio to the
 // ping-pong measured beside it; the slowest rank); mpi_text and mpi_json
 // only arrange them. The machine context is the command's to add
-// (bench/harness/machine_context.hpp).
+// (bench/results/machine_context.hpp).
 #include <nlohmann/json.hpp>
 
 #include <cstdint>

@@ -38,7 +38,7 @@
 // integers and identical; the medians and quantiles are the same IEEE
 // expressions in the same order, so on this build the two agree to the last
 // bit (the golden file's seeded cases agree exactly on x86-64, and so do a
-// run file's intervals: tests/cli/run_fixture_test.cpp and
+// run file's intervals: tests/run/run_fixture_test.cpp and
 // reports/tests/test_run_fixture.py). The golden tests allow 1 ulp: a
 // compiler that fuses x[floor h] + w (x[floor h + 1] - x[floor h]) into one
 // multiply-add (an FMA target, -ffp-contract=fast) may move an interpolated

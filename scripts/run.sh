@@ -15,7 +15,7 @@ cmake --build --preset release -j "$(nproc)" --target lockstep
 lockstep=build/release/bench/lockstep
 
 # Where the result goes: the user's --out, or a name chosen here (the same
-# form lockstep run chooses: bench/harness/result_file.cpp default_result_path).
+# form lockstep run chooses: bench/results/result_file.cpp default_result_path).
 out=""
 previous=""
 for argument in "$@"; do

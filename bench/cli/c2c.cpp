@@ -2,7 +2,7 @@
 // hwloc relation (SMT siblings, shared L2, shared L3, different L3, different
 // package). The measurement is the c2c probe (bench/probes/core_to_core.hpp),
 // the pairs its plan (bench/probes/c2c_pairs.hpp), what it means and its two
-// readings bench/harness/c2c_report.hpp; this file is the options, their
+// readings bench/probe_reports/c2c_report.hpp; this file is the options, their
 // checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -15,8 +15,8 @@
 #include "bench/cli/command.hpp"
 #include "bench/probes/core_to_core.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/c2c_report.hpp"
-#include "bench/harness/result_file.hpp"
+#include "bench/probe_reports/c2c_report.hpp"
+#include "bench/results/result_file.hpp"
 #include "bench/probes/c2c_pairs.hpp"
 #include "platform/topology.hpp"
 

@@ -4,7 +4,7 @@
 // per period, as cyclictest), optionally under SCHED_FIFO and with memory
 // locked, with /dev/cpu_dma_latency held at 0 as cyclictest holds it.
 // The measurement is bench/probes/delay.hpp's, what it means and how it reads
-// bench/harness/delay_report.hpp's; this file is the command: its options,
+// bench/delay/delay_report.hpp's; this file is the command: its options,
 // their checks, that call and the two readings.
 // Reports the wake-up latency and the completion time against the deadline as
 // distributions, the deadline misses, histograms (1 us buckets as
@@ -29,9 +29,9 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/delay_report.hpp"
-#include "bench/harness/result_file.hpp"
-#include "bench/harness/delay_output.hpp"
+#include "bench/delay/delay_report.hpp"
+#include "bench/results/result_file.hpp"
+#include "bench/delay/delay_output.hpp"
 #include "bench/probes/delay.hpp"
 #include "bench/probes/latency_histogram.hpp"
 #include "bench/probes/paced.hpp"

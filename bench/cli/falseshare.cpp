@@ -1,6 +1,6 @@
 // lockstep falseshare: false sharing priced directly (the falseshare probe,
 // bench/probes/falseshare.hpp): pinned writers, counters `stride` bytes apart.
-// What it means and its two readings: bench/harness/falseshare_report.hpp;
+// What it means and its two readings: bench/probe_reports/falseshare_report.hpp;
 // this file is the options, their checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -12,8 +12,8 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/falseshare_report.hpp"
-#include "bench/harness/result_file.hpp"
+#include "bench/probe_reports/falseshare_report.hpp"
+#include "bench/results/result_file.hpp"
 #include "bench/probes/falseshare.hpp"
 #include "platform/topology.hpp"
 

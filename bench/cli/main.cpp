@@ -8,7 +8,7 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/build_info.hpp"
+#include "bench/results/build_info.hpp"
 
 namespace {
 

@@ -1,6 +1,6 @@
 // lockstep migrate: the cost of one forced migration, the move and the cache
 // refill (the migrate probe, bench/probes/migrate.hpp). What it means and its
-// two readings: bench/harness/migrate_report.hpp; this file is the options,
+// two readings: bench/probe_reports/migrate_report.hpp; this file is the options,
 // their checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -12,8 +12,8 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/migrate_report.hpp"
-#include "bench/harness/result_file.hpp"
+#include "bench/probe_reports/migrate_report.hpp"
+#include "bench/results/result_file.hpp"
 #include "bench/probes/migrate.hpp"
 #include "platform/cache_line.hpp"
 #include "platform/topology.hpp"

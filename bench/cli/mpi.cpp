@@ -25,11 +25,11 @@
 #if LOCKSTEP_HAVE_MPI
 #include <nlohmann/json.hpp>
 
-#include "bench/harness/machine_context.hpp"
-#include "bench/harness/derived_figures.hpp"
-#include "bench/harness/result_file.hpp"
-#include "bench/harness/result_json.hpp"
-#include "bench/harness/rk4_entries.hpp"
+#include "bench/results/machine_context.hpp"
+#include "bench/results/derived_figures.hpp"
+#include "bench/results/result_file.hpp"
+#include "bench/results/result_json.hpp"
+#include "bench/run/rk4_entries.hpp"
 #include "distributed/benchmark.hpp"
 #include "distributed/launcher.hpp"
 #include "distributed/registry.hpp"

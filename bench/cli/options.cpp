@@ -10,7 +10,7 @@
 #include <sstream>
 #include <utility>
 
-#include "bench/harness/result_file.hpp"
+#include "bench/results/result_file.hpp"
 
 namespace lockstep::cli {
 

@@ -71,7 +71,7 @@ std::vector<std::string> select_names(const std::optional<std::string>& wanted, 
 std::string joined(const std::vector<std::string>& names);
 
 // Throws usage_error (one line) when a result cannot be written to `path`
-// (bench/harness/result_file.hpp: check_result_path). Empty: nothing asked.
+// (bench/results/result_file.hpp: check_result_path). Empty: nothing asked.
 void check_out(const std::string& path);
 
 // CPU lists: "0,2,4-7" into CPU numbers (ascending, no duplicates).

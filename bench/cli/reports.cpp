@@ -25,7 +25,7 @@
 #include <vector>
 
 #include "bench/cli/command.hpp"
-#include "bench/harness/build_info.hpp"
+#include "bench/results/build_info.hpp"
 
 namespace lockstep::cli {
 namespace {

@@ -2,9 +2,9 @@
 // counters: docs/names-and-counters.md).
 //
 // The command: its options, checked and turned into a bench::matrix_request
-// (bench/harness/matrix_run.hpp, which measures the matrix, the pairs and the
+// (bench/run/matrix_run.hpp, which measures the matrix, the pairs and the
 // pace trace and writes the result file atomically), then the summary on
-// stdout (bench/harness/summary.hpp). Progress goes to stderr.
+// stdout (bench/run/summary.hpp). Progress goes to stderr.
 #include <benchmark/benchmark.h>
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -24,20 +24,20 @@
 #include <vector>
 
 #include "bench/cli/options.hpp"
-#include "bench/harness/barrier_entries.hpp"
+#include "bench/run/barrier_entries.hpp"
 #include "bench/cli/command.hpp"
-#include "bench/harness/machine_context.hpp"
-#include "bench/harness/matrix_run.hpp"
-#include "bench/harness/pace.hpp"
-#include "bench/harness/paired_blocks.hpp"
-#include "bench/harness/run_book.hpp"
-#include "bench/harness/reporters.hpp"
-#include "bench/harness/result_file.hpp"
-#include "bench/harness/summary.hpp"
-#include "bench/harness/team_driver.hpp"
-#include "bench/harness/rk4_entries.hpp"
-#include "bench/harness/run_plan.hpp"
-#include "bench/harness/scaling.hpp"
+#include "bench/results/machine_context.hpp"
+#include "bench/run/matrix_run.hpp"
+#include "bench/run/pace.hpp"
+#include "bench/run/paired_blocks.hpp"
+#include "bench/run/run_book.hpp"
+#include "bench/run/reporters.hpp"
+#include "bench/results/result_file.hpp"
+#include "bench/run/summary.hpp"
+#include "bench/run/team_driver.hpp"
+#include "bench/run/rk4_entries.hpp"
+#include "bench/run/run_plan.hpp"
+#include "bench/run/scaling.hpp"
 #include "kernels/model_choice.hpp"
 #include "kernels/oscillator.hpp"
 #include "layouts/registry.hpp"

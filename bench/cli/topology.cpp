@@ -1,6 +1,6 @@
 // lockstep topology: what hwloc sees, the affinity set, and the placement
 // plans for 1, 2, 4 threads and the core count. The plans and the two
-// readings: bench/harness/topology_report.hpp; this file is the options, their
+// readings: bench/probe_reports/topology_report.hpp; this file is the options, their
 // checks, that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -12,8 +12,8 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/result_file.hpp"
-#include "bench/harness/topology_report.hpp"
+#include "bench/results/result_file.hpp"
+#include "bench/probe_reports/topology_report.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 

@@ -3,7 +3,7 @@
 // computed ones; with --masses S the uniform S-mass chain that threads beyond
 // four integrate, against Eigen's normal modes. What is computed and every
 // bound: kernels/verification.hpp; its readings (text, CSV, result file):
-// bench/harness/verify_report.hpp. This file is the options, their checks,
+// bench/probe_reports/verify_report.hpp. This file is the options, their checks,
 // that call and the readings.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
@@ -16,9 +16,9 @@
 
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
-#include "bench/harness/result_file.hpp"
+#include "bench/results/result_file.hpp"
 #include "platform/topology.hpp"
-#include "bench/harness/verify_report.hpp"
+#include "bench/probe_reports/verify_report.hpp"
 #include "kernels/verification.hpp"
 
 namespace lockstep::cli {

@@ -4,7 +4,7 @@
 // the shortest period that holds a miss rate (period_search.hpp), with
 // /dev/cpu_dma_latency held for the run as cyclictest holds it. Settings in
 // (checked by the command), a delay_measurement out; what it means and how it
-// reads is bench/harness/delay_report.hpp's.
+// reads is bench/delay/delay_report.hpp's.
 //
 // Views: the paper's model (participants share one step, a primitive between
 // the stages); one participant (like for like with `cyclictest -t1`); per

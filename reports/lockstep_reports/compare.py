@@ -795,7 +795,7 @@ def normalised(run_file: RunFile, key: BenchmarkKey, time_kind: str = "real") ->
     machine.
 
     The entry's own vs_serial / vs_c2c counters, the median over its repetitions, as `lockstep run` derived them
-    against its in-run calibrations (bench/harness/derived_figures.hpp). Computed here only where the file lacks
+    against its in-run calibrations (bench/results/derived_figures.hpp). Computed here only where the file lacks
     them (files written before the counters, or a run whose calibration was unavailable) or for CPU time (the
     counters divide the real ns_per_step): the same division, by the context's in-run calibrations (a chain's
     serial step: its rk4/model:<model>/serial entry). None ("unavailable") when neither exists."""

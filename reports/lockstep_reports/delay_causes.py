@@ -2,7 +2,7 @@
 
 Reads the `causes` object of a delay result file (docs/result-files.md, delay;
 docs/schemas/delay.schema.json, $defs/causes), as `lockstep delay` writes it
-(bench/harness/delay_report.cpp, causes_json). `causes_figure(document)`
+(bench/delay/delay_report.cpp, causes_json). `causes_figure(document)`
 returns an SVG string (or None when the file has no causes), which the
 report's delay section places (report.py, delay_section), and `causes_rows`
 the table behind it.
@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from .figures import to_svg  # noqa: E402
 
-# The order and the words of bench/harness/delay_report.hpp's delay_cause.
+# The order and the words of bench/delay/delay_report.hpp's delay_cause.
 CAUSES = (
     ("compute", "compute"),
     ("run_queue_wait", "run-queue wait"),

@@ -38,7 +38,7 @@ KNOWN_GB_JSON_SCHEMA = 1
 KNOWN_LOCKSTEP_SCHEMA = 2
 # From this lockstep schema on, a `lockstep run` entry's real_time and cpu_time are per unit (the RK4 step,
 # the barrier episode): real_time equals its UNIT_COUNTERS value, cpu_time is participant 0's thread CPU
-# time per unit (bench/harness/team_driver.hpp, before measure_entry). Before it, both were per batch of units.
+# time per unit (bench/run/team_driver.hpp, before measure_entry). Before it, both were per batch of units.
 PER_UNIT_TIMES_SCHEMA = 2
 
 TIME_UNIT_NS = {"ns": 1.0, "us": 1e3, "ms": 1e6, "s": 1e9}
@@ -93,7 +93,7 @@ AMOUNT_COUNTERS = (tuple(name for name, _ in COUNTERS_SHOWN) + (VS_SERIAL_COUNTE
                    + TEAM_CPU_COUNTERS)  # in [0, LARGEST_AMOUNT]
 READ_COUNTERS = DURATION_COUNTERS + SIGNED_COUNTERS + AMOUNT_COUNTERS
 # Read counters the writer may omit from one repetition and keep in the next: sync_ns_per_stage (and vs_c2c,
-# derived from it) when the repetition's sampled steps timed no stage sync (bench/harness/rk4_entries.cpp).
+# derived from it) when the repetition's sampled steps timed no stage sync (bench/run/rk4_entries.cpp).
 # A repetition without one is read without it; every other read counter must agree across repetitions.
 PER_REPETITION_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)
 
@@ -105,7 +105,7 @@ PER_REPETITION_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)
 PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
 PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
 SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, threads, points, best, c2c_one_way_ns}
-# top level: the run's answer (bench/harness/headline.hpp): {lines, recommendations, collapsed, ...}; a file
+# top level: the run's answer (bench/run/headline.hpp): {lines, recommendations, collapsed, ...}; a file
 # written before it has none and reads as before.
 HEADLINE_KEY = "lockstep_headline"
 # How a recommendation was chosen (lockstep_headline.recommendations[].basis).

@@ -277,7 +277,7 @@ def against_best_other_views(pairs: list[PacePair]) -> list[PacePair]:
     primitive by median) has no pair of its own: every pair of the group has the leader as its denominator,
     and the leader's line is its pair with the runner-up read the other way round (PacePair.inverse), put
     first. The runner-up's pair is the group's first in the file (lockstep run writes them in its plan's
-    order, the runner-up first: bench/harness/paired_blocks.hpp). A file written before that, where every
+    order, the runner-up first: bench/run/paired_blocks.hpp). A file written before that, where every
     primitive has a pair of its own, leader included, gives its pairs as they are."""
     groups: dict[tuple, list[PacePair]] = {}
     for pair in pairs:
@@ -306,7 +306,7 @@ class ScalingPoint:
 
 @dataclass(frozen=True)
 class ScalingCurve:
-    """The file's "lockstep_scaling" (`lockstep run --scaling`), as the run computed it (bench/harness/scaling.hpp)."""
+    """The file's "lockstep_scaling" (`lockstep run --scaling`), as the run computed it (bench/run/scaling.hpp)."""
     pin: str
     counter: str
     threads: tuple[int, ...]
@@ -554,7 +554,7 @@ def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
 @dataclass(frozen=True)
 class Recommendation:
     """One of lockstep_headline's recommendations: the combination to use at one model, thread count and
-    placement, as lockstep run chose it (bench/harness/headline.hpp)."""
+    placement, as lockstep run chose it (bench/run/headline.hpp)."""
 
     threads: int
     pin: str

@@ -76,7 +76,7 @@ MIN_REPETITIONS = 5
 # (never written by lockstep run) there is no interval.
 MAX_EXACT = 200
 BASE_SEED = 20260101
-# The resamples and seed of a run file's pair intervals: bench/harness/paired_ratio.hpp's kBootstrapResamples and
+# The resamples and seed of a run file's pair intervals: bench/results/paired_ratio.hpp's kBootstrapResamples and
 # kBootstrapSeed (the file does not carry them; tests/fixtures/run/quick-pairs.json pins both sides to them).
 PAIR_RESAMPLES = 4000
 PAIR_SEED = 0x5EED1234
@@ -211,7 +211,7 @@ def beyond_noise(ratio: float, noise: float) -> bool:
 def inverse_verdict(word: str) -> str:
     """The verdict of a ratio read the other way round (1 / ratio, its interval [1 / high, 1 / low]): penalty
     and gain swapped, within noise and unsure (and any other word) unchanged. Mirrored, not recomputed, as
-    lockstep run mirrors it (bench/harness/paired_ratio.hpp, inverse): the band is symmetric on a log scale, and
+    lockstep run mirrors it (bench/results/paired_ratio.hpp, inverse): the band is symmetric on a log scale, and
     rounding at its edge cannot make the two directions of one comparison disagree."""
     return {PENALTY: GAIN, GAIN: PENALTY}.get(word, word)
 

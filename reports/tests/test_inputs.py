@@ -89,7 +89,7 @@ class RunFiles(unittest.TestCase):
         self.assertIn("lacks ns_per_step", str(caught.exception))
 
     def test_from_schema_2_real_time_and_cpu_time_are_per_step(self):
-        # lockstep schema 2 (bench/harness/team_driver.hpp): real_time is ns_per_step, cpu_time is per step too,
+        # lockstep schema 2 (bench/run/team_driver.hpp): real_time is ns_per_step, cpu_time is per step too,
         # and neither is rescaled, whatever real_time / ns_per_step would say.
         import json, os, tempfile
         with open(fixture("machine_a.json"), encoding="utf-8") as stream:

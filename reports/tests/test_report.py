@@ -532,12 +532,12 @@ class CpuPerStep(Scratch):
 
     def test_a_real_run_file_with_both(self):
         """fixtures/run_quick_split.json: `lockstep run --quick --threads 2 --sync mailbox,std_barrier,futex_spin
-        --pairs 0` on a 2-CPU VM, as bench/harness/rk4_entries.cpp writes the split."""
+        --pairs 0` on a 2-CPU VM, as bench/run/rk4_entries.cpp writes the split."""
         run_file = load_run_file(fixture(REAL_SPLIT))
         points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
         self.assertEqual(len(points), 18)  # 3 primitives x (4 layouts, mailbox 1) x 2 placements, at 2 threads
         self.assertTrue(all(0.0 < point.cpus_busy < 2.1 for point in points))  # the team has the VM's 2 CPUs
-        # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/harness/headline.hpp, the
+        # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/run/headline.hpp, the
         # medians' ratio) is the point's, to the bit.
         by_key = {point.key: point for point in points}
         with open(fixture(REAL_SPLIT), encoding="utf-8") as stream:
@@ -570,7 +570,7 @@ if __name__ == "__main__":
 
 
 class DelayCauses(Scratch):
-    """A delay file's causes object (bench/harness/delay_report.cpp, causes_json) becomes the delay section's
+    """A delay file's causes object (bench/delay/delay_report.cpp, causes_json) becomes the delay section's
     stacked bars (delay_causes.py), placed by report.py's delay_section; a file without one gets none."""
 
     def delay_document(self):

@@ -1,7 +1,7 @@
 """One real run file through the Python side: tests/fixtures/run/quick-pairs.json (a `lockstep run --quick` file,
 written by the binary, never edited) read through inputs.read_document, each pair's median, interval and verdict
 recomputed from its ratios by statistics.py and equal to the file's to the last bit, and what compare and report
-would print for each pair the same. tests/cli/run_fixture_test.cpp holds the harness (the code behind run's
+would print for each pair the same. tests/run/run_fixture_test.cpp holds the harness (the code behind run's
 summary) to the same file: a change of the rule (median, quantile, draws, verdict edge) on one side alone fails one
 of the two."""
 import dataclasses
@@ -92,8 +92,8 @@ class RunFixture(unittest.TestCase):
         _, document = inputs.read_document(FIXTURE)
         probe = document["lockstep_headline"].get("false_sharing_probe")
         if probe:
-            # The probe is judged against the default band, whatever --noise says (bench/harness/paired_ratio.hpp,
-            # kDefaultNoise; bench/harness/falseshare_report.cpp).
+            # The probe is judged against the default band, whatever --noise says (bench/results/paired_ratio.hpp,
+            # kDefaultNoise; bench/probe_reports/falseshare_report.cpp).
             self.assertEqual(statistics.verdict(probe["ci_low"], probe["ci_high"], 0.05), probe["verdict"])
             known.add(figure(probe["median"], probe["ci_low"], probe["ci_high"], probe["verdict"]))
         found = [match for line in headline.lines for match in PAIRED_FIGURE.findall(line)]

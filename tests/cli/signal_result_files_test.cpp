@@ -7,7 +7,7 @@
 // user would (the lockstep binary, its smallest settings that still measure for
 // a second or two), waits until the command says it is measuring (its own
 // progress line on stderr), signals it, and then holds it to the one writer's
-// promise (bench/harness/result_file.hpp):
+// promise (bench/results/result_file.hpp):
 //  - every file the command writes holds the earlier result, untouched, or the
 //    whole new one (JSON that parses, of the command's kind); nothing else is
 //    left in the directory (no temporary ".partial-" file);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "bench/cli/options.hpp"
-#include "bench/harness/result_json.hpp"
+#include "bench/results/result_json.hpp"
 
 namespace {
 

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "bench/harness/delay_output.hpp"
-#include "bench/harness/delay_report.hpp"
+#include "bench/delay/delay_output.hpp"
+#include "bench/delay/delay_report.hpp"
 #include "bench/probes/latency_histogram.hpp"
 #include "platform/idle_states.hpp"
 #include "tests/delay/cyclictest_histogram_parser.hpp"

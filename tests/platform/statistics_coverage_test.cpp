@@ -40,7 +40,7 @@
 
 #include <gtest/gtest.h>
 
-#include "bench/harness/paired_ratio.hpp"
+#include "bench/results/paired_ratio.hpp"
 #include "platform/statistics.hpp"
 
 namespace {

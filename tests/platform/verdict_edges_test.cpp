@@ -1,7 +1,7 @@
 // The paired-ratio verdict at its exact edges: known answers at each edge of
 // the noise band and one double beside it, on either side, for the rule
 // (platform::verdict_of, platform/statistics.hpp) and for the paired ratios
-// that call it (bench::verdict_of on an estimate, bench/harness/paired_ratio.hpp).
+// that call it (bench::verdict_of on an estimate, bench/results/paired_ratio.hpp).
 //
 // The band for noise p is [1 / (1 + p), 1 + p]; an interval end exactly on an
 // edge lies inside it. So, with U = 1 + p and L = 1 / U:
@@ -18,7 +18,7 @@
 
 #include <gtest/gtest.h>
 
-#include "bench/harness/paired_ratio.hpp"
+#include "bench/results/paired_ratio.hpp"
 #include "platform/statistics.hpp"
 
 namespace {

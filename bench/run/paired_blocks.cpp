@@ -1,0 +1,353 @@
+// Planning and measuring the paired comparisons (paired_blocks.hpp).
+#include "bench/run/paired_blocks.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <optional>
+#include <numeric>
+#include <random>
+#include <tuple>
+
+#include "bench/run/pace.hpp"
+#include "layouts/registry.hpp"
+#include "platform/clock.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+// A reading taken at the end of the pair just before is this pair's reading
+// before: no time passes between them.
+constexpr std::int64_t kFreshReadingNs = 1'000'000;
+constexpr std::uint64_t kRoundOrderSeed = 0x9a17'04de;
+
+
+// From the layout registry: a shared layout whose writers share lines (the
+// false-sharing case), and a shared layout that gives each writer its own
+// aligned block (the padded cases).
+bool writers_share_lines(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation == 0;
+}
+bool writers_isolated(const std::string& layout) {
+  const layouts::layout_info* info = layouts::find_layout(layout);
+  return info != nullptr && info->kind == layouts::layout_kind::shared && info->writer_isolation > 0;
+}
+
+void plan_false_sharing(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
+  // (sync, pin, threads) -> the sharing entry and the best isolating one
+  std::map<std::tuple<std::string, std::string, std::string>,
+           std::pair<std::optional<measured_entry>, std::optional<measured_entry>>>
+      groups;
+  for (const auto& step : steps) {
+    auto& [sharing, isolated] =
+        groups[{step.entry->field("sync"), step.entry->field("pin"), step.entry->field("threads")}];
+    const std::string layout = step.entry->field("layout");
+    if (writers_share_lines(layout) && !sharing) sharing = step;
+    if (writers_isolated(layout) && (!isolated || step.median < isolated->median)) isolated = step;
+  }
+  for (const auto& [key, sides] : groups) {
+    if (!sides.first || !sides.second) continue;
+    const auto& [sync, pin, threads] = key;
+    plan.push_back({comparison_kind::false_sharing, fmt::format("sync:{} pin:{} threads:{}", sync, pin, threads),
+                    sides.first->entry->name, sides.second->entry->name});
+  }
+}
+
+void plan_migration(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
+  // (sync, threads) -> layout -> pin -> entry
+  std::map<std::pair<std::string, std::string>, std::map<std::string, std::map<std::string, measured_entry>>> groups;
+  for (const auto& step : steps)
+    groups[{step.entry->field("sync"), step.entry->field("threads")}][step.entry->field("layout")].insert_or_assign(
+        step.entry->field("pin"), step);
+  for (const auto& [key, layouts] : groups) {
+    std::optional<std::pair<measured_entry, measured_entry>> best;  // (none, compact) on the best pinned layout
+    for (const auto& [layout, pins] : layouts) {
+      const auto compact = pins.find("compact");
+      const auto none = pins.find("none");
+      if (compact == pins.end() || none == pins.end()) continue;
+      // A penalty of migration needs migrations: an unpinned entry the OS
+      // left in place (or one that did not count) prices nothing.
+      if (!(none->second.entry->median("migrations_per_kstep").value_or(0.0) > 0.0)) continue;
+      if (!best || compact->second.median < best->second.median) best = {none->second, compact->second};
+    }
+    if (!best) continue;
+    plan.push_back({comparison_kind::migration,
+                    fmt::format("sync:{} threads:{} layout:{}", key.first, key.second,
+                                best->second.entry->field("layout")),
+                    best->first.entry->name, best->second.entry->name});
+  }
+}
+
+void plan_against_best_other(std::vector<comparison>& plan, const std::vector<measured_entry>& entries,
+                             const char* what) {
+  // (pin, threads) -> sync -> its best entry
+  std::map<std::pair<std::string, std::string>, std::map<std::string, measured_entry>> groups;
+  for (const auto& item : entries) {
+    auto& best = groups[{item.entry->field("pin"), item.entry->field("threads")}];
+    const auto found = best.find(item.entry->field("sync"));
+    if (found == best.end() || item.median < found->second.median)
+      best.insert_or_assign(item.entry->field("sync"), item);
+  }
+  for (const auto& [key, best] : groups) {
+    if (best.size() < 2) continue;
+    std::vector<measured_entry> ranked;
+    for (const auto& [sync, item] : best) ranked.push_back(item);
+    std::sort(ranked.begin(), ranked.end(),
+              [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
+    // Every other primitive against the leader; the leader against the
+    // runner-up would be the runner-up's pair again, measured a second
+    // time, and two measurements of one comparison can disagree.
+    for (std::size_t index = 1; index < ranked.size(); ++index)
+      plan.push_back({comparison_kind::against_best_other,
+                      fmt::format("{} pin:{} threads:{}", what, key.first, key.second), ranked[index].entry->name,
+                      ranked[0].entry->name});
+  }
+}
+
+// A block of about block_ns from the entry's batch size (sized for
+// settings.target_batch_ns); at least one unit.
+std::uint64_t block_units(const harness_state& harness, const std::string& name, std::int64_t block_ns) {
+  const auto found = harness.units_per_batch.find(name);
+  const double units = found == harness.units_per_batch.end() ? 1.0 : static_cast<double>(found->second);
+  const double scaled =
+      std::round(units * static_cast<double>(block_ns) / static_cast<double>(harness.settings.target_batch_ns));
+  return static_cast<std::uint64_t>(std::clamp(scaled, 1.0, static_cast<double>(kMaxUnitsPerBatch)));
+}
+
+// One comparison while its pairs are being taken: both sides built once, and
+// what the pairs so far gave.
+struct comparison_in_progress {
+  paired_result result;
+  std::unique_ptr<block_runner> side_a;
+  std::unique_ptr<block_runner> side_b;
+  std::uint64_t units_a = 1;
+  std::uint64_t units_b = 1;
+  std::vector<double> block_ms;
+  std::int64_t spent_ns = 0;  // time in this comparison's pairs so far
+  bool finished = false;
+};
+
+comparison_in_progress start_comparison(harness_state& harness, const comparison& what,
+                                        const pairing_settings& settings) {
+  comparison_in_progress progress;
+  progress.result.what = what;
+  const auto factory_a = harness.block_runners.find(what.a);
+  const auto factory_b = harness.block_runners.find(what.b);
+  if (factory_a == harness.block_runners.end() || factory_b == harness.block_runners.end()) {
+    progress.result.failure = "not measured as a pair: no block runner for a side";
+    progress.finished = true;
+    return progress;
+  }
+  progress.side_a = factory_a->second();
+  progress.side_b = factory_b->second();
+  progress.units_a = block_units(harness, what.a, settings.block_ns);
+  progress.units_b = block_units(harness, what.b, settings.block_ns);
+  return progress;
+}
+
+// Pair number `pair` of one comparison: a pace reading before (shared with
+// the pair just before it, whichever comparison that was) and after, block A
+// and block B, in the order A B on even pairs and B A on odd ones.
+void take_pair(harness_state& harness, comparison_in_progress& progress, unsigned pair) {
+  paired_result& result = progress.result;
+  const auto& what = result.what;
+  if (harness.pace != nullptr) result.readings.push_back(harness.pace->latest_or_take(kFreshReadingNs));
+  const std::int64_t start_ns = platform::now_ns();
+  std::optional<double> a;
+  std::optional<double> b;
+  if (pair % 2 == 0) {
+    a = progress.side_a->run_block(progress.units_a);
+    b = progress.side_b->run_block(progress.units_b);
+  } else {
+    b = progress.side_b->run_block(progress.units_b);
+    a = progress.side_a->run_block(progress.units_a);
+  }
+  progress.spent_ns += platform::now_ns() - start_ns;
+  if (harness.pace != nullptr) result.readings.push_back(harness.pace->take());
+  if (!a || !b || !(*a > 0.0) || !(*b > 0.0)) {
+    result.failure = fmt::format("not measured as a pair: a block of {} stalled", !a ? what.a : what.b);
+    result.ratios.clear();
+    result.readings.clear();
+    progress.finished = true;
+    return;
+  }
+  result.ratios.push_back(*a / *b);
+  progress.block_ms.push_back(*a * static_cast<double>(progress.units_a) * 1e-6);
+  progress.block_ms.push_back(*b * static_cast<double>(progress.units_b) * 1e-6);
+}
+
+paired_result finish_comparison(comparison_in_progress& progress, const pairing_settings& settings) {
+  paired_result result = std::move(progress.result);
+  if (!progress.block_ms.empty()) result.block_ms = platform::median(progress.block_ms);
+  if (result.failure.empty()) {
+    result.estimate = bootstrap_median(result.ratios);
+    result.verdict = verdict_of(result.estimate, settings.noise);
+  }
+  return result;
+}
+
+}  // namespace
+
+std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
+  std::vector<measured_entry> found;
+  for (const auto& entry : book.entries()) {
+    if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
+    if (book.collapsed.count(entry.name) > 0) continue;
+    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
+  }
+  return found;
+}
+
+std::set<std::string> find_collapsed(const run_book& book) {
+  // (kind, model, threads) -> the best median of the group
+  using group_key = std::tuple<std::string, std::string, std::string>;
+  const auto key_of = [](const captured_entry& entry) {
+    return group_key{entry.field("kind"), entry.field("model"), entry.field("threads")};
+  };
+  const auto time_of = [](const captured_entry& entry) {
+    return entry.median(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  };
+  const auto counts = [](const captured_entry& entry) {
+    const std::string kind = entry.field("kind");
+    return (kind == "rk4" || kind == "barrier") && entry.error.empty() && entry.field("variant") != "serial";
+  };
+  std::map<group_key, double> best;
+  for (const auto& entry : book.entries()) {
+    if (!counts(entry)) continue;
+    if (const auto time = time_of(entry); time && *time > 0.0) {
+      const auto [found, inserted] = best.try_emplace(key_of(entry), *time);
+      if (!inserted) found->second = std::min(found->second, *time);
+    }
+  }
+  std::set<std::string> collapsed;
+  for (const auto& entry : book.entries()) {
+    if (!counts(entry) || entry.median("oversubscribed").value_or(0.0) < 0.5) continue;
+    const auto time = time_of(entry);
+    const auto group_best = best.find(key_of(entry));
+    if (time && group_best != best.end() && *time >= kCollapseFactor * group_best->second)
+      collapsed.insert(entry.name);
+  }
+  return collapsed;
+}
+
+std::vector<best_other_view> against_best_other_views(const run_book& book, const std::string& group) {
+  std::vector<best_other_view> views;
+  const paired_result* runner_up = nullptr;
+  for (const paired_result& pair : book.pairs) {
+    if (pair.what.kind != comparison_kind::against_best_other || pair.what.group != group) continue;
+    if (!pair.failure.empty() || pair.ratios.empty()) continue;
+    views.push_back({pair.what.a, pair.what.b, &pair, false, pair.estimate, pair.verdict});
+    if (runner_up == nullptr) runner_up = &pair;  // the plan's order: the runner-up's pair first
+  }
+  if (runner_up != nullptr)
+    views.insert(views.begin(), best_other_view{runner_up->what.b, runner_up->what.a, runner_up, true,
+                                                inverse(runner_up->estimate), inverse(runner_up->verdict)});
+  return views;
+}
+
+std::vector<comparison> plan_comparisons(const run_book& book) {
+  std::vector<comparison> plan;
+  const std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  plan_false_sharing(plan, steps);
+  plan_migration(plan, steps);
+  plan_against_best_other(plan, steps, "RK4 step");
+  plan_against_best_other(plan, measured_of(book, "barrier", "ns_per_episode"), "bare episode");
+  return plan;
+}
+
+void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, const pairing_settings& settings,
+                   const std::function<void(std::size_t, std::size_t)>& progress) {
+  harness.book->noise = settings.noise;
+  if (settings.pairs == 0) return;
+  std::vector<comparison_in_progress> running;
+  running.reserve(plan.size());
+  for (const comparison& what : plan) running.push_back(start_comparison(harness, what, settings));
+  // Rounds: each round takes one pair of every comparison still running, in
+  // an order shuffled per round (seeded: a run can be repeated), so that a
+  // comparison's pairs lie spread over the whole pairing phase, not within
+  // the tenth of a second its pairs would take back to back.
+  std::vector<std::size_t> order(running.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::mt19937_64 shuffle(kRoundOrderSeed);
+  for (unsigned pair = 0; pair < settings.pairs; ++pair) {
+    std::shuffle(order.begin(), order.end(), shuffle);
+    for (const std::size_t index : order) {
+      comparison_in_progress& item = running[index];
+      if (item.finished) continue;
+      if (pair >= kMinPairs && item.spent_ns > settings.budget_ns) {
+        item.result.budget_cut = true;
+        item.finished = true;
+        continue;
+      }
+      take_pair(harness, item, pair);
+    }
+    if (progress) progress(pair + 1, settings.pairs);
+  }
+  for (auto& item : running) harness.book->pairs.push_back(finish_comparison(item, settings));
+}
+
+void assign_pace_modes(run_book& book, const pace_modes& modes) {
+  book.pace = modes;
+  book.for_each_repetition([&](std::map<std::string, double>& repetition) {
+    const auto before = repetition.find(std::string(kPaceBeforeCounter));
+    const auto after = repetition.find(std::string(kPaceAfterCounter));
+    if (before == repetition.end() || after == repetition.end()) return;
+    repetition["pace_mode"] = agreed_mode(modes, static_cast<std::size_t>(before->second),
+                                          static_cast<std::size_t>(after->second));
+    repetition.erase(std::string(kPaceBeforeCounter));
+    repetition.erase(std::string(kPaceAfterCounter));
+  });
+  for (paired_result& pair : book.pairs) {
+    pair.modes.clear();
+    for (std::size_t index = 0; 2 * index + 1 < pair.readings.size() && index < pair.ratios.size(); ++index)
+      pair.modes.push_back(agreed_mode(modes, pair.readings[2 * index], pair.readings[2 * index + 1]));
+  }
+}
+
+void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pace_probe* probe,
+                          const pace_modes& modes) {
+  for (auto& row : result["benchmarks"]) {
+    if (!row.is_object()) continue;
+    const bool iteration = row.value("run_type", std::string()) == "iteration";
+    const auto before = row.find(std::string(kPaceBeforeCounter));
+    const auto after = row.find(std::string(kPaceAfterCounter));
+    if (iteration && before != row.end() && after != row.end() && before->is_number() && after->is_number())
+      row["pace_mode"] = agreed_mode(modes, before->get<std::size_t>(), after->get<std::size_t>());
+    row.erase(std::string(kPaceBeforeCounter));
+    row.erase(std::string(kPaceAfterCounter));
+    // An aggregate of a mode index or of readings means nothing.
+    if (!iteration) {
+      row.erase("pace_mode");
+    }
+  }
+  if (probe != nullptr) result["lockstep_pace"] = pace_json(*probe, modes);
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const paired_result& pair : book.pairs) {
+    if (!pair.failure.empty() || pair.ratios.empty()) continue;
+    pairs.push_back({{"comparison", to_string(pair.what.kind)},
+                     {"group", pair.what.group},
+                     {"a", pair.what.a},
+                     {"b", pair.what.b},
+                     {"ratios", pair.ratios},
+                     {"modes", pair.modes},
+                     {"median", pair.estimate.median},
+                     {"ci_low", pair.estimate.low},
+                     {"ci_high", pair.estimate.high},
+                     {"confidence", kConfidence},
+                     // what recomputes the interval from the ratios (platform/statistics.hpp's draw rule)
+                     {"resamples", kBootstrapResamples},
+                     {"seed", kBootstrapSeed},
+                     {"noise", book.noise},
+                     {"verdict", to_string(pair.verdict)},
+                     {"block_ms", pair.block_ms},
+                     {"budget_cut", pair.budget_cut}});
+  }
+  result["lockstep_pairs"] = pairs;
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,181 @@
+// Progress and the run book's feed, and the result JSON's names (reporters.hpp).
+#include "bench/run/reporters.hpp"
+
+#include "bench/run/run_plan.hpp"
+
+#include "bench/results/derived_figures.hpp"
+
+#include <fcntl.h>
+#include <signal.h>
+#include <unistd.h>
+
+#include <fmt/core.h>
+
+#include <array>
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <initializer_list>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <filesystem>
+#include <stdexcept>
+
+namespace lockstep::bench {
+
+
+std::map<std::string, std::string> parse_entry_name(const std::string& name) {
+  std::map<std::string, std::string> fields;
+  std::size_t start = 0;
+  bool first = true;
+  while (start <= name.size()) {
+    std::size_t end = name.find('/', start);
+    if (end == std::string::npos) end = name.size();
+    const std::string segment = name.substr(start, end - start);
+    const std::size_t colon = segment.find(':');
+    if (first) {
+      fields["kind"] = segment;
+      first = false;
+    } else if (colon == std::string::npos) {
+      fields["variant"] = segment;
+    } else {
+      fields[segment.substr(0, colon)] = segment.substr(colon + 1);
+    }
+    start = end + 1;
+  }
+  return fields;
+}
+
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run) {
+  benchmark::BenchmarkName name = run.run_name;
+  name.iterations.clear();
+  name.repetitions.clear();  // "/repeats:N", on an entry with its own repetition count
+  name.time_type.clear();
+  return name.str();
+}
+
+void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
+  std::vector<Run> renamed = runs;
+  for (Run& run : renamed) {
+    run.run_name.iterations.clear();
+    run.run_name.repetitions.clear();
+    run.run_name.time_type.clear();
+    // The time per unit in place of the batch's (an iteration is a batch:
+    // team_driver.hpp, before measure_entry), from the counter that holds it
+    // (for an aggregate, the counter's aggregate). JSONReporter writes a time
+    // as accumulated_time * multiplier / iterations, and a percentage
+    // aggregate (cv) as it is.
+    const bool percentage = run.run_type == Run::RT_Aggregate && run.aggregate_unit == benchmark::kPercentage;
+    const auto per_unit = [&](std::initializer_list<const char*> counter_names, double& accumulated) {
+      for (const char* counter_name : counter_names) {
+        const auto counter = run.counters.find(counter_name);
+        if (counter == run.counters.end() || !std::isfinite(counter->second.value)) continue;
+        accumulated = percentage ? counter->second.value
+                                 : counter->second.value * 1e-9 * static_cast<double>(run.iterations);
+        return;
+      }
+    };
+    per_unit({"ns_per_step", "ns_per_episode"}, run.real_accumulated_time);
+    // The CPU time per unit in place of the benchmark thread's own (which
+    // only replayed the batch times).
+    per_unit({"cpu_ns_per_step", "cpu_ns_per_episode"}, run.cpu_accumulated_time);
+    // The "cv" aggregate of a counter that is 0 in every repetition is 0/0;
+    // Google Benchmark would write it as NaN, which is not JSON. Omitted.
+    for (auto counter = run.counters.begin(); counter != run.counters.end();) {
+      if (std::isfinite(counter->second.value)) {
+        ++counter;
+      } else {
+        counter = run.counters.erase(counter);
+      }
+    }
+  }
+  JSONReporter::ReportRuns(renamed);
+}
+
+progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries, double planned_s)
+    : book_(book),
+      expected_(expected_entries),
+      planned_s_(planned_s),
+      start_(std::chrono::steady_clock::now()),
+      last_line_(start_) {}
+
+std::string time_left(double elapsed_s, double planned_s, std::size_t done, std::size_t total) {
+  if (total == 0 || done >= total) return "done";
+  double left = planned_s - elapsed_s;
+  if (2 * done >= total && done > 0)
+    left = elapsed_s / static_cast<double>(done) * static_cast<double>(total - done);
+  if (left < 1.0) return fmt::format("a little past the estimate of {}", format_seconds(planned_s));
+  return "about " + format_seconds(left) + " left";
+}
+
+void progress_reporter::tick() {
+  if (std::chrono::steady_clock::now() - last_line_ >= kProgressEvery) line(false);
+}
+
+void progress_reporter::line(bool force) {
+  const auto now = std::chrono::steady_clock::now();
+  if (!force && now - last_line_ < kProgressEvery) return;
+  last_line_ = now;
+  const double elapsed = std::chrono::duration<double>(now - start_).count();
+  const std::size_t total = std::max(expected_, finished_);
+  fmt::print(stderr, "  {} elapsed, {} of {} entries complete, matrix: {}\n", format_seconds(elapsed), finished_, total,
+             time_left(elapsed, planned_s_, finished_, total));
+  std::fflush(stderr);
+}
+
+void derive_ratios(nlohmann::json& result, const run_book& book) {
+  if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
+  for (nlohmann::json& row : result["benchmarks"]) {
+    if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
+    const auto fields = parse_entry_name(row["run_name"].get<std::string>());
+    if (!has_derived_ratios(fields)) continue;
+    const auto model = fields.find("model");
+    const calibrations run = book.calibrations_for(model == fields.end() ? std::string{} : model->second);
+    std::map<std::string, double> counters;
+    for (const auto& [key, value] : row.items())
+      if (value.is_number()) counters[key] = value.get<double>();
+    // Dividing by a constant scales a mean, a median and a standard
+    // deviation alike; a coefficient of variation does not change, so a cv
+    // row's ratio is its counter's cv.
+    const bool coefficient_of_variation = row.value("aggregate_unit", "") == "percentage";
+    for (const derived_ratio& ratio : derived_ratios(counters, run))
+      row[ratio.name] = coefficient_of_variation ? counters.at(ratio.counter) : ratio.value;
+  }
+}
+
+bool progress_reporter::ReportContext(const Context& /*context*/) { return true; }
+
+void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
+  // Google Benchmark reports an entry's repetitions, then (separately) its
+  // aggregates; the book recomputes aggregates, so only the first call counts.
+  const bool any_repetition = std::any_of(runs.begin(), runs.end(), [](const Run& run) {
+    return run.run_type == Run::RT_Iteration;
+  });
+  if (!any_repetition) return;
+  captured_entry entry;
+  // Repetitions carry their own name; aggregates are recomputed from them.
+  for (const Run& run : runs) {
+    if (run.run_type != Run::RT_Iteration) continue;
+    entry.name = plain_name(run);
+    if (run.error_occurred) {
+      entry.error = run.error_message;
+      continue;
+    }
+    std::map<std::string, double> counters;
+    for (const auto& [key, counter] : run.counters) counters[key] = counter.value;
+    entry.repetitions.push_back(std::move(counters));
+  }
+  entry.fields = parse_entry_name(entry.name);
+  // Some repetitions measured, some stopped: the entry counts as measured
+  // (its medians come from the measured ones) and the stop becomes a note.
+  if (!entry.error.empty() && !entry.repetitions.empty()) {
+    book_.notes.push_back(entry.name + ": some repetitions were flagged and left out: " + entry.error);
+    entry.error.clear();
+  }
+  ++finished_;
+  line(finished_ >= expected_);
+  book_.record(std::move(entry));
+}
+
+}  // namespace lockstep::bench

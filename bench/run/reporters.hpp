@@ -1,0 +1,89 @@
+#pragma once
+// Where a run's results go: the progress reporter (stderr) that also feeds the
+// run book, and the result file written atomically.
+#include <benchmark/benchmark.h>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "bench/results/derived_figures.hpp"
+#include "bench/run/run_book.hpp"
+
+namespace lockstep::bench {
+
+// Google Benchmark's display reporter for `lockstep run`: records every
+// entry's repetitions in the run book (how later entries read the in-run
+// calibrations) and prints progress on stderr, nothing on stdout (the
+// summary goes there at the end).
+//
+// Progress: with random interleaving (the default) an entry is complete only
+// when its last repetition ran, which for most entries is near the end, so a
+// count of complete entries says little until late. The time left is the
+// plan's estimate (run_plan.hpp: estimate_run) less the time elapsed, until
+// half of the entries are complete; from then on, the rate at which they
+// complete. A line at most every kProgressEvery, from tick() (called after
+// every call of an entry) or from a completed entry, and one at the end.
+class progress_reporter : public benchmark::BenchmarkReporter {
+ public:
+  progress_reporter(run_book& book, std::size_t expected_entries, double planned_s);
+
+  bool ReportContext(const Context& context) override;
+  void ReportRuns(const std::vector<Run>& runs) override;
+  // After every call of an entry: a progress line when one is due.
+  void tick();
+
+  std::size_t finished() const noexcept { return finished_; }
+
+ private:
+  void line(bool force);
+
+  run_book& book_;
+  std::size_t expected_;
+  double planned_s_;
+  std::size_t finished_ = 0;
+  std::chrono::steady_clock::time_point start_;
+  std::chrono::steady_clock::time_point last_line_;
+};
+inline constexpr std::chrono::seconds kProgressEvery{10};
+
+// "about 1 min 20 s left" from the plan's estimate and what is done: the
+// estimate less the time elapsed while fewer than half of `total` are done,
+// the observed rate after; past the estimate, "a little past the estimate".
+std::string time_left(double elapsed_s, double planned_s, std::size_t done, std::size_t total);
+
+// Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
+// Google Benchmark appends "/manual_time", "/real_time", "/iterations:N" and
+// "/repeats:N" to a name when an entry uses them; lockstep's names carry only key:value
+// segments (the timing is stated once, in the context's lockstep_timing).
+// Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
+// Google Benchmark would write NaN, which no JSON parser accepts.
+// A row with a cpu_ns_per_step or cpu_ns_per_episode counter (the team entries
+// and rk4/serial: team_driver.hpp, before measure_entry) gets that counter as
+// its cpu_time: a repetition's own value, an aggregate row the counter's
+// aggregate (Google Benchmark computes both with the same statistic, so the
+// cpu_time aggregates are those of the repetitions' cpu_time).
+class result_json_reporter : public benchmark::JSONReporter {
+ public:
+  void ReportRuns(const std::vector<Run>& runs) override;
+};
+
+// The run's name without Google Benchmark's suffixes (see above).
+std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
+
+// Splits an entry name into its fields: "kind" (the first segment) and every
+// key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
+std::map<std::string, std::string> parse_entry_name(const std::string& name);
+
+// The same derivation as run_book::derive_ratios, on the result JSON Google
+// Benchmark wrote: every iteration and aggregate row of an rk4 or overhead
+// entry gets vs_serial and vs_c2c from the run's calibrations (either may be
+// absent, and so then is its ratio). Dividing by a constant scales a mean, a
+// median and a standard deviation alike; a coefficient of variation does not
+// change, so a cv row's ratio is its counter's cv.
+void derive_ratios(nlohmann::json& result, const run_book& book);
+
+}  // namespace lockstep::bench

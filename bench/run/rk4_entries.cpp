@@ -1,0 +1,400 @@
+// The RK4 entries and the in-run calibrations (rk4_entries.hpp).
+#include "bench/run/rk4_entries.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <string_view>
+#include <tuple>
+#include <type_traits>
+#include <exception>
+#include <vector>
+
+#include "bench/probes/core_to_core.hpp"
+#include "kernels/model_choice.hpp"
+#include "kernels/oscillator.hpp"
+#include "kernels/parallel_step.hpp"
+#include "kernels/rk4.hpp"
+#include "layouts/registry.hpp"
+#include "platform/clock.hpp"
+#include "platform/stats.hpp"
+#include "sync/registry.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+// One repetition of c2c: a few measure_pair calls (each starts and joins its
+// own two pinned threads), all samples pooled. Once a repetition failed, the
+// later ones fail too (team_driver.hpp, measure_entry, says why).
+void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, unsigned cpu_b) {
+  const std::string name = entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name();
+  if (const auto failed = harness.stalled.find(name); failed != harness.stalled.end()) {
+    state.SkipWithError(("an earlier repetition failed: " + failed->second).c_str());
+    return;
+  }
+  c2c::pair_request request;
+  request.cpu_a = static_cast<int>(cpu_a);
+  request.cpu_b = static_cast<int>(cpu_b);
+  request.how = c2c::method::cas;
+  // 200 samples of 100 round trips: about 4 ms per call at 100 ns one-way,
+  // enough for a stable median; the p99 shows preemptions.
+  request.samples = 200;
+  request.rounds_per_sample = 100;
+  request.warmup_rounds = 1000;
+  std::vector<double> pooled;
+  try {
+    for (auto _ : state) {
+      const std::vector<double> samples = c2c::measure_pair(request);
+      pooled.insert(pooled.end(), samples.begin(), samples.end());
+    }
+  } catch (const std::exception& error) {
+    harness.stalled[name] = error.what();
+    state.SkipWithError(error.what());
+    return;
+  }
+  const platform::distribution one_way = platform::summarize(std::move(pooled));
+  state.counters["one_way_ns"] = one_way.p50;
+  state.counters["one_way_min_ns"] = one_way.min;
+  state.counters["one_way_p99_ns"] = one_way.p99;
+}
+
+// The model an entry integrates (kernels/model_choice.hpp): the paper's two
+// masses, or the chain its spec names.
+template <class Model>
+Model model_of(const entry_spec& spec) {
+  if constexpr (std::is_same_v<Model, kernels::chain_model>)
+    return kernels::chain_model(kernels::model_choice{spec.masses}.chain());
+  else
+    return Model{};
+}
+
+// Calls register_entry.template operator()<Model>() with the model type of
+// `choice`: the one place the harness turns a model choice into a type.
+template <class Register>
+decltype(auto) with_model(const kernels::model_choice& choice, Register&& register_entry) {
+  if (choice.is_chain()) return register_entry.template operator()<kernels::chain_model>();
+  return register_entry.template operator()<kernels::two_mass_model>();
+}
+
+// rk4/serial (rk4/model:chainS/serial): batches of steps on the benchmark
+// thread, timed by hand so that the batch loop matches the parallel entries',
+// and reported as they are (team_driver.hpp, before measure_entry): an
+// iteration's manual time is its batch's time, written per step by the JSON
+// reporter; cpu_ns_per_step is the benchmark thread's CPU time per step over
+// the timed batches.
+template <class Model>
+void serial_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
+  const Model model = model_of<Model>(spec);
+  kernels::staged_rk4<Model> rk4(model, kBenchmarkStepSeconds);
+  const std::string name = spec.name();
+  auto batch_size = harness.units_per_batch.find(name);
+  if (batch_size == harness.units_per_batch.end()) {
+    constexpr std::uint64_t kProbeSteps = 1000;
+    const std::int64_t start = platform::now_ns();
+    rk4.run(kProbeSteps);
+    const double per_step = static_cast<double>(platform::now_ns() - start) / kProbeSteps;
+    batch_size = harness.units_per_batch.emplace(name, units_for_batch(per_step, harness.settings)).first;
+  }
+  const std::uint64_t steps = batch_size->second;
+  rk4.run(steps);  // warm-up batch, as the parallel entries have
+  std::int64_t total_ns = 0;
+  std::uint64_t batches = 0;
+  const std::int64_t cpu_start = thread_cpu_ns();
+  for (auto _ : state) {
+    const std::int64_t start = platform::now_ns();
+    rk4.run(steps);
+    const std::int64_t batch_ns = platform::now_ns() - start;
+    state.SetIterationTime(static_cast<double>(batch_ns) * 1e-9);
+    total_ns += batch_ns;
+    ++batches;
+  }
+  const std::int64_t cpu_end = thread_cpu_ns();
+  benchmark::DoNotOptimize(rk4.state().data());
+  const double steps_timed = static_cast<double>(batches) * static_cast<double>(steps);
+  state.counters["ns_per_step"] = static_cast<double>(total_ns) / steps_timed;
+  state.counters["steps_per_batch"] = static_cast<double>(steps);
+  if (cpu_start >= 0 && cpu_end >= cpu_start)
+    state.counters["cpu_ns_per_step"] = static_cast<double>(cpu_end - cpu_start) / steps_timed;
+}
+
+// Two pinned participants on two CPUs (the vs_c2c goal's case): the one-way
+// core-to-core latency between exactly those CPUs, measured right after the
+// entry's timed batches (a few hundred microseconds), and vs_c2c_paired =
+// sync_ns_per_stage / it. A VM can change pace for seconds at a time (the
+// development VM's one-way latency moved between about 25 and 115 ns within a
+// run, its 2-thread steps with it), so the run's calibration, measured minutes
+// earlier, may belong to another pace; this one belongs to the same. vs_c2c
+// (the run's) stays, for comparing runs.
+void add_paired_c2c(benchmark::State& state, const platform::placement_plan& plan, unsigned threads) {
+  const auto pu_a = plan.pu_at(0);
+  const auto pu_b = plan.pu_at(1);
+  const auto sync_stage = state.counters.find("sync_ns_per_stage");
+  const bool fixed_pair = plan.kind == platform::placement::compact || plan.kind == platform::placement::scatter;
+  if (threads != 2 || !fixed_pair || !pu_a || !pu_b || *pu_a == *pu_b || sync_stage == state.counters.end()) return;
+  c2c::pair_request request;
+  request.cpu_a = static_cast<int>(*pu_a);
+  request.cpu_b = static_cast<int>(*pu_b);
+  request.how = c2c::method::cas;
+  request.samples = 21;
+  request.rounds_per_sample = 50;
+  request.warmup_rounds = 200;
+  try {
+    const double one_way = platform::summarize(c2c::measure_pair(request)).p50;
+    if (one_way > 0.0) {
+      state.counters["c2c_paired_ns"] = one_way;
+      state.counters["vs_c2c_paired"] = sync_stage->second.value / one_way;
+    }
+  } catch (const std::exception&) {
+    // Could not pin the pair (the affinity set changed): the counters are
+    // omitted, never made up; vs_c2c still divides by the run's figure.
+  }
+}
+
+// One call of an RK4 entry: the composed step on a pinned team.
+template <class Sync, class Layout, class Model, kernels::sync_timing Timing>
+void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec spec) {
+  constexpr bool kInstrumented = Timing != kernels::sync_timing::off;
+  constexpr sync::primitive_info info = sync::info_of<Sync>();
+  affinity_guard restore_caller;  // omp_team runs participant 0 on the benchmark thread
+  const platform::placement_plan plan = platform::plan_placement(*harness.machine, spec.pin, spec.threads);
+  const Model model = model_of<Model>(spec);
+  kernels::parallel_rk4<Sync, Layout, Model, Timing> step(model, kBenchmarkStepSeconds, spec.threads);
+  sync::team_of_t<Sync> team(spec.threads);
+  std::vector<participant_slot> slots(spec.threads);
+  auto steps = [&step](sync::participant& self, std::uint64_t count) { step.run(self, count); };
+  // The sync time the timed batches start from: read when the warm-up batch
+  // ends (the team waiting at the harness barrier), so that the warm-up's
+  // cold caches and first faults stay out of sync_ns_per_stage.
+  // The sampling period is set there too, from this call's batch size: about
+  // kSampledStepsPerBatch sampled steps per batch, never fewer than one step
+  // in kSyncTimingSampleSteps. A slow step (few per batch) is then timed often
+  // enough to be measured at all, and its clock readings (8 per sampled step)
+  // stay a tiny share of it; a fast one keeps the default period.
+  kernels::stage_sync_time sync_before{};
+  const std::string name = spec.name();
+  const auto result = measure_entry(state, harness, name, sync::find_primitive(info.name), plan, team, slots, steps, kInstrumented, "step", [&](std::uint64_t units) {
+    if constexpr (Timing == kernels::sync_timing::sampled) {
+      constexpr std::uint64_t kSampledStepsPerBatch = 8;
+      step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1, kernels::kSyncTimingSampleSteps));
+    }
+    sync_before = step.sync_time();
+  });
+  if (!result) return;
+
+  const double steps_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));
+  const double step_ns = ns_per_unit(*result);
+  state.counters["ns_per_step"] = step_ns;  // vs_serial is derived after the run (run_book::derive_ratios)
+  if constexpr (kInstrumented) {
+    const kernels::stage_sync_time timed = step.sync_time().since(sync_before);
+    if (timed.syncs > 0) {
+      // A timed span holds one clock reading's own cost besides the sync (the
+      // end of the first reading and the start of the second: what two
+      // back-to-back readings are apart), so the run's measured reading cost
+      // is taken off each span. vs_c2c is derived after the run
+      // (run_book::derive_ratios), from the whole run's calibration.
+      const double sync_per_stage =
+          static_cast<double>(timed.nanoseconds) / static_cast<double>(timed.syncs) - harness.book->clock_read_ns;
+      state.counters["sync_ns_per_stage"] = sync_per_stage;
+      // The step per participant, split in three (docs/names-and-counters.md):
+      // compute, waiting for others (the mean waiting of the split syncs) and
+      // synchronisation proper, the rest of the four syncs. Waiting is the
+      // difference of two arrival readings, so it holds no clock reading's
+      // cost; the release part has it taken off with sync_ns_per_stage. All
+      // three or none: without enough split syncs (kernels::waiting_ns_per_stage)
+      // they are omitted, never a made-up 0.
+      if (const auto waiting_per_stage = kernels::waiting_ns_per_stage(timed)) {
+        constexpr double kStages = kernels::kRk4Stages;
+        const double waiting = kStages * *waiting_per_stage;
+        state.counters["compute_ns_per_step"] = std::max(step_ns - kStages * sync_per_stage, 0.0);
+        state.counters["waiting_ns_per_step"] = waiting;
+        state.counters["release_ns_per_step"] = kStages * sync_per_stage - waiting;
+      }
+    }
+  }
+  set_accounting_counters(state, *result, "step");
+  if constexpr (info.counts_futex_waits)  // else unavailable: omitted, never a 0 nobody counted
+    state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
+  state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
+  state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
+
+  if constexpr (kInstrumented) add_paired_c2c(state, plan, spec.threads);
+
+  // The overhead pair's "on" side measures its "off" side too, in the same
+  // call, right after: the same plan, batch size and batch count, on a fresh
+  // step and team without instrumentation or accounting. The two times of a
+  // repetition are then a fraction of a second apart, so their ratio
+  // (overhead_ratio) survives a machine that changes pace during the run,
+  // which two entries measured one after the other do not (the development
+  // VM's 2-thread steps moved between about 280 ns and 1.1 us for seconds).
+  if constexpr (kInstrumented) {
+    if (spec.kind == entry_kind::overhead) {
+      kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off> bare(
+          model, kBenchmarkStepSeconds, spec.threads);
+      sync::team_of_t<Sync> bare_team(spec.threads);
+      std::vector<participant_slot> bare_slots(spec.threads);
+      auto bare_steps = [&bare](sync::participant& self, std::uint64_t count) { bare.run(self, count); };
+      const call_result paired =
+          run_call(bare_team, bare_slots, plan, static_cast<unsigned>(result->batches.batch_ns.size()),
+                   result->batches.units_per_batch, harness.settings, false, bare_steps);
+      if (paired.failure.empty() && !paired.batches.stalled && !paired.batches.over_budget &&
+          !paired.batches.batch_ns.empty()) {
+        const double off_ns = ns_per_unit(paired);
+        state.counters["paired_off_ns_per_step"] = off_ns;
+        state.counters["overhead_ratio"] = step_ns / off_ns;
+      }
+    }
+  }
+}
+
+bool selected(const std::vector<std::string>& names, std::string_view name) {
+  return std::find(names.begin(), names.end(), name) != names.end();
+}
+
+template <class Sync, class Layout, class Model>
+benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harness_state& harness,
+                                                   bool instrumented) {
+  auto* entry =
+      instrumented
+          ? benchmark::RegisterBenchmark(spec.name().c_str(),
+                                         [&harness, spec](benchmark::State& state) {
+                                           // sampled: one step per sampling period
+                                           // (rk4_entry sets it) reads the clock around
+                                           // its syncs; the other steps read none.
+                                           rk4_entry<Sync, Layout, Model, kernels::sync_timing::sampled>(
+                                               state, harness, spec);
+                                         })
+          : benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
+              rk4_entry<Sync, Layout, Model, kernels::sync_timing::off>(state, harness, spec);
+            });
+  constexpr sync::primitive_info info = sync::info_of<Sync>();
+  size_entry(*entry, &info, spec.threads, harness);
+  return entry->UseManualTime()->Unit(benchmark::kNanosecond);
+}
+
+}  // namespace
+
+std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  sync::for_each_primitive([&]<class Sync>() {
+    if (!selected(selection.syncs, Sync::kName)) return;
+    layouts::for_each_layout([&]<class Layout>() {
+      if (!selected(selection.layouts, Layout::kName)) return;
+      for (unsigned threads : selection.threads) {
+        const kernels::model_choice model = kernels::model_for(threads, selection.masses);
+        for (platform::placement pin : selection.pins) {
+          entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
+          spec.masses = model.masses;
+          const std::string reason = kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads);
+          if (!reason.empty()) {
+            harness.book->not_applicable.push_back({spec.name(), reason});
+            continue;
+          }
+          if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+            with_model(model, [&]<class Model>() {
+              register_rk4_entry<Sync, Layout, Model>(spec, harness, harness.settings.accounting);
+              // The entry's side of a paired comparison: the bare step, as the
+              // matrix builds it (paired_blocks.hpp).
+              harness.block_runners[spec.name()] =
+                  block_runner_of<sync::team_of_t<Sync>,
+                                  kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off>>(
+                      harness, pin, threads,
+                      [](auto& step, sync::participant& self, std::uint64_t count) { step.run(self, count); },
+                      model_of<Model>(spec), kBenchmarkStepSeconds, threads);
+            });
+            registered.push_back(spec.name());
+          }
+        }
+      }
+    });
+  });
+  return registered;
+}
+
+std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  // The preferred combination first: the fastest and steadiest step of the
+  // matrix (seqlock on private copies, pinned, two threads: one per core
+  // here), where a fixed cost of the harness weighs most. futex_spin's 2-thread
+  // step, the first choice before, settles into one of two rhythms (about 300
+  // or 550 ns a step on the development VM) for stretches of a run, so two
+  // entries measured one after the other could land in different rhythms and
+  // their ratio said nothing about the harness.
+  const unsigned threads =
+      std::find(selection.threads.begin(), selection.threads.end(), 2u) != selection.threads.end()
+          ? 2u
+          : selection.threads.front();
+  const platform::placement pin =
+      std::find(selection.pins.begin(), selection.pins.end(), platform::placement::compact) != selection.pins.end()
+          ? platform::placement::compact
+          : selection.pins.front();
+  const kernels::model_choice model = kernels::model_for(threads, selection.masses);
+  bool done = false;
+  const auto try_pair = [&]<class Sync, class Layout>() {
+    if (done || !selected(selection.syncs, Sync::kName) || !selected(selection.layouts, Layout::kName)) return;
+    if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+      if (!kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads).empty()) return;
+      for (bool accounting : {false, true}) {
+        entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
+                        pin,                  threads,                 accounting};
+        spec.masses = model.masses;
+        auto* entry = with_model(
+            model, [&]<class Model>() { return register_rk4_entry<Sync, Layout, Model>(spec, harness, accounting); });
+        if (harness.settings.overhead_repetitions > 0) entry->Repetitions(harness.settings.overhead_repetitions);
+        registered.push_back(spec.name());
+      }
+      done = true;
+    }
+  };
+  try_pair.template operator()<sync::seqlock, layouts::per_thread>();
+  sync::for_each_primitive([&]<class Sync>() {
+    layouts::for_each_layout([&]<class Layout>() { try_pair.template operator()<Sync, Layout>(); });
+  });
+  return registered;
+}
+
+std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<std::string> registered;
+  const entry_spec c2c_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2};
+  const platform::placement_plan plan = platform::plan_placement(*harness.machine, platform::placement::compact, 2);
+  const auto pu_a = plan.pu_at(0);
+  const auto pu_b = plan.pu_at(1);
+  if (pu_a && pu_b && *pu_a != *pu_b) {
+    const unsigned cpu_a = *pu_a;
+    const unsigned cpu_b = *pu_b;
+    benchmark::RegisterBenchmark(
+        c2c_spec.name().c_str(),
+        [&harness, cpu_a, cpu_b](benchmark::State& state) { c2c_entry(state, harness, cpu_a, cpu_b); })
+        ->Iterations(3)
+        ->UseRealTime()
+        ->Unit(benchmark::kMicrosecond);
+    registered.push_back(c2c_spec.name());
+  } else {
+    harness.book->not_applicable.push_back(
+        {c2c_spec.name(), "needs two CPUs in the affinity set; vs_c2c is omitted in this run"});
+  }
+  // The serial step of every model the run integrates (vs_serial divides an
+  // entry's step by its own model's), the paper's system always.
+  std::vector<std::size_t> masses{0};
+  for (const unsigned threads : selection.threads) {
+    const kernels::model_choice model = kernels::model_for(threads, selection.masses);
+    if (std::find(masses.begin(), masses.end(), model.masses) == masses.end()) masses.push_back(model.masses);
+  }
+  for (const std::size_t model_masses : masses) {
+    entry_spec spec{entry_kind::serial, {}, {}, platform::placement::none, 1};
+    spec.masses = model_masses;
+    with_model(kernels::model_choice{model_masses}, [&]<class Model>() {
+      benchmark::RegisterBenchmark(spec.name().c_str(),
+                                   [&harness, spec](benchmark::State& state) {
+                                     serial_entry<Model>(state, harness, spec);
+                                   })
+          ->Iterations(harness.settings.timed_batches)
+          ->UseManualTime()
+          ->Unit(benchmark::kNanosecond);
+    });
+    registered.push_back(spec.name());
+  }
+  return registered;
+}
+
+}  // namespace lockstep::bench

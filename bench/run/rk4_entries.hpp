@@ -1,0 +1,86 @@
+#pragma once
+// The RK4 entries and the in-run calibrations.
+//
+//   c2c/pin:compact/threads:2   one-way core-to-core latency between the first
+//                               two PUs of the compact plan (core_to_core.hpp,
+//                               CAS ping-pong): counter one_way_ns (median of
+//                               the samples), one_way_min_ns, one_way_p99_ns.
+//                               The median over repetitions is the run's
+//                               c2c_one_way_ns, which vs_c2c divides by.
+//   rk4/serial                  the serial staged RK4 (kernels/rk4.hpp) on the
+//                               benchmark thread: ns_per_step (real_time),
+//                               cpu_ns_per_step (cpu_time), steps_per_batch
+//                               as the team entries have them. Its median is
+//                               the run's serial_step_ns (vs_serial).
+//   rk4/sync:S/layout:L/pin:P/threads:T
+//                               the composed step (kernels/parallel_step.hpp)
+//                               on a pinned team, batches of steps; counters
+//                               at register_rk4_benchmarks below (and in
+//                               docs/names-and-counters.md).
+//   rk4/model:chainS/...        the same on an s-mass chain, the model of
+//                               more than 4 threads or of --masses
+//                               (kernels/model_choice.hpp); its vs_serial
+//                               divides by rk4/model:chainS/serial.
+// Both calibrations are registered first (Google Benchmark runs entries in
+// registration order unless told to interleave), but no entry reads them while
+// it runs: vs_serial and vs_c2c are derived after the run from the whole run's
+// medians (run_book::derive_ratios, derive_ratios in reporters.hpp).
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bench/run/run_book.hpp"
+#include "bench/run/team_driver.hpp"
+
+namespace lockstep::bench {
+
+// The step size of every benchmarked RK4 step, in seconds: about 1/1200 of
+// the fastest period of the paper's oscillator (2 pi / 51.49 rad/s = 0.122 s),
+// so millions of steps stay bounded and never reach denormals or infinities.
+inline constexpr double kBenchmarkStepSeconds = 1e-4;
+
+// c2c and rk4/serial, and rk4/model:chainS/serial for every chain the
+// selection's thread counts integrate. c2c needs two CPUs in the affinity set; without them it
+// is recorded as not applicable in the run book. Returns the names registered.
+std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness);
+
+// rk4/sync:S/layout:L/pin:P/threads:T for every selected combination that
+// applies; the others go into the run book's not_applicable list with the
+// reason (kernels/parallel_step.hpp: applicable, not_applicable_reason).
+// Google Benchmark's real_time and cpu_time are per step (team_driver.hpp,
+// before measure_entry): real_time = ns_per_step, cpu_time = cpu_ns_per_step.
+// Counters, per step unless named otherwise (summed over the team):
+//   ns_per_step          batch time / steps
+//   cpu_ns_per_step      participant 0's thread CPU time over the timed
+//                        batches / their steps (not summed over the team)
+//   steps_per_batch      the steps of one batch (one Google Benchmark
+//                        iteration), from the entry's probe
+//   sync_ns_per_stage    mean time a participant spent in one stage sync
+//                        (the step's sampled instrumentation: the syncs of one
+//                        step in kSyncTimingSampleSteps; absent with accounting
+//                        off), over the timed batches (the warm-up excluded),
+//                        less one clock reading (context clock_read_ns: a timed
+//                        span holds the cost of one reading besides the sync)
+//   vs_serial            ns_per_step / this run's rk4/serial median
+//   vs_c2c               sync_ns_per_stage / this run's c2c one-way median
+//   csw_vol_per_kstep, csw_invol_per_kstep, migrations_per_kstep
+//                        context switches and migrations of the whole team per
+//                        1000 steps (warm-up batch and harness barriers
+//                        included); migrations absent when unavailable
+//   cross_core_csw_pct   the paper's Figure 5 share (absent when unavailable)
+//   futex_waits_per_step the primitive's futex sleeps, summed over the team;
+//                        absent for primitives that cannot count them
+//                        (sync::primitive_info::counts_futex_waits)
+//   timeouts             waits that ended by timeout in the repetition (a count)
+//   oversubscribed       1 when the threads outnumber the CPUs
+// With settings.accounting off the entries run without instrumentation and
+// without accounting (their counters are omitted).
+std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness);
+
+// The harness-overhead pair, side by side: overhead/accounting:off/... and
+// overhead/accounting:on/... on one combination (seqlock, per_thread,
+// compact, 2 threads when selected; else the first selected that applies).
+// The summary quotes on / off.
+std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness);
+
+}  // namespace lockstep::bench

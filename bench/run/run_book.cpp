@@ -1,0 +1,137 @@
+// The run book, entry names and batch sizing (run_book.hpp).
+#include "bench/run/run_book.hpp"
+
+#include "bench/results/derived_figures.hpp"
+#include "kernels/model_choice.hpp"
+#include "platform/statistics.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace lockstep::bench {
+
+std::string entry_spec::name() const {
+  const std::string pin_name{platform::to_string(pin)};
+  const std::string tail = "/pin:" + pin_name + "/threads:" + std::to_string(threads);
+  const std::string model = kernels::model_choice{masses}.name_segment();
+  switch (kind) {
+    case entry_kind::c2c:
+      return "c2c" + tail;
+    case entry_kind::serial:
+      return "rk4" + model + "/serial";
+    case entry_kind::barrier:
+      return "barrier/sync:" + sync + tail;
+    case entry_kind::rk4:
+      return "rk4" + model + "/sync:" + sync + "/layout:" + layout + tail;
+    case entry_kind::overhead:
+      return std::string("overhead") + model + "/accounting:" + (accounting ? "on" : "off") + "/sync:" + sync +
+             "/layout:" + layout + tail;
+  }
+  return {};
+}
+
+namespace {
+
+std::vector<double> values_of(const captured_entry& entry, const std::string& counter) {
+  std::vector<double> values;
+  for (const auto& repetition : entry.repetitions) {
+    const auto found = repetition.find(counter);
+    if (found != repetition.end()) values.push_back(found->second);
+  }
+  return values;
+}
+
+}  // namespace
+
+std::optional<double> captured_entry::median(const std::string& counter) const {
+  const std::vector<double> values = values_of(*this, counter);
+  if (values.empty()) return std::nullopt;
+  return platform::median(values);
+}
+
+std::optional<std::pair<double, double>> captured_entry::range(const std::string& counter) const {
+  const std::vector<double> values = values_of(*this, counter);
+  if (values.empty()) return std::nullopt;
+  const auto [low, high] = std::minmax_element(values.begin(), values.end());
+  return std::pair{*low, *high};
+}
+
+std::map<int, std::vector<double>> captured_entry::by_pace_mode(const std::string& counter) const {
+  std::map<int, std::vector<double>> modes;
+  for (const auto& repetition : repetitions) {
+    const auto mode = repetition.find("pace_mode");
+    const auto value = repetition.find(counter);
+    if (mode != repetition.end() && value != repetition.end())
+      modes[static_cast<int>(mode->second)].push_back(value->second);
+  }
+  return modes;
+}
+
+std::string captured_entry::field(const std::string& key) const {
+  const auto found = fields.find(key);
+  return found == fields.end() ? std::string{} : found->second;
+}
+
+void run_book::record(captured_entry entry) {
+  for (auto& existing : entries_) {
+    if (existing.name == entry.name) {
+      existing = std::move(entry);
+      return;
+    }
+  }
+  entries_.push_back(std::move(entry));
+}
+
+const captured_entry* run_book::find(const std::string& name) const {
+  for (const auto& entry : entries_)
+    if (entry.name == name) return &entry;
+  return nullptr;
+}
+
+std::optional<double> run_book::c2c_one_way_ns() const {
+  const captured_entry* entry = find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
+  if (entry == nullptr || !entry->error.empty()) return std::nullopt;
+  return entry->median("one_way_ns");
+}
+
+std::optional<double> run_book::serial_step_ns(const std::string& model) const {
+  const captured_entry* entry = find("rk4" + (model.empty() ? std::string{} : "/model:" + model) + "/serial");
+  if (entry == nullptr || !entry->error.empty()) return std::nullopt;
+  return entry->median("ns_per_step");
+}
+
+void run_book::derive_ratios() {
+  for (captured_entry& entry : entries_) {
+    if (!has_derived_ratios(entry.fields)) continue;
+    const calibrations run = calibrations_for(entry.field("model"));
+    for (auto& repetition : entry.repetitions)
+      for (const derived_ratio& ratio : derived_ratios(repetition, run)) repetition[ratio.name] = ratio.value;
+  }
+}
+
+calibrations run_book::calibrations_for(const std::string& model) const {
+  return {c2c_one_way_ns(), serial_step_ns(model)};
+}
+
+std::uint64_t units_for_batch(double unit_ns, const run_settings& settings) {
+  if (!(unit_ns > 0.0)) return 1;
+  const double units = std::floor(static_cast<double>(settings.target_batch_ns) / unit_ns);
+  return static_cast<std::uint64_t>(std::clamp(units, 1.0, static_cast<double>(kMaxUnitsPerBatch)));
+}
+
+std::vector<std::string> split_list(const std::string& text) {
+  std::vector<std::string> items;
+  std::string item;
+  for (char c : text) {
+    if (c == ',') {
+      if (!item.empty()) items.push_back(item);
+      item.clear();
+    } else if (c != ' ') {
+      item += c;
+    }
+  }
+  if (!item.empty()) items.push_back(item);
+  return items;
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,377 @@
+// The end-of-run summary (summary.hpp).
+#include "bench/run/scaling.hpp"
+#include "bench/run/summary.hpp"
+
+#include "bench/results/derived_figures.hpp"
+#include "bench/run/paired_blocks.hpp"
+#include "platform/statistics.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+namespace lockstep::bench {
+
+namespace {
+
+// The short summary's ranking: this many combinations per group.
+constexpr std::size_t kShortRankingPerGroup = 3;
+
+std::string spread_of(const captured_entry& entry, const std::string& counter) {
+  const auto median = entry.median(counter);
+  const auto range = entry.range(counter);
+  if (!median || !range || *median <= 0.0) return "-";
+  // The half-range relative to the median: what a re-run may move it by.
+  return fmt::format("+-{:.1f}%", (range->second - range->first) / 2.0 / *median * 100.0);
+}
+
+std::string optional_number(const captured_entry& entry, const std::string& counter, const char* format_spec,
+                            const char* absent = "-") {
+  const auto value = entry.median(counter);
+  if (!value) return absent;
+  return fmt::format(fmt::runtime(format_spec), *value);
+}
+
+// The CPUs a step kept busy: the team's CPU time per step over the step's
+// wall time (both medians over the repetitions). A team that spins while it
+// waits reads near its thread count; one that sleeps, less.
+std::string cpus_busy(const captured_entry& entry, const char* unit) {
+  const auto cpu = entry.median(fmt::format("team_cpu_ns_per_{}", unit));
+  const auto wall = entry.median(fmt::format("ns_per_{}", unit));
+  if (!cpu || !wall || !(*wall > 0.0)) return "-";
+  return fmt::format("{:.1f}", *cpu / *wall);
+}
+
+// "  [oversubscribed] [straddles a pace change] [short batches]"
+std::string entry_flags(const captured_entry& entry) {
+  std::string flags;
+  if (entry.median("oversubscribed").value_or(0.0) > 0.5) flags += "  [oversubscribed]";
+  const auto modes = entry.by_pace_mode(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  if (modes.count(-1) > 0) flags += "  [straddles a pace change]";
+  if (entry.median("short_batches").value_or(0.0) > 0.5) flags += "  [short batches: the harness barrier weighs in]";
+  return flags;
+}
+
+// Entries whose repetitions ran in more than one pace mode: their median in each.
+void per_mode_medians(std::string& out, const run_book& book) {
+  if (!book.pace || book.pace->modes.size() < 2) return;
+  std::string lines;
+  std::size_t count = 0;
+  for (const auto& entry : book.entries()) {
+    if (!entry.error.empty()) continue;
+    const std::string kind = entry.field("kind");
+    if (kind != "rk4" && kind != "barrier") continue;
+    const std::string counter = kind == "barrier" ? "ns_per_episode" : "ns_per_step";
+    const auto modes = entry.by_pace_mode(counter);
+    std::size_t moded = 0;
+    for (const auto& [mode, values] : modes) moded += mode >= 0 ? 1 : 0;
+    if (moded < 2) continue;
+    ++count;
+    std::string cells;
+    for (const auto& [mode, values] : modes) {
+      if (mode < 0) continue;
+      const pace_mode& pace = book.pace->modes[static_cast<std::size_t>(mode)];
+      cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", book.pace->has_c2c ? "c2c" : "serial",
+                           format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(platform::median(values)),
+                           values.size());
+    }
+    lines += fmt::format("  {:<62} {}\n", entry.name, cells);
+  }
+  if (count == 0) return;
+  out += fmt::format("\nMedian per pace mode ({} entries ran in more than one mode; repetitions that straddle a "
+                     "change left out):\n",
+                     count);
+  out += lines;
+}
+
+// One comparison's line: the paired ratio with its interval and verdict, or,
+// when it was not measured as a pair, the ratio of the two medians (marked).
+std::string comparison_figure(const run_book& book, const comparison& what) {
+  const auto pair = std::find_if(book.pairs.begin(), book.pairs.end(), [&](const paired_result& measured_pair) {
+    return measured_pair.what.a == what.a && measured_pair.what.b == what.b;
+  });
+  if (pair != book.pairs.end() && pair->failure.empty() && !pair->ratios.empty()) {
+    std::size_t straddling = 0;
+    for (int mode : pair->modes) straddling += mode < 0 ? 1 : 0;
+    return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})", pair->estimate.median, pair->estimate.low,
+                       pair->estimate.high, to_string(pair->verdict), pair->ratios.size(),
+                       pair->budget_cut ? ", cut by the time budget: slow blocks" : "",
+                       straddling > 0 ? fmt::format(", {} straddling a pace change", straddling) : "");
+  }
+  const captured_entry* a = book.find(what.a);
+  const captured_entry* b = book.find(what.b);
+  const char* counter = what.a.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
+  const double median_a = a != nullptr ? a->median(counter).value_or(0.0) : 0.0;
+  const double median_b = b != nullptr ? b->median(counter).value_or(0.0) : 0.0;
+  std::string why = pair != book.pairs.end() ? pair->failure : std::string("not measured as a pair");
+  if (!(median_a > 0.0) || !(median_b > 0.0)) return why;
+  return fmt::format("{:.2f}x (medians, unpaired: no interval; {})", median_a / median_b, why);
+}
+
+std::string median_of(const run_book& book, const std::string& name) {
+  const captured_entry* entry = book.find(name);
+  const char* counter = name.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
+  const auto median = entry != nullptr ? entry->median(counter) : std::nullopt;
+  return median ? format_ns(*median) : "-";
+}
+
+void comparisons_of(std::string& out, const run_book& book, const std::vector<comparison>& plan,
+                    comparison_kind kind) {
+  std::string last_group;
+  for (const comparison& what : plan) {
+    if (what.kind != kind) continue;
+    const captured_entry* a = book.find(what.a);
+    const captured_entry* b = book.find(what.b);
+    if (a == nullptr || b == nullptr) continue;
+    switch (kind) {
+      case comparison_kind::false_sharing:
+        out += fmt::format("  {:<44} {}/{} ({} / {}): {}\n", what.group, a->field("layout"), b->field("layout"),
+                           median_of(book, what.a), median_of(book, what.b), comparison_figure(book, what));
+        break;
+      case comparison_kind::migration:
+        out += fmt::format("  {:<44} none {} / compact {}: {}\n", what.group, median_of(book, what.a),
+                           median_of(book, what.b), comparison_figure(book, what));
+        break;
+      case comparison_kind::against_best_other:
+        if (what.group == last_group) break;
+        last_group = what.group;
+        out += "  " + what.group + "\n";
+        // One measurement per unordered pair: the leader's line is its pair
+        // with the runner-up read the other way round.
+        for (const best_other_view& view : against_best_other_views(book, what.group)) {
+          const captured_entry* entry = book.find(view.entry);
+          const captured_entry* other = book.find(view.other);
+          if (entry == nullptr || other == nullptr) continue;
+          out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})\n",
+                             entry->field("sync"), median_of(book, view.entry),
+                             entry->field("layout").empty() ? std::string() : fmt::format("({})", entry->field("layout")),
+                             other->field("sync"), view.estimate.median, view.estimate.low, view.estimate.high,
+                             to_string(view.verdict), view.pair->ratios.size(),
+                             view.inverted ? ", the runner-up's pair inverted" : "",
+                             view.pair->budget_cut ? ", cut by the time budget: slow blocks" : "");
+        }
+        break;
+    }
+  }
+}
+
+// The short ranking: the fastest few combinations of each model, thread
+// count and placement.
+void short_ranking(std::string& out, const run_book& book, std::size_t per_group) {
+  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  std::stable_sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) {
+    const auto key = [](const measured_entry& item) {
+      return std::tuple(std::stoul(item.entry->field("threads")), item.entry->field("model"), item.entry->field("pin"),
+                        item.median);
+    };
+    return key(a) < key(b);
+  });
+  if (steps.empty()) return;
+  out += fmt::format("\nFastest {} per thread count and placement (median step, spread over repetitions, stage "
+                     "sync in core-to-core transfers, CPUs the team kept busy):\n",
+                     per_group);
+  std::string group;
+  std::size_t shown = 0;
+  for (const auto& step : steps) {
+    const captured_entry& entry = *step.entry;
+    const std::string this_group = fmt::format("{}threads:{} pin:{}",
+                                               entry.field("model").empty() ? "" : "model:" + entry.field("model") + " ",
+                                               entry.field("threads"), entry.field("pin"));
+    if (this_group != group) {
+      group = this_group;
+      shown = 0;
+      out += "  " + group + "\n";
+    }
+    if (shown++ >= per_group) continue;
+    out += fmt::format("    {:>11} {:>8} {:>6} {:>4} CPU  {} + {}{}\n", format_ns(step.median),
+                       spread_of(entry, "ns_per_step"), optional_number(entry, "vs_c2c", "{:.2f}"),
+                       cpus_busy(entry, "step"), entry.field("sync"), entry.field("layout"), entry_flags(entry));
+  }
+}
+
+}  // namespace
+
+std::string oversubscribed_note(const run_book& book, unsigned cpus) {
+  std::set<std::string> thread_counts;
+  std::size_t count = 0;
+  for (const auto& entry : book.entries()) {
+    if (const auto flag = entry.median("oversubscribed"); flag && *flag > 0.5) {
+      ++count;
+      thread_counts.insert("threads:" + entry.field("threads"));
+    }
+  }
+  if (count == 0) return "none: every measured entry had a CPU per thread";
+  std::string counts;
+  for (const auto& threads : thread_counts) counts += (counts.empty() ? "" : ", ") + threads;
+  return fmt::format("{} entries ran oversubscribed (more threads than the {} CPUs of the affinity set: {})", count,
+                     cpus, counts);
+}
+
+std::string render_summary(const run_book& book, const std::string& result_path, bool verbose) {
+  std::string out;
+  std::size_t skipped = 0;
+  for (const auto& entry : book.entries()) skipped += entry.error.empty() ? 0 : 1;
+  out += fmt::format("lockstep run: {} entries measured, {} skipped, {} not applicable; results in {}\n",
+                     book.entries().size() - skipped, skipped, book.not_applicable.size(), result_path);
+
+  out += "\nIn-run calibration: ";
+  out += book.c2c_one_way_ns() ? "core-to-core one-way " + format_ns(*book.c2c_one_way_ns()) : "c2c unavailable";
+  if (const captured_entry* c2c = book.find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
+      c2c != nullptr && book.c2c_one_way_ns()) {
+    if (const auto range = c2c->range("one_way_ns"))
+      out += fmt::format(" (repetitions {}..{})", format_ns(range->first), format_ns(range->second));
+  }
+  out += book.serial_step_ns() ? ", serial RK4 step " + format_ns(*book.serial_step_ns()) : ", serial step unavailable";
+  out += fmt::format(", clock reading {} (taken off each timed sync)", format_ns(book.clock_read_ns));
+  out += "\n";
+  if (book.pace) {
+    out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n",
+                       book.pace->mode_of.size(), book.pace->summary());
+  }
+
+  if (!verbose) {
+    if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
+    short_ranking(out, book, kShortRankingPerGroup);
+    out += "\n" + headline_text(book.headline);
+    return out;
+  }
+
+  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  std::sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
+  if (!steps.empty()) {
+    out += "\nRK4 step, ranked by median step time (spread: half the min..max range over repetitions):\n";
+    out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}\n", "rank", "step", "spread", "vs_serial",
+                       "sync/stage", "vs_c2c", "combination");
+    std::size_t rank = 0;
+    for (const auto& step : steps) {
+      const captured_entry& entry = *step.entry;
+      const auto sync_stage = entry.median("sync_ns_per_stage");
+      out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}{}\n", ++rank, format_ns(step.median),
+                         spread_of(entry, "ns_per_step"), optional_number(entry, "vs_serial", "{:.2f}"),
+                         sync_stage ? format_ns(*sync_stage) : "-", optional_number(entry, "vs_c2c", "{:.2f}"),
+                         entry.name, entry_flags(entry));
+    }
+    // The best stage sync at 2 threads pinned, against the one-way
+    // core-to-core latency: the latency measured in the same call
+    // (vs_c2c_paired) where the entry has it, and the run's calibration
+    // (vs_c2c) for reference.
+    bool header = false;
+    for (const char* ratio_name : {"vs_c2c_paired", "vs_c2c"}) {
+      std::optional<std::pair<const captured_entry*, double>> best_c2c;
+      for (const auto& step : steps) {
+        if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
+        if (const auto ratio = step.entry->median(ratio_name); ratio && (!best_c2c || *ratio < best_c2c->second))
+          best_c2c = {step.entry, *ratio};
+      }
+      if (!best_c2c) continue;
+      const bool paired = std::string_view(ratio_name) == "vs_c2c_paired";
+      const auto latency = best_c2c->first->median("c2c_paired_ns");
+      out += fmt::format(
+          "{}{} {:.2f} ({}; {})\n",
+          header ? "  against the run's calibration: " : "\nBest stage sync at threads:2 pin:compact: ",
+          ratio_name, best_c2c->second, best_c2c->first->name,
+          paired && latency ? fmt::format("one-way latency in the same calls {}", format_ns(*latency))
+                            : "the run's calibration");
+      header = true;
+    }
+  }
+
+  std::vector<measured_entry> episodes = measured_of(book, "barrier", "ns_per_episode");
+  if (!episodes.empty()) {
+    std::sort(episodes.begin(), episodes.end(), [](const measured_entry& a, const measured_entry& b) {
+      return std::tuple(a.entry->field("threads"), a.entry->field("pin"), a.median) <
+             std::tuple(b.entry->field("threads"), b.entry->field("pin"), b.median);
+    });
+    out += "\nBare primitives, median time per episode:\n";
+    for (const auto& episode : episodes)
+      out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n", format_ns(episode.median),
+                         spread_of(*episode.entry, "ns_per_episode"),
+                         // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
+                         optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
+                         optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
+                         entry_flags(*episode.entry));
+  }
+
+  // Every ratio the summary prints, paired (paired_blocks.hpp).
+  const std::vector<comparison> plan = plan_comparisons(book);
+  out += fmt::format(
+      "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), one pair per round "
+      "of all comparisons (so its pairs spread over the pairing phase), the median ratio "
+      "over pairs with its {:.0f} % bootstrap interval, against the noise band of {:.0f} % "
+      "(platform/statistics.hpp): \"penalty\" / \"gain\" when the whole interval lies above / below the band, "
+      "\"within noise\" when it lies wholly inside, \"unsure\" when it straddles an edge of the band.\n",
+      100.0 * kConfidence, 100.0 * book.noise);
+  out += "\nFalse-sharing penalty per primitive (a layout whose writers share lines / the best one that isolates "
+         "them):\n";
+  comparisons_of(out, book, plan, comparison_kind::false_sharing);
+  out += "\nMigration penalty (pin:none / pin:compact, each primitive's best pinned layout):\n";
+  comparisons_of(out, book, plan, comparison_kind::migration);
+  out += "\nEach primitive against the best other primitive (best layout each; ratio < 1 and \"gain\": it leads):\n";
+  comparisons_of(out, book, plan, comparison_kind::against_best_other);
+
+
+  // The harness's own cost: the overhead pair.
+  std::optional<double> with_accounting;
+  std::optional<double> without_accounting;
+  std::string overhead_name;
+  for (const auto& entry : book.entries()) {
+    if (entry.field("kind") != "overhead" || !entry.error.empty()) continue;
+    (entry.field("accounting") == "on" ? with_accounting : without_accounting) = entry.median("ns_per_step");
+    overhead_name = entry.name.substr(entry.name.find("/sync:") + 1);
+  }
+  // Paired in each repetition of the "on" side (rk4_entries.cpp): the
+  // figure to read. The entries' own medians follow, for reference.
+  bool paired_shown = false;
+  for (const auto& entry : book.entries()) {
+    if (entry.field("kind") != "overhead" || entry.field("accounting") != "on" || !entry.error.empty()) continue;
+    const auto paired = entry.median("overhead_ratio");
+    const auto range = entry.range("overhead_ratio");
+    if (!paired || !range) continue;
+    out += fmt::format(
+        "\nHarness overhead ({}): accounting and instrumentation on / off, paired in each of {} repetitions: "
+        "median {:.3f}x (range {:.3f}..{:.3f})\n",
+        overhead_name, entry.repetitions.size(), *paired, range->first, range->second);
+    paired_shown = true;
+  }
+  if (with_accounting && without_accounting)
+    out += fmt::format("{}the two entries' medians, measured one after the other: on {} / off {} = {:.3f}x\n",
+                       paired_shown ? "  " : "\nHarness overhead (" + overhead_name + "), ",
+                       format_ns(*with_accounting), format_ns(*without_accounting),
+                       *with_accounting / *without_accounting);
+
+  if (book.scaling) out += render_scaling(scaling_of(book));
+
+  per_mode_medians(out, book);
+
+  out += "\nRan oversubscribed (more threads than CPUs): " + oversubscribed_note(book, book.cpus) + "\n";
+  if (!book.collapsed.empty()) {
+    out += fmt::format("Collapsed ({}: oversubscribed and at least {:.0f}x the best of their kind and thread count; "
+                       "out of the rankings and pairs above):\n",
+                       book.collapsed.size(), kCollapseFactor);
+    for (const auto& name : book.collapsed) out += fmt::format("  {:<62} {}\n", name, median_of(book, name));
+  }
+
+  if (!book.not_applicable.empty()) {
+    std::map<std::string, std::vector<std::string>> by_reason;
+    for (const auto& skipped_entry : book.not_applicable) by_reason[skipped_entry.reason].push_back(skipped_entry.name);
+    out += fmt::format("\nNot applicable ({}):\n", book.not_applicable.size());
+    for (const auto& [reason, names] : by_reason) out += fmt::format("  {} entries: {}\n", names.size(), reason);
+  }
+  if (skipped > 0) {
+    out += fmt::format("\nStalled or skipped ({}):\n", skipped);
+    for (const auto& entry : book.entries())
+      if (!entry.error.empty()) out += "  " + entry.name + ": " + entry.error + "\n";
+  }
+  for (const auto& note : book.notes) out += "\nNote: " + note + "\n";
+  out += "\n" + headline_text(book.headline);
+  return out;
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,66 @@
+// One machine context (bench/results/machine_context.hpp): `run`, `c2c` and
+// `delay`, run briefly on one machine, write the same fingerprint keys with
+// the same values, and `lockstep compare` calls them one machine.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "tests/support/run_command.hpp"
+#include "tests/support/scratch_directory.hpp"
+#include "tests/support/watchdog.hpp"
+
+namespace {
+
+using lockstep::testing::command_result;
+using lockstep::testing::run_command;
+using lockstep::testing::scratch_directory;
+using lockstep::testing::watchdog;
+
+nlohmann::json context_of(const std::string& path) {
+  std::ifstream file(path);
+  const nlohmann::json document = nlohmann::json::parse(file);
+  return document.at("context");
+}
+
+TEST(Fingerprint, RunC2cAndDelayWriteOneMachineContext) {
+  watchdog guard(std::chrono::seconds(180 * lockstep::testing::kSlowdown), "run, c2c and delay did not finish");
+  scratch_directory scratch("lockstep-fingerprint");
+  const std::string run = scratch.file("run.json");
+  const std::string c2c = scratch.file("c2c.json");
+  const std::string delay = scratch.file("delay.json");
+
+  command_result result = run_command({LOCKSTEP_BINARY, "run", "--quick", "--sync", "futex_spin", "--layout",
+                                       "padded64", "--threads", "2", "--pin", "compact", "--repetitions", "1",
+                                       "--min-time", "1ms", "--out", run});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  result = run_command({LOCKSTEP_BINARY, "c2c", "--samples", "5", "--rounds", "5", "--method", "cas", "--out", c2c});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  result = run_command({LOCKSTEP_BINARY, "delay", "--threads", "2", "--period", "1ms", "--duration", "20ms",
+                        "--sync", "futex_spin", "--out", delay});
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+
+  // The fingerprint is what c2c writes (it writes nothing but the machine
+  // context); run and delay carry every one of those keys with the same value.
+  const nlohmann::json reference = context_of(c2c);
+  for (const char* key : {"cpu_model", "hypervisor", "kernel", "topology", "num_cpus", "host_name", "compiler",
+                          "git_revision", "hwloc_version", "lockstep_version", "lockstep_schema"})
+    EXPECT_TRUE(reference.contains(key)) << key;
+  for (const std::string& other : {run, delay}) {
+    const nlohmann::json context = context_of(other);
+    for (const auto& [key, value] : reference.items()) {
+      ASSERT_TRUE(context.contains(key)) << other << " lacks " << key;
+      EXPECT_EQ(context.at(key), value) << other << ": " << key;
+    }
+  }
+
+  result = run_command({LOCKSTEP_BINARY, "compare", run, c2c, delay});
+  EXPECT_EQ(result.exit_status, 0) << result.err;
+  EXPECT_NE(result.out.find("machines: 1 distinct"), std::string::npos) << result.out << result.err;
+}
+
+}  // namespace

@@ -1,0 +1,249 @@
+// The answer of a run (bench/run/headline.hpp) and the comparisons it
+// rests on (bench/run/paired_blocks.hpp), on hand-made run books: which
+// entries collapse, that each unordered comparison is planned once and read
+// the same both ways, and that the combination the headline recommends is the
+// one the paired comparisons put first. No timing is measured or asserted.
+#include <fmt/core.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "bench/run/headline.hpp"
+#include "bench/run/paired_blocks.hpp"
+#include "bench/run/run_book.hpp"
+
+namespace {
+
+namespace bench = lockstep::bench;
+
+std::string step_name(const std::string& sync, const std::string& layout, const std::string& pin, unsigned threads) {
+  return "rk4/sync:" + sync + "/layout:" + layout + "/pin:" + pin + "/threads:" + std::to_string(threads);
+}
+
+// An rk4 entry with `ns_per_step` in each of three repetitions.
+void add_step(bench::run_book& book, const std::string& sync, const std::string& layout, const std::string& pin,
+              unsigned threads, double ns_per_step, bool oversubscribed = false, double migrations = 0.0) {
+  bench::captured_entry entry;
+  entry.name = step_name(sync, layout, pin, threads);
+  entry.fields = {{"kind", "rk4"}, {"sync", sync}, {"layout", layout}, {"pin", pin}, {"threads", std::to_string(threads)}};
+  for (int repetition = 0; repetition < 3; ++repetition)
+    entry.repetitions.push_back({{"ns_per_step", ns_per_step},
+                                 {"oversubscribed", oversubscribed ? 1.0 : 0.0},
+                                 {"migrations_per_kstep", migrations},
+                                 {"vs_c2c", 1.0}});
+  book.record(std::move(entry));
+}
+
+// Measures every planned comparison as pairs whose ratios are all `ratio_of(a, b)`.
+template <class RatioOf>
+void measure(bench::run_book& book, RatioOf ratio_of) {
+  for (const bench::comparison& what : bench::plan_comparisons(book)) {
+    bench::paired_result pair;
+    pair.what = what;
+    const double ratio = ratio_of(what.a, what.b);
+    pair.ratios = {ratio * 0.99, ratio, ratio * 1.01, ratio, ratio * 1.005};
+    pair.estimate = bench::bootstrap_median(pair.ratios);
+    pair.verdict = bench::verdict_of(pair.estimate, book.noise);
+    book.pairs.push_back(pair);
+  }
+}
+
+// Two thread counts on two CPUs: at threads:2 mailbox leads by median,
+// seqlock close behind, std_barrier far behind; at threads:4 (oversubscribed)
+// a pure spinner takes 20 ms a step.
+bench::run_book two_cpu_book() {
+  bench::run_book book;
+  add_step(book, "mailbox", "per_thread", "compact", 2, 1000.0);
+  add_step(book, "mailbox", "packed", "compact", 2, 1100.0);
+  add_step(book, "seqlock", "per_thread", "compact", 2, 1040.0);
+  add_step(book, "seqlock", "padded64", "compact", 2, 1300.0);
+  add_step(book, "std_barrier", "padded64", "compact", 2, 5800.0);
+  add_step(book, "mailbox", "per_thread", "compact", 4, 5000.0, true);
+  add_step(book, "std_barrier", "per_thread", "compact", 4, 30000.0, true);
+  add_step(book, "ck_centralized", "per_thread", "compact", 4, 20'000'000.0, true);
+  return book;
+}
+
+TEST(Collapse, AnOversubscribedEntryAHundredTimesTheBestIsCollapsedAndOutOfTheRanking) {
+  bench::run_book book = two_cpu_book();
+  book.collapsed = bench::find_collapsed(book);
+  EXPECT_EQ(book.collapsed, (std::set<std::string>{step_name("ck_centralized", "per_thread", "compact", 4)}));
+  for (const auto& step : bench::measured_of(book, "rk4", "ns_per_step"))
+    EXPECT_EQ(book.collapsed.count(step.entry->name), 0u) << step.entry->name;
+  for (const auto& what : bench::plan_comparisons(book)) {
+    EXPECT_EQ(book.collapsed.count(what.a), 0u) << what.group;
+    EXPECT_EQ(book.collapsed.count(what.b), 0u) << what.group;
+  }
+}
+
+TEST(Collapse, ASlowEntryWithACpuPerThreadIsNotCollapsed) {
+  bench::run_book book;
+  add_step(book, "mailbox", "per_thread", "compact", 2, 1000.0);
+  add_step(book, "win_event_faithful", "per_thread", "compact", 2, 500'000.0);
+  EXPECT_TRUE(bench::find_collapsed(book).empty());
+}
+
+TEST(PlanComparisons, EachUnorderedPairIsPlannedOnce) {
+  bench::run_book book = two_cpu_book();
+  book.collapsed = bench::find_collapsed(book);
+  std::set<std::pair<std::string, std::string>> seen;
+  for (const auto& what : bench::plan_comparisons(book)) {
+    const auto unordered = std::minmax(what.a, what.b);
+    EXPECT_TRUE(seen.insert(unordered).second) << what.a << " and " << what.b << " are compared twice";
+  }
+}
+
+TEST(PlanComparisons, NoMigrationPairWhereTheUnpinnedEntryDidNotMigrate) {
+  bench::run_book book;
+  add_step(book, "mailbox", "per_thread", "compact", 2, 1000.0);
+  add_step(book, "mailbox", "per_thread", "none", 2, 1010.0, false, 0.0);
+  add_step(book, "seqlock", "per_thread", "compact", 2, 1000.0);
+  add_step(book, "seqlock", "per_thread", "none", 2, 1400.0, false, 2.5);
+  std::vector<std::string> migrating;
+  for (const auto& what : bench::plan_comparisons(book))
+    if (what.kind == bench::comparison_kind::migration) migrating.push_back(what.a);
+  EXPECT_EQ(migrating, (std::vector<std::string>{step_name("seqlock", "per_thread", "none", 2)}));
+}
+
+TEST(AgainstBestOther, TheTwoDirectionsOfOnePairAgree) {
+  bench::run_book book = two_cpu_book();
+  book.collapsed = bench::find_collapsed(book);
+  // seqlock runs 0.9x mailbox side by side: a gain one way, a penalty the other.
+  measure(book, [](const std::string& a, const std::string&) { return a.find("seqlock") != std::string::npos ? 0.9 : 5.8; });
+  const auto views = bench::against_best_other_views(book, "RK4 step pin:compact threads:2");
+  ASSERT_EQ(views.size(), 3u);
+  std::map<std::pair<std::string, std::string>, const bench::best_other_view*> by_direction;
+  for (const auto& view : views) by_direction[{view.entry, view.other}] = &view;
+  unsigned read_both_ways = 0;  // views whose reverse is listed too: the checks below ran on them
+  for (const auto& view : views) {
+    const auto back = by_direction.find({view.other, view.entry});
+    if (back == by_direction.end()) continue;
+    ++read_both_ways;
+    EXPECT_DOUBLE_EQ(view.estimate.median * back->second->estimate.median, 1.0);
+    EXPECT_DOUBLE_EQ(view.estimate.low * back->second->estimate.high, 1.0);
+    EXPECT_EQ(view.verdict, bench::inverse(back->second->verdict)) << view.entry << " against " << view.other;
+    EXPECT_NE(view.inverted, back->second->inverted);
+  }
+  // mailbox against seqlock and seqlock against mailbox: without them the loop checks nothing.
+  EXPECT_EQ(read_both_ways, 2u);
+  EXPECT_EQ(views.front().entry, step_name("mailbox", "per_thread", "compact", 2));
+  EXPECT_TRUE(views.front().inverted);
+  EXPECT_EQ(views.front().verdict, bench::ratio_verdict::penalty);
+}
+
+TEST(Headline, RecommendsWhatThePairsPutFirstWhereTheyOverturnTheMedians) {
+  bench::run_book book = two_cpu_book();
+  book.collapsed = bench::find_collapsed(book);
+  measure(book, [](const std::string& a, const std::string&) { return a.find("seqlock") != std::string::npos ? 0.9 : 5.8; });
+  const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
+  ASSERT_EQ(headline.choices.size(), 2u);
+  const bench::headline_choice& two = headline.choices[0];
+  EXPECT_EQ(two.threads, 2u);
+  EXPECT_EQ(two.entry, step_name("seqlock", "per_thread", "compact", 2));
+  EXPECT_EQ(two.median_leader, step_name("mailbox", "per_thread", "compact", 2));
+  EXPECT_EQ(two.basis, "paired");
+  ASSERT_TRUE(two.runner_up);
+  EXPECT_EQ(two.runner_up->sync, "mailbox");
+  EXPECT_EQ(two.runner_up->verdict, bench::ratio_verdict::penalty);
+  EXPECT_LE(headline.lines.size(), bench::kHeadlineLines);
+}
+
+TEST(Headline, KeepsTheMedianLeaderWhenThePairAgreesOrCannotTell) {
+  for (const double seqlock_over_mailbox : {1.3, 1.01}) {
+    bench::run_book book = two_cpu_book();
+    book.collapsed = bench::find_collapsed(book);
+    measure(book, [&](const std::string& a, const std::string&) {
+      return a.find("seqlock") != std::string::npos ? seqlock_over_mailbox : 5.8;
+    });
+    const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
+    ASSERT_FALSE(headline.choices.empty());
+    const bench::headline_choice& two = headline.choices[0];
+    EXPECT_EQ(two.entry, step_name("mailbox", "per_thread", "compact", 2)) << seqlock_over_mailbox;
+    ASSERT_TRUE(two.runner_up);
+    EXPECT_EQ(two.runner_up->sync, "seqlock");
+    EXPECT_EQ(two.runner_up->verdict, seqlock_over_mailbox > 1.1 ? bench::ratio_verdict::penalty
+                                                                 : bench::ratio_verdict::within_noise);
+    ASSERT_TRUE(two.baseline);
+    EXPECT_NEAR(two.baseline->estimate.median, 5.8, 0.1);
+  }
+}
+
+TEST(Headline, RanksByMediansAndSaysSoWithoutPairs) {
+  bench::run_book book = two_cpu_book();
+  book.collapsed = bench::find_collapsed(book);
+  const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
+  ASSERT_FALSE(headline.choices.empty());
+  EXPECT_EQ(headline.choices[0].entry, step_name("mailbox", "per_thread", "compact", 2));
+  EXPECT_EQ(headline.choices[0].basis, "medians");
+  const std::string text = bench::headline_text(headline);
+  EXPECT_NE(text.find("ranked by medians only"), std::string::npos) << text;
+  EXPECT_NE(text.find("Collapsed when threads outnumber CPUs (1 entries"), std::string::npos) << text;
+}
+
+TEST(Headline, SaysMigrationWasNotMeasuredWhenNothingMigrated) {
+  bench::run_book book;
+  add_step(book, "mailbox", "per_thread", "compact", 2, 1000.0);
+  add_step(book, "mailbox", "per_thread", "none", 2, 1010.0, false, 0.0);
+  const std::string text = bench::headline_text(bench::make_headline(book, {}, 2, "results/x.json"));
+  EXPECT_NE(text.find("the OS migrated none of the 1 pin:none entries"), std::string::npos) << text;
+}
+
+// One rk4 entry at threads:2 whose repetitions ran in the pace modes given
+// (-1: the repetition straddles a change; kNoMode: no trace was analysed),
+// 1000 ns a step in mode 0 and 3000 ns in any other.
+constexpr int kNoMode = -2;
+bench::run_book book_in_modes(const std::vector<int>& modes) {
+  bench::run_book book;
+  bench::captured_entry entry;
+  entry.name = step_name("mailbox", "per_thread", "compact", 2);
+  entry.fields = {{"kind", "rk4"}, {"sync", "mailbox"}, {"layout", "per_thread"}, {"pin", "compact"}, {"threads", "2"}};
+  for (const int mode : modes) {
+    entry.repetitions.push_back({{"ns_per_step", mode == 0 ? 1000.0 : 3000.0}});
+    if (mode != kNoMode) entry.repetitions.back()["pace_mode"] = mode;
+  }
+  book.record(std::move(entry));
+  return book;
+}
+
+TEST(Headline, SaysWhenTheSpreadComesFromTheMachinesPace) {
+  struct known {
+    std::vector<int> modes;
+    std::size_t paces;
+    bool straddles;
+    const char* words;  // after the spread; empty: nothing after it
+  };
+  for (const known& answer : {known{{0, 0, 0, 0, 0}, 1, false, ""}, known{{0, 0, 1, 0, 0}, 2, false, " over 2 paces"},
+                              known{{0, -1, 0, 0, 0}, 1, true, ", straddles a pace change"},
+                              known{{0, 1, 2, -1, 0}, 3, true, " over 3 paces"},
+                              known{{kNoMode, kNoMode, kNoMode}, 0, false, ""}}) {
+    const bench::run_book book = book_in_modes(answer.modes);
+    const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
+    ASSERT_EQ(headline.choices.size(), 1u);
+    const bench::headline_choice& choice = headline.choices.front();
+    EXPECT_EQ(choice.paces, answer.paces);
+    EXPECT_EQ(choice.straddles_pace_change, answer.straddles);
+    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct, answer.words);
+    EXPECT_NE(bench::headline_text(headline).find(spread), std::string::npos) << spread << "\n"
+                                                                              << bench::headline_text(headline);
+    const nlohmann::json json = bench::headline_json(headline);
+    EXPECT_EQ(json["recommendations"][0]["paces"], answer.paces);
+    EXPECT_EQ(json["recommendations"][0]["straddles_pace_change"], answer.straddles);
+  }
+}
+
+TEST(Headline, StaysWithinItsLinesForAManyThreadMatrix) {
+  bench::run_book book;
+  for (unsigned threads = 2; threads <= 64; threads += 2)
+    for (const char* pin : {"compact", "none"}) add_step(book, "mailbox", "per_thread", pin, threads, 1000.0 * threads);
+  const bench::run_headline headline = bench::make_headline(book, {}, 64, "results/x.json");
+  EXPECT_EQ(headline.lines.size(), bench::kHeadlineLines);
+  EXPECT_NE(bench::headline_text(headline).find("more lines of choices"), std::string::npos);
+  EXPECT_EQ(headline.choices.size(), 64u);
+}
+
+}  // namespace

@@ -1,0 +1,296 @@
+// One real run file, read back through the code that wrote its figures: for
+// every paired comparison of tests/fixtures/run/quick-pairs.json (a
+// `lockstep run --quick` file, written by the binary, never edited), the
+// median, interval and verdict recomputed from its ratios by the harness's
+// own calls (bench::bootstrap_median, bench::verdict_of: paired_ratio.hpp)
+// are the file's to the last bit, and the summary `lockstep run --verbose`
+// prints over a run book rebuilt from the file shows each of them.
+// reports/tests/test_run_fixture.py holds reports/lockstep_reports/statistics.py
+// and the figures compare and report print to the same file: a change of the
+// rule (median, quantile, draws, verdict edge) on one side alone fails one of
+// the two. No timing is measured or asserted.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <fmt/core.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <string>
+#include <string_view>
+#include <tuple>
+#include <vector>
+
+#include "bench/run/headline.hpp"
+#include "bench/run/paired_blocks.hpp"
+#include "bench/results/paired_ratio.hpp"
+#include "bench/run/reporters.hpp"
+#include "bench/run/run_book.hpp"
+#include "bench/run/summary.hpp"
+#include "platform/statistics.hpp"
+
+namespace {
+
+namespace bench = lockstep::bench;
+namespace platform = lockstep::platform;
+
+const nlohmann::json& fixture() {
+  static const nlohmann::json document = [] {
+    std::ifstream in(std::string(LOCKSTEP_SOURCE_DIR) + "/tests/fixtures/run/quick-pairs.json");
+    return nlohmann::json::parse(in);
+  }();
+  return document;
+}
+
+bench::comparison_kind kind_named(const std::string& name) {
+  for (const auto kind : {bench::comparison_kind::false_sharing, bench::comparison_kind::migration,
+                          bench::comparison_kind::against_best_other})
+    if (bench::to_string(kind) == name) return kind;
+  ADD_FAILURE() << "a comparison of unknown kind " << name;
+  return bench::comparison_kind::false_sharing;
+}
+
+// A pair of the file as measure_pairs left it, its estimate and verdict
+// recomputed from its ratios as finish_comparison computes them.
+bench::paired_result recomputed(const nlohmann::json& pair) {
+  bench::paired_result result;
+  result.what = {kind_named(pair.at("comparison").get<std::string>()), pair.at("group").get<std::string>(),
+                 pair.at("a").get<std::string>(), pair.at("b").get<std::string>()};
+  result.ratios = pair.at("ratios").get<std::vector<double>>();
+  result.modes = pair.at("modes").get<std::vector<int>>();
+  result.block_ms = pair.at("block_ms").get<double>();
+  result.budget_cut = pair.value("budget_cut", false);
+  result.estimate = bench::bootstrap_median(result.ratios);
+  result.verdict = bench::verdict_of(result.estimate, pair.at("noise").get<double>());
+  return result;
+}
+
+// The run book the run kept: every entry's repetitions (the file's iteration
+// rows, their counters), the pairs recomputed, the noise band and the
+// collapsed entries. The headline is left empty: its lines are the file's
+// (checked below against the pairs), and its probes are not in the book.
+bench::run_book book_of(const nlohmann::json& file) {
+  // Google Benchmark's own fields of a row; every other number is a counter.
+  static const std::set<std::string> own = {"family_index", "per_family_instance_index", "repetitions",
+                                            "repetition_index", "threads", "iterations", "real_time", "cpu_time"};
+  std::vector<bench::captured_entry> entries;
+  for (const auto& row : file.at("benchmarks")) {
+    if (row.at("run_type").get<std::string>() != "iteration") continue;
+    const std::string name = row.at("name").get<std::string>();
+    if (entries.empty() || entries.back().name != name) {
+      bench::captured_entry entry;
+      entry.name = name;
+      entry.fields = bench::parse_entry_name(name);
+      entries.push_back(std::move(entry));
+    }
+    std::map<std::string, double> counters;
+    for (const auto& [key, value] : row.items())
+      if (value.is_number() && own.count(key) == 0) counters[key] = value.get<double>();
+    entries.back().repetitions.push_back(std::move(counters));
+    if (row.value("error_occurred", false)) entries.back().error = row.value("error_message", std::string("error"));
+  }
+  bench::run_book book;
+  for (auto& entry : entries) book.record(std::move(entry));
+  // Google Benchmark's context holds strings: "23.2".
+  book.clock_read_ns = std::stod(file.at("context").at("clock_read_ns").get<std::string>());
+  for (const auto& pair : file.at("lockstep_pairs")) {
+    book.pairs.push_back(recomputed(pair));
+    book.noise = pair.at("noise").get<double>();
+  }
+  for (const auto& name : file.at("lockstep_headline").at("collapsed")) book.collapsed.insert(name.get<std::string>());
+  return book;
+}
+
+// "1.24x [1.17, 1.33] penalty": how the summary and the headline print a pair.
+std::string figure(double median, double low, double high, std::string_view verdict) {
+  return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {}", median, low, high, verdict);
+}
+
+TEST(RunFixture, HoldsPairsOfEveryKindAndBothKindsOfVerdict) {
+  std::set<std::string> kinds;
+  std::set<std::string> verdicts;
+  for (const auto& pair : fixture().at("lockstep_pairs")) {
+    kinds.insert(pair.at("comparison").get<std::string>());
+    verdicts.insert(pair.at("verdict").get<std::string>());
+  }
+  EXPECT_EQ(kinds, (std::set<std::string>{"false_sharing", "migration", "against_best_other"}));
+  EXPECT_TRUE(verdicts.count("penalty") + verdicts.count("gain") > 0);
+  EXPECT_TRUE(verdicts.count("within noise") + verdicts.count("unsure") > 0);
+}
+
+TEST(RunFixture, EveryPairsMedianIntervalAndVerdictAreTheFilesToTheLastBit) {
+  ASSERT_FALSE(fixture().at("lockstep_pairs").empty());
+  for (const auto& pair : fixture().at("lockstep_pairs")) {
+    SCOPED_TRACE(pair.at("a").get<std::string>() + " / " + pair.at("b").get<std::string>());
+    // The file's interval is at the harness's confidence (kConfidence); the
+    // resamples and seed are the harness's defaults, which the file does not carry.
+    EXPECT_EQ(pair.at("confidence").get<double>(), bench::kConfidence);
+    const bench::paired_result result = recomputed(pair);
+    EXPECT_EQ(result.estimate.median, pair.at("median").get<double>());
+    EXPECT_EQ(result.estimate.low, pair.at("ci_low").get<double>());
+    EXPECT_EQ(result.estimate.high, pair.at("ci_high").get<double>());
+    EXPECT_EQ(bench::to_string(result.verdict), pair.at("verdict").get<std::string>());
+    // The verdict of the file's own interval, by the one rule.
+    EXPECT_EQ(platform::to_string(platform::verdict_of(pair.at("ci_low").get<double>(),
+                                                       pair.at("ci_high").get<double>(),
+                                                       pair.at("noise").get<double>())),
+              pair.at("verdict").get<std::string>());
+  }
+}
+
+TEST(RunFixture, TheBookRebuiltFromTheFilePlansTheFilesComparisons) {
+  const bench::run_book book = book_of(fixture());
+  std::set<std::tuple<std::string, std::string, std::string, std::string>> planned;
+  for (const bench::comparison& what : bench::plan_comparisons(book))
+    planned.emplace(std::string(bench::to_string(what.kind)), what.group, what.a, what.b);
+  std::set<std::tuple<std::string, std::string, std::string, std::string>> measured;
+  for (const auto& pair : fixture().at("lockstep_pairs"))
+    measured.emplace(pair.at("comparison").get<std::string>(), pair.at("group").get<std::string>(),
+                     pair.at("a").get<std::string>(), pair.at("b").get<std::string>());
+  EXPECT_EQ(planned, measured);
+}
+
+TEST(RunFixture, TheSummaryPrintsEachPairsFigureFromTheFile) {
+  const bench::run_book book = book_of(fixture());
+  const std::string summary = bench::render_summary(book, "quick-pairs.json", /*verbose=*/true);
+  std::vector<std::string> lines;
+  std::istringstream stream(summary);
+  for (std::string line; std::getline(stream, line);) lines.push_back(line);
+  // A line that holds every one of `parts`, the first at its start.
+  const auto printed = [&](const std::vector<std::string>& parts) {
+    for (const auto& line : lines) {
+      bool all = line.rfind(parts.front(), 0) == 0;
+      for (const auto& part : parts) all = all && line.find(part) != std::string::npos;
+      if (all) return true;
+    }
+    return false;
+  };
+  std::set<std::string> groups_seen;
+  for (const auto& pair : fixture().at("lockstep_pairs")) {
+    const std::string a = pair.at("a").get<std::string>();
+    const std::string b = pair.at("b").get<std::string>();
+    const std::string group = pair.at("group").get<std::string>();
+    SCOPED_TRACE(a + " / " + b);
+    const double median = pair.at("median").get<double>();
+    const double low = pair.at("ci_low").get<double>();
+    const double high = pair.at("ci_high").get<double>();
+    const std::string verdict = pair.at("verdict").get<std::string>();
+    if (pair.at("comparison") != "against_best_other") {
+      // "  sync:futex_spin pin:compact threads:4   packed/padded64 (...): 1.01x [0.98, 1.10] unsure (6 pairs)"
+      EXPECT_TRUE(printed({"  " + group + " ", figure(median, low, high, verdict)})) << summary;
+      continue;
+    }
+    // "    std_barrier   13.6 us (packed)  vs futex_spin   1.24x [1.17, 1.33] penalty (6 pairs)"
+    const std::string sync_a = bench::parse_entry_name(a).at("sync");
+    const std::string sync_b = bench::parse_entry_name(b).at("sync");
+    EXPECT_TRUE(printed({"    " + sync_a + " ", " vs " + sync_b + " ", figure(median, low, high, verdict)})) << summary;
+    // The group's first pair is the runner-up's against the leader: the
+    // leader's line is that pair inverted.
+    if (groups_seen.insert(group).second) {
+      const platform::verdict file_verdict =
+          platform::verdict_of(low, high, pair.at("noise").get<double>());  // the file's, as the rule reads it
+      const bench::ratio_estimate inverted = bench::inverse(bench::ratio_estimate{median, low, high});
+      EXPECT_TRUE(printed({"    " + sync_b + " ", " vs " + sync_a + " ",
+                           figure(inverted.median, inverted.low, inverted.high,
+                                  bench::to_string(bench::inverse(file_verdict))),
+                           "the runner-up's pair inverted"}))
+          << summary;
+    }
+  }
+}
+
+// The headline (the summary's last lines, the report's first) prints paired
+// figures: each is a pair's, read either way round (the group's leader has
+// its pair with the runner-up inverted: paired_ratio.hpp, inverse), or the
+// false-sharing probe's, whose verdict is the rule's.
+TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
+  std::set<std::string> known;
+  for (const auto& pair : fixture().at("lockstep_pairs")) {
+    const bench::paired_result result = recomputed(pair);
+    known.insert(figure(result.estimate.median, result.estimate.low, result.estimate.high,
+                        bench::to_string(result.verdict)));
+    const bench::ratio_estimate inverted = bench::inverse(result.estimate);
+    known.insert(
+        figure(inverted.median, inverted.low, inverted.high, bench::to_string(bench::inverse(result.verdict))));
+  }
+  const auto& headline = fixture().at("lockstep_headline");
+  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+    const double low = probe.at("ci_low").get<double>();
+    const double high = probe.at("ci_high").get<double>();
+    EXPECT_EQ(platform::to_string(platform::verdict_of(low, high, bench::kDefaultNoise)),
+              probe.at("verdict").get<std::string>());
+    known.insert(figure(probe.at("median").get<double>(), low, high, probe.at("verdict").get<std::string>()));
+  }
+  const std::regex paired_figure(R"(\d+\.\d\dx \[\d+\.\d\d, \d+\.\d\d\] (penalty|gain|within noise|unsure))");
+  std::size_t found = 0;
+  for (const auto& line_json : headline.at("lines")) {
+    const std::string line = line_json.get<std::string>();
+    for (auto match = std::sregex_iterator(line.begin(), line.end(), paired_figure); match != std::sregex_iterator();
+         ++match) {
+      ++found;
+      EXPECT_EQ(known.count(match->str()), 1u) << match->str() << " in: " << line;
+    }
+  }
+  EXPECT_GT(found, 0u);
+}
+
+// The probes of the file's headline, as the run measured them.
+bench::known_answers probes_of(const nlohmann::json& file) {
+  bench::known_answers probes;
+  const auto& headline = file.at("lockstep_headline");
+  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+    bench::false_sharing_probe fs;
+    fs.cpus = probe.at("cpus").get<std::string>();
+    fs.sharing_stride = probe.at("sharing_stride_bytes").get<std::size_t>();
+    fs.apart_stride = probe.at("apart_stride_bytes").get<std::size_t>();
+    fs.estimate = {probe.at("median").get<double>(), probe.at("ci_low").get<double>(),
+                   probe.at("ci_high").get<double>()};
+    fs.verdict = bench::verdict_of(fs.estimate, bench::kDefaultNoise);
+    fs.pairs = probe.at("pairs").get<std::size_t>();
+    probes.false_sharing = fs;
+  }
+  if (const auto& probe = headline.at("migration_probe"); !probe.is_null()) {
+    bench::migration_probe migration;
+    migration.cpus = probe.at("cpus").get<std::string>();
+    migration.bytes = probe.at("bytes").get<std::size_t>();
+    migration.move.count = probe.at("moves").get<std::size_t>();
+    migration.move.p50 = probe.at("move_p50_ns").get<double>();
+    migration.refill.p50 = probe.at("refill_p50_ns").get<double>();
+    probes.migration = migration;
+  }
+  return probes;
+}
+
+// Compares `text` with the golden file tests/fixtures/run/<name>; with
+// LOCKSTEP_UPDATE_GOLDEN=1 in the environment it writes the file instead.
+void expect_golden(const std::string& name, const std::string& text) {
+  const std::string path = std::string(LOCKSTEP_SOURCE_DIR) + "/tests/fixtures/run/" + name;
+  if (const char* update = std::getenv("LOCKSTEP_UPDATE_GOLDEN"); update && std::string(update) == "1") {
+    std::ofstream(path) << text;
+    return;
+  }
+  std::ifstream in(path);
+  ASSERT_TRUE(in) << path << " is missing: run with LOCKSTEP_UPDATE_GOLDEN=1 to write it";
+  const std::string golden((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(text, golden) << "the output differs from " << path
+                          << " (LOCKSTEP_UPDATE_GOLDEN=1 rewrites it where the change is meant)";
+}
+
+// What the run prints and derives from the fixture's book, held to golden
+// files: a change of structure must not change a character of it; a change
+// of behaviour rewrites the golden files in the same commit.
+TEST(RunFixture, TheSummaryHeadlineAndTheirJsonMatchTheGoldenFiles) {
+  bench::run_book book = book_of(fixture());
+  book.headline = bench::make_headline(book, probes_of(fixture()), /*cpus=*/2, "quick-pairs.json");
+  expect_golden("quick-pairs.summary.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/false));
+  expect_golden("quick-pairs.summary-verbose.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/true));
+  expect_golden("quick-pairs.headline.json", bench::headline_json(book.headline).dump(2) + "\n");
+}
+
+}  // namespace
