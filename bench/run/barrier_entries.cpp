@@ -25,8 +25,9 @@ void barrier_entry(benchmark::State& state, harness_state& harness, const entry_
   auto episodes = [&barrier](sync::participant& self, std::uint64_t count) {
     for (std::uint64_t episode = 0; episode < count; ++episode) barrier.arrive_and_wait(self);
   };
-  const auto result = measure_entry(state, harness, spec.name(), sync::find_primitive(info.name), plan, team, slots, episodes,
-                                    harness.settings.accounting, "episode");
+  entry_call call{state, harness, spec.name(), sync::find_primitive(info.name), plan, harness.settings.accounting,
+                  "episode", {}};
+  const auto result = measure_entry(call, team_call_runner(team, slots, plan, harness.settings, episodes));
   if (!result) return;
 
   const double episodes_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));

@@ -172,14 +172,16 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // enough to be measured at all, and its clock readings (8 per sampled step)
   // stay a tiny share of it; a fast one keeps the default period.
   kernels::stage_sync_time sync_before{};
-  const std::string name = spec.name();
-  const auto result = measure_entry(state, harness, name, sync::find_primitive(info.name), plan, team, slots, steps, kInstrumented, "step", [&](std::uint64_t units) {
-    if constexpr (Timing == kernels::sync_timing::sampled) {
-      constexpr std::uint64_t kSampledStepsPerBatch = 8;
-      step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1, kernels::kSyncTimingSampleSteps));
-    }
-    sync_before = step.sync_time();
-  });
+  entry_call call{state, harness, spec.name(), sync::find_primitive(info.name), plan, kInstrumented, "step",
+                  [&](std::uint64_t units) {
+                    if constexpr (Timing == kernels::sync_timing::sampled) {
+                      constexpr std::uint64_t kSampledStepsPerBatch = 8;
+                      step.set_sync_sample_period(std::clamp<std::uint64_t>(units / kSampledStepsPerBatch, 1,
+                                                                            kernels::kSyncTimingSampleSteps));
+                    }
+                    sync_before = step.sync_time();
+                  }};
+  const auto result = measure_entry(call, team_call_runner(team, slots, plan, harness.settings, steps));
   if (!result) return;
 
   const double steps_run = static_cast<double>(std::max<std::uint64_t>(result->batches.units_run, 1));

@@ -214,13 +214,12 @@ std::string oversubscribed_note(const run_book& book, unsigned cpus) {
                      cpus, counts);
 }
 
-std::string render_summary(const run_book& book, const std::string& result_path, bool verbose) {
-  std::string out;
-  std::size_t skipped = 0;
-  for (const auto& entry : book.entries()) skipped += entry.error.empty() ? 0 : 1;
+namespace {
+
+// The first lines: what was measured, the in-run calibrations and the pace.
+void calibration_lines(std::string& out, const run_book& book, const std::string& result_path, std::size_t skipped) {
   out += fmt::format("lockstep run: {} entries measured, {} skipped, {} not applicable; results in {}\n",
                      book.entries().size() - skipped, skipped, book.not_applicable.size(), result_path);
-
   out += "\nIn-run calibration: ";
   out += book.c2c_one_way_ns() ? "core-to-core one-way " + format_ns(*book.c2c_one_way_ns()) : "c2c unavailable";
   if (const captured_entry* c2c = book.find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
@@ -235,71 +234,73 @@ std::string render_summary(const run_book& book, const std::string& result_path,
     out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n",
                        book.pace->mode_of.size(), book.pace->summary());
   }
+}
 
-  if (!verbose) {
-    if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
-    short_ranking(out, book, kShortRankingPerGroup);
-    out += "\n" + headline_text(book.headline);
-    return out;
+// The best stage sync at 2 threads pinned, against the one-way core-to-core
+// latency: the latency measured in the same call (vs_c2c_paired) where the
+// entry has it, and the run's calibration (vs_c2c) for reference.
+void best_stage_sync_lines(std::string& out, const std::vector<measured_entry>& steps) {
+  bool header = false;
+  for (const char* ratio_name : {"vs_c2c_paired", "vs_c2c"}) {
+    std::optional<std::pair<const captured_entry*, double>> best_c2c;
+    for (const auto& step : steps) {
+      if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
+      if (const auto ratio = step.entry->median(ratio_name); ratio && (!best_c2c || *ratio < best_c2c->second))
+        best_c2c = {step.entry, *ratio};
+    }
+    if (!best_c2c) continue;
+    const bool paired = std::string_view(ratio_name) == "vs_c2c_paired";
+    const auto latency = best_c2c->first->median("c2c_paired_ns");
+    out += fmt::format(
+        "{}{} {:.2f} ({}; {})\n",
+        header ? "  against the run's calibration: " : "\nBest stage sync at threads:2 pin:compact: ",
+        ratio_name, best_c2c->second, best_c2c->first->name,
+        paired && latency ? fmt::format("one-way latency in the same calls {}", format_ns(*latency))
+                          : "the run's calibration");
+    header = true;
   }
+}
 
+// Every RK4 entry ranked by its median step, then the best stage sync.
+void step_ranking(std::string& out, const run_book& book) {
   std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
   std::sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
-  if (!steps.empty()) {
-    out += "\nRK4 step, ranked by median step time (spread: half the min..max range over repetitions):\n";
-    out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}\n", "rank", "step", "spread", "vs_serial",
-                       "sync/stage", "vs_c2c", "combination");
-    std::size_t rank = 0;
-    for (const auto& step : steps) {
-      const captured_entry& entry = *step.entry;
-      const auto sync_stage = entry.median("sync_ns_per_stage");
-      out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}{}\n", ++rank, format_ns(step.median),
-                         spread_of(entry, "ns_per_step"), optional_number(entry, "vs_serial", "{:.2f}"),
-                         sync_stage ? format_ns(*sync_stage) : "-", optional_number(entry, "vs_c2c", "{:.2f}"),
-                         entry.name, entry_flags(entry));
-    }
-    // The best stage sync at 2 threads pinned, against the one-way
-    // core-to-core latency: the latency measured in the same call
-    // (vs_c2c_paired) where the entry has it, and the run's calibration
-    // (vs_c2c) for reference.
-    bool header = false;
-    for (const char* ratio_name : {"vs_c2c_paired", "vs_c2c"}) {
-      std::optional<std::pair<const captured_entry*, double>> best_c2c;
-      for (const auto& step : steps) {
-        if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
-        if (const auto ratio = step.entry->median(ratio_name); ratio && (!best_c2c || *ratio < best_c2c->second))
-          best_c2c = {step.entry, *ratio};
-      }
-      if (!best_c2c) continue;
-      const bool paired = std::string_view(ratio_name) == "vs_c2c_paired";
-      const auto latency = best_c2c->first->median("c2c_paired_ns");
-      out += fmt::format(
-          "{}{} {:.2f} ({}; {})\n",
-          header ? "  against the run's calibration: " : "\nBest stage sync at threads:2 pin:compact: ",
-          ratio_name, best_c2c->second, best_c2c->first->name,
-          paired && latency ? fmt::format("one-way latency in the same calls {}", format_ns(*latency))
-                            : "the run's calibration");
-      header = true;
-    }
+  if (steps.empty()) return;
+  out += "\nRK4 step, ranked by median step time (spread: half the min..max range over repetitions):\n";
+  out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}\n", "rank", "step", "spread", "vs_serial",
+                     "sync/stage", "vs_c2c", "combination");
+  std::size_t rank = 0;
+  for (const auto& step : steps) {
+    const captured_entry& entry = *step.entry;
+    const auto sync_stage = entry.median("sync_ns_per_stage");
+    out += fmt::format("  {:>4} {:>11} {:>8} {:>9} {:>11} {:>7}  {}{}\n", ++rank, format_ns(step.median),
+                       spread_of(entry, "ns_per_step"), optional_number(entry, "vs_serial", "{:.2f}"),
+                       sync_stage ? format_ns(*sync_stage) : "-", optional_number(entry, "vs_c2c", "{:.2f}"),
+                       entry.name, entry_flags(entry));
   }
+  best_stage_sync_lines(out, steps);
+}
 
+// The bare primitives' episodes, by thread count, placement and median.
+void episode_table(std::string& out, const run_book& book) {
   std::vector<measured_entry> episodes = measured_of(book, "barrier", "ns_per_episode");
-  if (!episodes.empty()) {
-    std::sort(episodes.begin(), episodes.end(), [](const measured_entry& a, const measured_entry& b) {
-      return std::tuple(a.entry->field("threads"), a.entry->field("pin"), a.median) <
-             std::tuple(b.entry->field("threads"), b.entry->field("pin"), b.median);
-    });
-    out += "\nBare primitives, median time per episode:\n";
-    for (const auto& episode : episodes)
-      out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n", format_ns(episode.median),
-                         spread_of(*episode.entry, "ns_per_episode"),
-                         // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
-                         optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
-                         optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
-                         entry_flags(*episode.entry));
-  }
+  if (episodes.empty()) return;
+  std::sort(episodes.begin(), episodes.end(), [](const measured_entry& a, const measured_entry& b) {
+    return std::tuple(a.entry->field("threads"), a.entry->field("pin"), a.median) <
+           std::tuple(b.entry->field("threads"), b.entry->field("pin"), b.median);
+  });
+  out += "\nBare primitives, median time per episode:\n";
+  for (const auto& episode : episodes)
+    out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n", format_ns(episode.median),
+                       spread_of(*episode.entry, "ns_per_episode"),
+                       // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
+                       optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
+                       optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
+                       entry_flags(*episode.entry));
+}
 
-  // Every ratio the summary prints, paired (paired_blocks.hpp).
+// Every ratio the summary prints, paired (paired_blocks.hpp).
+void paired_ratio_tables(std::string& out, const run_book& book) {
   const std::vector<comparison> plan = plan_comparisons(book);
   out += fmt::format(
       "\nPaired ratios: each measured as alternating blocks of its two sides (A B, B A, ...), one pair per round "
@@ -315,9 +316,10 @@ std::string render_summary(const run_book& book, const std::string& result_path,
   comparisons_of(out, book, plan, comparison_kind::migration);
   out += "\nEach primitive against the best other primitive (best layout each; ratio < 1 and \"gain\": it leads):\n";
   comparisons_of(out, book, plan, comparison_kind::against_best_other);
+}
 
-
-  // The harness's own cost: the overhead pair.
+// The harness's own cost: the overhead pair.
+void overhead_lines(std::string& out, const run_book& book) {
   std::optional<double> with_accounting;
   std::optional<double> without_accounting;
   std::string overhead_name;
@@ -345,11 +347,11 @@ std::string render_summary(const run_book& book, const std::string& result_path,
                        paired_shown ? "  " : "\nHarness overhead (" + overhead_name + "), ",
                        format_ns(*with_accounting), format_ns(*without_accounting),
                        *with_accounting / *without_accounting);
+}
 
-  if (book.scaling) out += render_scaling(scaling_of(book));
-
-  per_mode_medians(out, book);
-
+// What was left out and why: oversubscribed, collapsed, not applicable,
+// stalled or skipped entries, and the run's notes.
+void left_out_lines(std::string& out, const run_book& book, std::size_t skipped) {
   out += "\nRan oversubscribed (more threads than CPUs): " + oversubscribed_note(book, book.cpus) + "\n";
   if (!book.collapsed.empty()) {
     out += fmt::format("Collapsed ({}: oversubscribed and at least {:.0f}x the best of their kind and thread count; "
@@ -357,7 +359,6 @@ std::string render_summary(const run_book& book, const std::string& result_path,
                        book.collapsed.size(), kCollapseFactor);
     for (const auto& name : book.collapsed) out += fmt::format("  {:<62} {}\n", name, median_of(book, name));
   }
-
   if (!book.not_applicable.empty()) {
     std::map<std::string, std::vector<std::string>> by_reason;
     for (const auto& skipped_entry : book.not_applicable) by_reason[skipped_entry.reason].push_back(skipped_entry.name);
@@ -370,6 +371,28 @@ std::string render_summary(const run_book& book, const std::string& result_path,
       if (!entry.error.empty()) out += "  " + entry.name + ": " + entry.error + "\n";
   }
   for (const auto& note : book.notes) out += "\nNote: " + note + "\n";
+}
+
+}  // namespace
+
+std::string render_summary(const run_book& book, const std::string& result_path, bool verbose) {
+  std::string out;
+  std::size_t skipped = 0;
+  for (const auto& entry : book.entries()) skipped += entry.error.empty() ? 0 : 1;
+  calibration_lines(out, book, result_path, skipped);
+  if (!verbose) {
+    if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
+    short_ranking(out, book, kShortRankingPerGroup);
+    out += "\n" + headline_text(book.headline);
+    return out;
+  }
+  step_ranking(out, book);
+  episode_table(out, book);
+  paired_ratio_tables(out, book);
+  overhead_lines(out, book);
+  if (book.scaling) out += render_scaling(scaling_of(book));
+  per_mode_medians(out, book);
+  left_out_lines(out, book, skipped);
   out += "\n" + headline_text(book.headline);
   return out;
 }

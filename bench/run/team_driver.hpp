@@ -299,188 +299,49 @@ double median_unit_ns(const batch_record& record);
 // The result file's context says so (lockstep_timing) from lockstep_schema 2
 // on; in files of schema 1, real_time and cpu_time were per batch.
 //
+// One call of the team (run_call over an entry's team, slots, plan and work,
+// bound by team_call_runner): timed batches of units, with or without
+// accounting, the warm-up hook between the warm-up and the first timed batch.
+using call_runner = std::function<call_result(unsigned timed_batches, std::uint64_t units_per_batch,
+                                              bool accounting, std::function<void(std::uint64_t)> warmed_up)>;
+
+template <class Team, class Work>
+call_runner team_call_runner(Team& team, std::vector<participant_slot>& slots, const platform::placement_plan& plan,
+                             const run_settings& settings, Work& work) {
+  return [&team, &slots, &plan, &settings, &work](unsigned timed_batches, std::uint64_t units_per_batch,
+                                                  bool accounting, std::function<void(std::uint64_t)> warmed_up) {
+    return run_call(team, slots, plan, timed_batches, units_per_batch, settings, accounting, work,
+                    std::move(warmed_up));
+  };
+}
+
+// What one call of an entry is: which entry, its primitive's facts
+// (sync/registry.hpp; nullptr for an entry of no primitive: the stall
+// reasons and the per-primitive stall count use them), its placement, and
+// how its timed call runs.
+struct entry_call {
+  benchmark::State& state;
+  harness_state& harness;
+  std::string name;
+  const sync::primitive_info* primitive = nullptr;
+  const platform::placement_plan& plan;
+  bool accounting = true;     // the timed call's accounting and instrumentation
+  const char* unit = "step";  // "step" or "episode": the counters' names
+  // Runs between the timed call's warm-up batch and its first timed batch,
+  // with the units per timed batch (the team waiting: a baseline for what the
+  // timed batches accumulate). May be empty.
+  std::function<void(std::uint64_t)> warmed_up;
+};
+
 // One call of an entry, the whole protocol: skip at once if this entry or too
 // many of its primitive's entries stalled before; probe the batch size on the
-// first call (8 batches of one unit); run the timed call, calling
-// warmed_up(units per timed batch) between its warm-up batch and its first
-// timed batch (the team waiting: a baseline for what the timed batches
-// accumulate); feed Google Benchmark the
-// timed batches as its iterations (per unit, as above). Returns the call's
-// result, or nothing when the entry was skipped (SkipWithError, with the
-// reason). `primitive`: the registry's facts about the entry's primitive
-// (sync/registry.hpp), for the stall reasons and the per-primitive stall
-// count; nullptr for an entry of no primitive.
-template <class Team, class Work>
-std::optional<call_result> measure_entry(benchmark::State& state, harness_state& harness, const std::string& name,
-                                         const sync::primitive_info* primitive, const platform::placement_plan& plan,
-                                         Team& team, std::vector<participant_slot>& slots, Work& work,
-                                         bool accounting, const char* unit,
-                                         std::function<void(std::uint64_t)> warmed_up = {}) {
-  const run_settings& settings = harness.settings;
-  const auto skip = [&](const std::string& reason) {
-    state.SkipWithError(reason.c_str());
-    return std::optional<call_result>{};
-  };
-  // Google Benchmark requires every repetition of an entry to report the same
-  // iteration count (it aborts otherwise), and a skipped call reports none.
-  // So once a repetition of this entry was measured, a later call that stops
-  // early still walks all its iterations, then is flagged as an error, which
-  // keeps it out of the aggregates; its times are not a measurement.
-  // Google Benchmark 1.7.1 also computes an entry's aggregates from its first
-  // repetition's statistics list, which it leaves uninitialised when that
-  // repetition was flagged (google/benchmark#1406): a flagged first
-  // repetition followed by two measured ones read a wild pointer and crashed
-  // the run (exit 139). A call flagged while Google Benchmark still sizes the
-  // first repetition becomes that repetition, so no later call may measure:
-  // once a call of an entry stopped, every later call of it stops too, and
-  // either every repetition is flagged or the first one was measured.
-  const bool measured_before = harness.measured.count(name) > 0;
-  const auto flag_measured_entry = [&](const call_result& result, const std::string& reason) {
-    std::vector<std::int64_t> times = result.batches.batch_ns;
-    std::int64_t filler = result.batches.slowest_unit_ns * static_cast<std::int64_t>(result.batches.units_per_batch);
-    if (!times.empty())
-      filler = std::llround(platform::median(std::vector<double>(times.begin(), times.end())));
-    std::size_t batch = 0;
-    for (auto _ : state) {
-      state.SetIterationTime(static_cast<double>(batch < times.size() ? times[batch] : filler) * 1e-9);
-      ++batch;
-    }
-    const std::string message = reason + " (this repetition stopped after " + std::to_string(times.size()) + " of " +
-                                std::to_string(batch) + " batches; its times are not a measurement)";
-    state.SkipWithError(message.c_str());
-    return std::optional<call_result>{};
-  };
-
-  const std::string stall_key =
-      (primitive != nullptr ? std::string(primitive->name) : name) + " threads:" + std::to_string(plan.threads);
-  if (const auto known = harness.stalled.find(name); known != harness.stalled.end()) {
-    if (measured_before) return flag_measured_entry(call_result{}, "an earlier call stopped: " + known->second);
-    return skip(known->second);
-  }
-  if (!measured_before && primitive != nullptr) {
-    const unsigned stalls = harness.stalls_of_sync[stall_key];
-    if (stalls >= harness.stalls_before_skipping_sync) {
-      const std::string reason =
-          "skipped: " + stall_key + " already stalled in " + std::to_string(stalls) + " entries of this run";
-      harness.stalled[name] = reason;
-      return skip(reason);
-    }
-  }
-  // A stall (one unit beyond the bound) says something about the primitive;
-  // running out of the call's budget only about this call.
-  const auto record_stop = [&](const call_result& result) {
-    std::string reason = stall_reason(result, unit, primitive != nullptr && primitive->pure_spin,
-                                      primitive != nullptr && primitive->may_lose_wakeups, plan, settings);
-    harness.stalled[name] = reason;
-    if (measured_before) return flag_measured_entry(result, reason);
-    if (result.batches.stalled && primitive != nullptr) ++harness.stalls_of_sync[stall_key];
-    return skip(reason);
-  };
-  const auto record_placement_failure = [&](const call_result& result) {
-    const std::string reason = "cannot place the team: " + result.failure;
-    harness.stalled[name] = reason;
-    if (measured_before) return flag_measured_entry(result, reason);
-    return skip(reason);
-  };
-
-  auto batch_size = harness.units_per_batch.find(name);
-  if (batch_size == harness.units_per_batch.end()) {
-    // The first probe (8 batches of one unit) can land on a slow moment, or
-    // weigh the harness barrier's own cost (a sleeping team's wake-up) in
-    // its unit, and settle on batches far shorter than the target: the
-    // entry's figure is then mostly the harness's. So the size is checked
-    // by batches of the size it chose, and grown by what they fell short,
-    // up to kRegrowths times; batches still under a quarter of the target
-    // are flagged (harness.short_batches), not hidden. The median, not the
-    // fastest batch: sized from the fastest, an entry whose steps run at two
-    // speeds (win_event) took batches many times the target, and the default
-    // run twice as long. The timed call below catches what a slow probe
-    // still gets wrong.
-    //
-    // A unit that alone outlasts the target makes a batch of one unit
-    // whatever the probe says, so a first batch of one unit that does is
-    // the whole probe: an oversubscribed pure spinner (tens of ms a step)
-    // spent about eleven units, most of a second, on a probe whose answer
-    // was known after one; collapsed entries took half of the quick run.
-    constexpr unsigned kProbeBatches = 8;
-    constexpr unsigned kCheckBatches = 3;
-    constexpr int kRegrowths = 3;
-    call_result first = run_call(team, slots, plan, 1, 1, settings, false, work);
-    if (!first.failure.empty()) return record_placement_failure(first);
-    if (first.batches.stalled || first.batches.over_budget) return record_stop(first);
-    const bool slow_unit = median_unit_ns(first.batches) >= static_cast<double>(settings.target_batch_ns);
-    call_result probe = slow_unit ? std::move(first) : run_call(team, slots, plan, kProbeBatches, 1, settings, false, work);
-    if (!probe.failure.empty()) return record_placement_failure(probe);
-    if (probe.batches.stalled || probe.batches.over_budget) return record_stop(probe);
-    std::uint64_t units = units_for_batch(median_unit_ns(probe.batches), settings);
-    bool short_batch = false;
-    for (int regrowth = 0; regrowth <= kRegrowths && !slow_unit; ++regrowth) {
-      call_result check = run_call(team, slots, plan, kCheckBatches, units, settings, false, work);
-      if (!check.failure.empty()) return record_placement_failure(check);
-      if (check.batches.stalled || check.batches.over_budget) return record_stop(check);
-      const double batch_ns = median_unit_ns(check.batches) * static_cast<double>(units);
-      short_batch = batch_ns < static_cast<double>(settings.target_batch_ns) / 4.0;
-      if (batch_ns >= static_cast<double>(settings.target_batch_ns) / 2.0 || units >= kMaxUnitsPerBatch) break;
-      units = units_for_batch(median_unit_ns(check.batches), settings);
-    }
-    if (short_batch) harness.short_batches.insert(name);
-    batch_size = harness.units_per_batch.emplace(name, units).first;
-  }
-
-  const auto wanted = static_cast<unsigned>(std::min<benchmark::IterationCount>(state.max_iterations, 1'000'000));
-  // The size can still be wrong by orders of magnitude: an unpinned team's
-  // probe and checks, while the scheduler still places its new threads on
-  // one CPU, took 10-100x a step and settled on ~20 steps per batch instead
-  // of ~30,000; every later call and every paired block of the entry then
-  // read 1.4-2.4x slow (mailbox's 2-thread bare step at pin:none, in 2 of 8
-  // processes). A timed call whose median batch is under kShortBatch of the
-  // target is re-sized from its own median and run again, before Google
-  // Benchmark sees it, up to kResizes times; a re-size only grows the batch
-  // (at least doubling it) and keeps the call within a quarter of its budget.
-  constexpr double kShortBatch = 1.0 / 8.0;
-  constexpr int kResizes = 2;
-  call_result result;
-  long pace_before = 0;
-  long pace_after = 0;
-  for (int resize = 0;; ++resize) {
-    pace_before = pace_reading_before(harness);
-    result = run_call(team, slots, plan, wanted, batch_size->second, settings, accounting, work, warmed_up);
-    pace_after = pace_reading_after(harness);
-    if (!result.failure.empty()) return record_placement_failure(result);
-    if (result.batches.stalled || result.batches.over_budget || result.batches.batch_ns.size() < wanted)
-      return record_stop(result);
-    const double unit_ns = median_unit_ns(result.batches);
-    const double target = static_cast<double>(settings.target_batch_ns);
-    const double batch_ns = unit_ns * static_cast<double>(result.batches.units_per_batch);
-    if (batch_ns >= target / 4.0) harness.short_batches.erase(name);
-    if (resize == kResizes || unit_ns <= 0.0 || batch_ns >= target * kShortBatch) break;
-    const double affordable = static_cast<double>(settings.call_budget_ns) / 4.0 / (unit_ns * wanted);
-    const auto units = std::min(units_for_batch(unit_ns, settings),
-                                static_cast<std::uint64_t>(std::min(affordable, double(kMaxUnitsPerBatch))));
-    if (units < 2 * batch_size->second) break;
-    batch_size->second = units;
-  }
-  harness.measured.insert(name);
-  set_pace_counters(state, harness, pace_before, pace_after);
-  if (harness.short_batches.count(name) > 0) state.counters["short_batches"] = 1.0;
-
-  // A batch's time (see above): Google Benchmark sizes the next repetition's
-  // iterations by it; the JSON reporter writes it per unit.
-  const double units = static_cast<double>(result.batches.units_per_batch);
-  std::size_t batch = 0;
-  for (auto _ : state) {
-    state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) * 1e-9);
-    ++batch;
-  }
-  const std::string unit_name(unit);
-  state.counters[unit_name + "s_per_batch"] = units;
-  const double units_timed = static_cast<double>(result.batches.batch_ns.size()) * units;
-  if (result.lead_cpu_ns >= 0)
-    state.counters["cpu_ns_per_" + unit_name] = static_cast<double>(result.lead_cpu_ns) / units_timed;
-  if (result.team_cpu_ns >= 0)
-    state.counters["team_cpu_ns_per_" + unit_name] = static_cast<double>(result.team_cpu_ns) / units_timed;
-  return result;
-}
+// first call (8 batches of one unit, then checks); run the timed call
+// (re-sized when its batches came out far too short); feed Google Benchmark
+// the timed batches as its iterations (per unit, as above). Returns the
+// call's result, or nothing when the entry was skipped (SkipWithError, with
+// the reason). Not a template: every entry's source calls this one
+// definition (team_driver.cpp) through its call_runner.
+std::optional<call_result> measure_entry(entry_call& call, const call_runner& run);
 
 // Per-unit time of a call's timed batches, in ns.
 double ns_per_unit(const call_result& result);

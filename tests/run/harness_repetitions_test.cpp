@@ -87,8 +87,9 @@ TEST(HarnessRepetitions, ACallStoppedWhileSizingTheFirstRepetitionStopsEveryLate
                                    for (std::uint64_t unit = 0; unit < units; ++unit)
                                      benchmark::DoNotOptimize(sink += unit);
                                  };
-                                 (void)bench::measure_entry(state, harness, name, nullptr, plan,
-                                                            team, slots, work, false, "unit");
+                                 bench::entry_call call{state, harness, name, nullptr, plan, false, "unit", {}};
+                                 (void)bench::measure_entry(
+                                     call, bench::team_call_runner(team, slots, plan, harness.settings, work));
                                  harness.settings.call_budget_ns = normal_budget;
                                })
       ->UseManualTime()
