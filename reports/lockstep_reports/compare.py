@@ -81,7 +81,7 @@ from .fields import (BACK_TO_BACK_ORDER, C2C_CONTEXT, C2C_COUNTER, COUNTERS_SHOW
                      PER_UNIT_TIMES_SCHEMA, SERIAL_CONTEXT, SYNC_COUNTER, UNAVAILABLE, VS_C2C_COUNTER,
                      VS_SERIAL_COUNTER)
 from .formatting import format_ns, format_number
-from .inputs import Run, RunFile
+from .run_file import Run, RunFile
 from .mpi_context import mpi_difference_lines
 from .names import BenchmarkKey, parse_name
 

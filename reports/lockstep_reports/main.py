@@ -11,7 +11,8 @@ import math
 import os
 import sys
 
-from .inputs import InputError, RunFile, load_for_compare, unique_labels
+from .inputs import InputError, load_for_compare, unique_labels
+from .run_file import RunFile
 from .output import OutputError, check_directory_target, check_file_target, write_file
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2

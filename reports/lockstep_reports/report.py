@@ -29,8 +29,11 @@ from .compare import calibration, fingerprint, layout_effects, per_mode_medians,
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LONGEST_NS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
-from .inputs import (C2cFile, DelayExtras, DelayFile, RunFile, VerifyFile, against_best_other_views, load_any,
-                     unique_labels)
+from .c2c_reader import C2cFile
+from .delay_reader import DelayExtras, DelayFile
+from .inputs import load_any, unique_labels
+from .run_file import RunFile, against_best_other_views
+from .verify_reader import VerifyFile
 from .names import parse_name
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")

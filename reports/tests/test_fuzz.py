@@ -50,7 +50,7 @@ from collections import Counter
 from support import FIXTURES, REPORTS_DIR
 
 from lockstep_reports import fields, figures
-from lockstep_reports.inputs import json_kind
+from lockstep_reports.schemas import json_kind
 from lockstep_reports.main import main
 from lockstep_reports.names import parse_name
 

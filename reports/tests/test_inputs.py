@@ -8,8 +8,11 @@ import unittest
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
 from lockstep_reports import statistics
-from lockstep_reports.inputs import (InputError, against_best_other_views, load_any, load_run_file, C2cFile,
-                                     DelayFile, VerifyFile)
+from lockstep_reports.c2c_reader import C2cFile
+from lockstep_reports.delay_reader import DelayFile
+from lockstep_reports.inputs import InputError, load_any, load_run_file
+from lockstep_reports.run_file import against_best_other_views
+from lockstep_reports.verify_reader import VerifyFile
 from lockstep_reports.names import parse_name
 
 

@@ -11,7 +11,7 @@ import tempfile
 import unittest
 
 from support import REPORTS_DIR, run_tool
-from lockstep_reports import compare, inputs, statistics
+from lockstep_reports import compare, inputs, run_file, run_reader, statistics
 from lockstep_reports.formatting import format_number
 
 FIXTURE = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.json")
@@ -24,7 +24,7 @@ def figure(median: float, low: float, high: float, verdict: str) -> str:
     return f"{median:.2f}x [{low:.2f}, {high:.2f}] {verdict}"
 
 
-def recomputed(pair: inputs.PacePair) -> inputs.PacePair:
+def recomputed(pair: run_file.PacePair) -> run_file.PacePair:
     """The pair with its median, interval and verdict recomputed from its ratios by statistics.py, with lockstep
     run's resamples and seed (the file carries its confidence and noise band, not those two)."""
     median, low, high = statistics.bootstrap_median(pair.ratios, pair.confidence, statistics.PAIR_RESAMPLES,
@@ -38,7 +38,7 @@ class RunFixture(unittest.TestCase):
     def setUpClass(cls):
         kind, document = inputs.read_document(FIXTURE)
         cls.kind = kind
-        cls.run_file = inputs.run_file_from_document(FIXTURE, "quick-pairs.json", document)
+        cls.run_file = run_reader.run_file_from_document(FIXTURE, "quick-pairs.json", document)
         cls.recomputed = [recomputed(pair) for pair in cls.run_file.pairs]
 
     def test_the_file_is_a_run_with_pairs_of_every_kind_and_both_kinds_of_verdict(self):
@@ -64,14 +64,14 @@ class RunFixture(unittest.TestCase):
 
     def test_the_report_prints_each_pairs_figures(self):
         """The report's Markdown holds a row per pair, and per "against the best other" group the leader's row
-        (its pair with the runner-up inverted, inputs.against_best_other_views), each with the median, interval
+        (its pair with the runner-up inverted, run_file.against_best_other_views), each with the median, interval
         and verdict statistics.py recomputes."""
         with tempfile.TemporaryDirectory(prefix="lockstep-run-fixture-") as directory:
             status, _, err = run_tool("report", FIXTURE, "--out", directory)
             self.assertEqual(status, 0, err)
             with open(os.path.join(directory, "report.md"), encoding="utf-8") as page:
                 rows = [line for line in page.read().splitlines() if line.startswith("|")]
-        expected = self.recomputed + [view for view in inputs.against_best_other_views(self.recomputed)
+        expected = self.recomputed + [view for view in run_file.against_best_other_views(self.recomputed)
                                       if view.inverted]
         self.assertTrue(any(view.inverted for view in expected))
         for pair in expected:

@@ -1,0 +1,250 @@
+"""A `lockstep run` (or `lockstep mpi`) file as the tools hold it: its entries and their repetitions, the pace
+trace, the paired ratios, the scaling curve and the run's answer (run_reader.py reads and checks them)."""
+from __future__ import annotations
+
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+from . import fields, statistics
+from .names import BenchmarkKey
+
+if TYPE_CHECKING:
+    from .mpi_reader import MpiDetails
+
+
+@dataclass(frozen=True)
+class RepetitionPace:
+    """The pace measured around one repetition (fields.PACE_COUNTERS): the mean of the readings before and
+    after it. None where the file says NaN (unavailable: c2c on a machine of one CPU); mode is an index into
+    the file's PaceTrace.modes, or fields.OUTLIER_MODE when the two readings disagree (a change of pace
+    during the repetition)."""
+
+    c2c_ns: float | None
+    serial_ns: float | None
+    mode: int | None
+
+    @property
+    def straddles(self) -> bool:
+        return self.mode == fields.OUTLIER_MODE
+
+
+@dataclass
+class Repetition:
+    """One measured value set: real_ns is the per-unit counter (fields.UNIT_COUNTERS) where the entry has
+    one, else Google Benchmark's real_time; cpu_ns is its cpu_time; counters holds the read counters that
+    are finite numbers; pace the pace around it (None in a file written before the pace trace)."""
+
+    real_ns: float
+    cpu_ns: float
+    counters: dict[str, float]
+    pace: RepetitionPace | None = None
+
+
+@dataclass
+class Run:
+    """Everything one file says about one benchmark (its repetitions and the aggregates the tools read)."""
+
+    key: BenchmarkKey
+    names: list[str] = field(default_factory=list)  # names as written in the file
+    repetitions: list[Repetition] = field(default_factory=list)
+    aggregates: dict[str, Repetition] = field(default_factory=dict)  # fields.READ_AGGREGATES
+    errors: list[str] = field(default_factory=list)
+    unavailable: Counter = field(default_factory=Counter)  # what was NaN or infinite -> how many values
+
+    @property
+    def errored(self) -> bool:
+        return bool(self.errors)
+
+    def times_ns(self, time_kind: str = "real") -> list[float]:
+        """Per-repetition times: per unit (RK4 step, barrier episode) where the entry has the counter,
+        else per Google Benchmark iteration; CPU time per iteration for time_kind "cpu"."""
+        return [r.real_ns if time_kind == "real" else r.cpu_ns for r in self.repetitions]
+
+    def aggregate_time_ns(self, aggregate: str, time_kind: str = "real") -> float | None:
+        entry = self.aggregates.get(aggregate)
+        if entry is None:
+            return None
+        return entry.real_ns if time_kind == "real" else entry.cpu_ns
+
+    def counter_values(self, counter: str) -> list[float]:
+        """The counter's value in each repetition that has it, else its median aggregate's."""
+        values = [r.counters[counter] for r in self.repetitions if counter in r.counters]
+        if not values and "median" in self.aggregates and counter in self.aggregates["median"].counters:
+            values = [self.aggregates["median"].counters[counter]]
+        return values
+
+
+@dataclass(frozen=True)
+class PaceReading:
+    """One reference reading of the pace trace, taken between blocks of measurement."""
+
+    t_s: float  # seconds since the run started
+    c2c_ns: float | None  # one-way core-to-core latency on the pinned pair; None on a machine of one CPU
+    serial_ns: float  # the serial RK4 step
+    mode: int  # index into PaceTrace.modes, fields.OUTLIER_MODE for a reading that belongs to no mode
+
+
+@dataclass(frozen=True)
+class PaceMode:
+    """One pace the machine ran at: the medians of its readings, and its share of the run's time."""
+
+    mode: int
+    c2c_ns: float | None
+    serial_ns: float
+    share: float  # 0..1
+    readings: int
+
+
+@dataclass(frozen=True)
+class PaceTrace:
+    """The file's "lockstep_pace": the reference, the readings in time order, the modes fastest first."""
+
+    reference: str
+    cpus: tuple[int, ...]  # the pinned pair of the c2c reading; () on a machine of one CPU
+    readings: tuple[PaceReading, ...]
+    modes: tuple[PaceMode, ...]
+    changes: int
+    summary: str
+
+
+@dataclass(frozen=True)
+class PacePair:
+    """One entry of "lockstep_pairs": a ratio a/b measured as a pair, both sides in alternating short blocks,
+    one ratio per adjacent pair of blocks."""
+
+    comparison: str  # fields.PAIR_COMPARISONS
+    group: str
+    a: str  # the numerator entry's name, as written
+    b: str
+    a_key: BenchmarkKey
+    b_key: BenchmarkKey
+    ratios: tuple[float, ...]
+    modes: tuple[int, ...]  # the pace mode of each pair, fields.OUTLIER_MODE when unknown
+    median: float
+    ci_low: float
+    ci_high: float
+    confidence: float
+    noise: float  # a fraction: 0.05 is 5 %
+    verdict: str  # fields.PAIR_VERDICTS
+    block_ms: float
+    inverted: bool = False  # the pair read the other way round (inverse): b / a
+
+    def inverse(self) -> "PacePair":
+        """The same comparison read the other way round, b / a: each ratio and the median inverted, the
+        interval [1 / ci_high, 1 / ci_low], the verdict mirrored by statistics.inverse_verdict (penalty and
+        gain swapped; within noise and unsure stay), not recomputed."""
+        return PacePair(self.comparison, self.group, self.b, self.a, self.b_key, self.a_key,
+                        tuple(1.0 / ratio for ratio in self.ratios), self.modes, 1.0 / self.median,
+                        1.0 / self.ci_high, 1.0 / self.ci_low, self.confidence, self.noise,
+                        statistics.inverse_verdict(self.verdict), self.block_ms, not self.inverted)
+
+
+def _best_other_group(pair: PacePair) -> tuple:
+    """Which "each primitive against the best other" group a pair belongs to: its kind of entry (an RK4 step,
+    a bare episode), model, placement and thread count, read from its numerator's name."""
+    key = pair.a_key
+    return key.family, key.get("model") or "", key.get("pin") or "", key.threads or 0
+
+
+def against_best_other_views(pairs: list[PacePair]) -> list[PacePair]:
+    """Every primitive's line of "each primitive against the best other", group by group in the file's order.
+
+    Since lockstep run measures each unordered comparison once (docs/pace.md), a group's leader (its fastest
+    primitive by median) has no pair of its own: every pair of the group has the leader as its denominator,
+    and the leader's line is its pair with the runner-up read the other way round (PacePair.inverse), put
+    first. The runner-up's pair is the group's first in the file (lockstep run writes them in its plan's
+    order, the runner-up first: bench/run/paired_blocks.hpp). A file written before that, where every
+    primitive has a pair of its own, leader included, gives its pairs as they are."""
+    groups: dict[tuple, list[PacePair]] = {}
+    for pair in pairs:
+        if pair.comparison == "against_best_other":
+            groups.setdefault(_best_other_group(pair), []).append(pair)
+    views = []
+    for members in groups.values():
+        leaders = {pair.b_key for pair in members}
+        leader = next(iter(leaders))
+        if len(leaders) == 1 and all(pair.a_key != leader for pair in members):
+            views.append(members[0].inverse())
+        views += members
+    return views
+
+
+@dataclass(frozen=True)
+class ScalingPoint:
+    sync: str
+    threads: int
+    layout: str  # the best layout at this count
+    model: str
+    value_ns: float  # the curve's counter
+    oversubscribed: bool
+    range_ns: tuple[float, float] | None = None  # its min..max over repetitions (None: an earlier file)
+
+
+@dataclass(frozen=True)
+class ScalingCurve:
+    """The file's "lockstep_scaling" (`lockstep run --scaling`), as the run computed it (bench/run/scaling.hpp)."""
+    pin: str
+    counter: str
+    threads: tuple[int, ...]
+    points: tuple[ScalingPoint, ...]
+    best: str | None
+    c2c_one_way_ns: float | None
+
+
+@dataclass
+class RunFile:
+    path: str
+    label: str
+    context: dict  # the context keys the tools read (fields.FINGERPRINT_KEYS), checked
+    runs: dict[BenchmarkKey, Run]
+    warnings: list[str] = field(default_factory=list)
+    pace: PaceTrace | None = None  # None: written before the pace trace
+    pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
+    scaling: ScalingCurve | None = None  # None: not a --scaling run
+    headline: Headline | None = None  # None: written before lockstep_headline
+    mpi: "MpiDetails | None" = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
+
+    def context_number(self, key: str) -> float | None:
+        """A numeric context value (lockstep writes them as text), or None when unavailable."""
+        value = self.context.get(key)
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            return None
+        return number if math.isfinite(number) and number > 0 else None
+
+    @property
+    def collapsed(self) -> frozenset:
+        """The entries (BenchmarkKey) the run found collapsed: out of every ranking, ratio and colour scale."""
+        return self.headline.collapsed_keys if self.headline else frozenset()
+
+
+@dataclass(frozen=True)
+class Recommendation:
+    """One of lockstep_headline's recommendations: the combination to use at one model, thread count and
+    placement, as lockstep run chose it (bench/run/headline.hpp)."""
+
+    threads: int
+    pin: str
+    model: str  # "": the paper's two-mass system
+    entry: str  # its entry's name, as written
+    entry_key: BenchmarkKey
+    sync: str
+    layout: str
+    ns_per_step: float
+    basis: str  # fields.HEADLINE_BASES: "paired" (its pair with the runner-up decided) or "medians"
+
+
+@dataclass(frozen=True)
+class Headline:
+    """The file's "lockstep_headline": the run's answer as its terminal printed it (lines, shown verbatim:
+    the same fact reads the same everywhere), the recommendations, and the entries that collapsed
+    (oversubscribed and at least 100 times the best of their kind and thread count: kept out of rankings,
+    ratios and colour scales)."""
+
+    lines: tuple[str, ...]
+    recommendations: tuple[Recommendation, ...]
+    collapsed: tuple[str, ...]  # entry names as written, each once
+    collapsed_keys: frozenset

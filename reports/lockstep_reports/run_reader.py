@@ -1,0 +1,339 @@
+"""The reader of `lockstep run` files (Google Benchmark JSON with lockstep's keys) and of `lockstep mpi` files,
+whose benchmarks have the same shape: run_file_from_document turns a document read_document (inputs.py) has
+checked against its schema into a RunFile (run_file.py), checking what the schema cannot say: an entry appears
+once, the repetitions of one benchmark carry the same counters, a time in its unit lies within
+fields.SHORTEST_NS..LONGEST_NS, a mode names one of the trace's, the headline's lines and recommendations.
+
+NaN and Infinity in a benchmark entry (Google Benchmark writes them for a value it could not compute) make that
+one value unavailable and the file's warnings count what was left out; anywhere else they are a damaged file.
+"""
+from __future__ import annotations
+
+import json
+import math
+
+from . import fields, schemas
+from .checks import CheckedObject, InputError, checked_number, fail
+from .context_reader import read_context
+from .mpi_reader import read_mpi
+from .names import BenchmarkKey, parse_name
+from .run_file import (Headline, PaceMode, PacePair, PaceReading, PaceTrace, Recommendation, Repetition,
+                       RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
+from .schemas import json_kind, shown
+
+
+def _measured_values(entry: CheckedObject, run: Run, scale: float, least: float,
+                     batch_times: bool = False) -> Repetition | None:
+    """An entry's times (in ns: scale is its time unit's size) and read counters, checked; None when its
+    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold.
+    `batch_times`: a file written before lockstep schema fields.PER_UNIT_TIMES_SCHEMA, whose real_time and
+    cpu_time of an entry with a per-unit counter are per batch; its cpu_time is then rescaled per unit by the
+    batch size the two say (real_time / the counter). From that schema on both are per unit already."""
+    times = {key: checked_number(entry, key, entry.get(key, required=True), least, fields.LONGEST_NS, " ns",
+                                 non_finite=True, scale=scale)
+             for key in ("real_time", "cpu_time")}
+    counters = {}
+    for name in fields.READ_COUNTERS:
+        if name not in entry.value:
+            continue
+        if name in fields.DURATION_COUNTERS:
+            low, high = fields.SHORTEST_NS, fields.LONGEST_NS
+        elif name in fields.SIGNED_COUNTERS:
+            low, high = -fields.LONGEST_NS, fields.LONGEST_NS
+        else:
+            low, high = 0.0, fields.LARGEST_AMOUNT
+        counters[name] = entry.number(name, low, high, non_finite=True)
+    unit_counter = next((name for name in fields.UNIT_COUNTERS if name in counters), None)
+    real = counters[unit_counter] if unit_counter else times["real_time"]
+    if batch_times and unit_counter and math.isfinite(times["real_time"]):
+        times["cpu_time"] *= real / times["real_time"]
+    if not (math.isfinite(real) and math.isfinite(times["cpu_time"])):
+        run.unavailable["repetition time"] += 1
+        return None
+    finite = {}
+    for name, value in counters.items():
+        if math.isfinite(value):
+            finite[name] = value
+        else:
+            run.unavailable[f"{name} value"] += 1
+    return Repetition(real, times["cpu_time"], finite)
+
+
+def _repetition_pace(entry: CheckedObject, run: Run, trace: "PaceTrace | None") -> RepetitionPace | None:
+    """The pace counters of one repetition (iteration row), checked; None when it carries none. They come
+    together, only in a file with a pace trace, and a mode names one of its modes (or -1)."""
+    present = [name for name in fields.PACE_COUNTERS if name in entry.value]
+    if not present:
+        return None
+    if len(present) != len(fields.PACE_COUNTERS):
+        missing = [name for name in fields.PACE_COUNTERS if name not in present]
+        entry.fail(missing[0], f"is missing beside {', '.join(present)}: the pace counters come together")
+    if trace is None:
+        entry.fail(present[0], f"is there but the file has no {fields.PACE_KEY}: a repetition's pace names a "
+                               "mode of the file's pace trace")
+    values = {}
+    for name in (fields.PACE_C2C_COUNTER, fields.PACE_SERIAL_COUNTER):
+        value = entry.number(name, fields.SHORTEST_NS, fields.LONGEST_NS, unit=" ns", non_finite=True)
+        if not math.isfinite(value):
+            run.unavailable[f"{name} value"] += 1
+            value = None
+        values[name] = value
+    mode = entry.number(fields.PACE_MODE_COUNTER, -fields.LARGEST_AMOUNT, fields.LARGEST_AMOUNT, non_finite=True)
+    if not math.isfinite(mode):
+        run.unavailable[f"{fields.PACE_MODE_COUNTER} value"] += 1
+        mode = None
+    elif not mode.is_integer() or not fields.OUTLIER_MODE <= mode < len(trace.modes):
+        entry.fail(fields.PACE_MODE_COUNTER, f"is {shown(mode)}, not one of the {len(trace.modes)} modes of "
+                                             f"{fields.PACE_KEY} (0..{len(trace.modes) - 1}) or -1 (a change of "
+                                             "pace during the repetition)")
+    return RepetitionPace(values[fields.PACE_C2C_COUNTER], values[fields.PACE_SERIAL_COUNTER],
+                          None if mode is None else int(mode))
+
+
+def _read_pace(path: str, document: dict) -> PaceTrace | None:
+    """The top-level "lockstep_pace" (its fields checked by the schema, what ties them together here); None
+    when the file has none (an older file)."""
+    if fields.PACE_KEY not in document:
+        return None
+    trace, at = document[fields.PACE_KEY], (fields.PACE_KEY,)
+    cpus = trace["cpus"]
+    if len(cpus) not in (0, 2) or len(set(cpus)) != len(cpus) or max(cpus, default=0) >= fields.CPU_LIMIT:
+        fail(path, at + ("cpus",), f"is {cpus}: the pinned pair of two different CPUs, or [] on a machine of one")
+
+    modes = []
+    for index, raw in enumerate(trace["modes"]):
+        here = at + ("modes", index)
+        if raw["mode"] != index:
+            fail(path, here + ("mode",), f"is {shown(raw['mode'])}, not {index}: the modes are listed in the order "
+                                         "of their index")
+        c2c = raw["c2c_ns"]
+        if modes and (c2c is None) != (modes[0].c2c_ns is None):
+            fail(path, here + ("c2c_ns",), "is null in some modes and a number in others: either the machine has a "
+                                           "pair of CPUs to measure or it has not")
+        if modes and c2c is not None and c2c < modes[-1].c2c_ns:
+            fail(path, here + ("c2c_ns",), f"is {c2c:g} ns, below the {modes[-1].c2c_ns:g} ns of the mode before: "
+                                           "the modes are sorted fastest first")
+        modes.append(PaceMode(index, c2c, raw["serial_ns"], raw["share"], int(raw["readings"])))
+    if sum(mode.share for mode in modes) > 1.0 + fields.SHARE_SLACK:
+        fail(path, at + ("modes",), f"have shares adding up to {sum(mode.share for mode in modes):g}, more than "
+                                    "the whole run")
+
+    readings = []
+    for index, raw in enumerate(trace["readings"]):
+        here = at + ("readings", index)
+        if readings and raw["t_s"] < readings[-1].t_s:
+            fail(path, here + ("t_s",), f"is {raw['t_s']:g} s, before the {readings[-1].t_s:g} s of the reading "
+                                        "before: the readings are in time order")
+        if raw["mode"] >= len(modes):
+            fail(path, here + ("mode",), f"is {shown(raw['mode'])}, not one of the {len(modes)} modes (0.."
+                                         f"{len(modes) - 1}) or -1")
+        readings.append(PaceReading(raw["t_s"], raw["c2c_ns"], raw["serial_ns"], int(raw["mode"])))
+    if trace["changes"] > len(readings) - 1:
+        fail(path, at + ("changes",), f"is {shown(trace['changes'])}, more than the {len(readings)} readings "
+                                      "can change")
+    return PaceTrace(trace["reference"], tuple(cpus), tuple(readings), tuple(modes), int(trace["changes"]),
+                     trace["summary"])
+
+
+def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[PacePair]:
+    """The top-level "lockstep_pairs" (checked by the schema but for what ties them to the entries and the
+    trace); [] when the file has none (an older file)."""
+    pairs, seen = [], {}
+    highest_mode = len(trace.modes) - 1 if trace else fields.OUTLIER_MODE
+    for index, pair in enumerate(document.get(fields.PAIRS_KEY, [])):
+        at = (fields.PAIRS_KEY, index)
+        comparison = pair["comparison"]
+        names = {}
+        for side in ("a", "b"):
+            key = parse_name(pair[side])
+            if not key.family:
+                fail(path, at + (side,), f"is {shown(pair[side])}: no benchmark family")
+            names[side] = (pair[side], key)
+        identity = (comparison, names["a"][1], names["b"][1])
+        if identity in seen:
+            fail(path, at, f"repeats entry {seen[identity]} (the same {comparison} pair of {names['a'][0]} and "
+                           f"{names['b'][0]}): a damaged or concatenated file")
+        seen[identity] = index
+        ratios, modes = tuple(pair["ratios"]), tuple(pair["modes"])
+        if len(modes) != len(ratios):
+            fail(path, at + ("modes",), f"has {len(modes)} values for {len(ratios)} ratios: one mode per pair")
+        for place, mode in enumerate(modes):
+            if mode > highest_mode:
+                where = (f"one of the {highest_mode + 1} modes of {fields.PACE_KEY} or -1" if trace
+                         else f"-1: the file has no {fields.PACE_KEY}")
+                fail(path, at + ("modes", place), f"is {shown(mode)}, not {where}")
+        if pair["ci_low"] > pair["ci_high"]:
+            fail(path, at + ("ci_low",), f"is {pair['ci_low']:g}, above ci_high {pair['ci_high']:g}")
+        pairs.append(PacePair(comparison, pair["group"], names["a"][0], names["b"][0], names["a"][1], names["b"][1],
+                              ratios, tuple(int(mode) for mode in modes), pair["median"], pair["ci_low"],
+                              pair["ci_high"], pair["confidence"], pair["noise"], pair["verdict"], pair["block_ms"]))
+    return pairs
+
+
+def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
+    """The top-level "lockstep_scaling"; None when the file has none. Each point holds the curve's counter."""
+    if fields.SCALING_KEY not in document:
+        return None
+    curve = document[fields.SCALING_KEY]
+    counter = curve["counter"]
+    points = []
+    for index, point in enumerate(curve["points"]):
+        if counter not in point:
+            fail(path, (fields.SCALING_KEY, "points", index, counter), "is missing: the curve's counter")
+        low, high = point.get("repetitions_min"), point.get("repetitions_max")
+        points.append(ScalingPoint(point["sync"], int(point["threads"]), point["layout"], point["model"],
+                                   point[counter], bool(point.get("oversubscribed")),
+                                   (low, high) if low is not None and high is not None else None))
+    return ScalingCurve(curve["pin"], counter, tuple(int(t) for t in curve["threads"]), tuple(points),
+                        curve.get("best"), curve.get("c2c_one_way_ns"))
+
+
+def _headline_text(path: str, place: tuple, value) -> str:
+    if not isinstance(value, str):
+        fail(path, place, f"is {json_kind(value)}, not text")
+    return value
+
+
+def _headline_list(path: str, block: dict, key: str) -> list:
+    if key not in block:
+        fail(path, (fields.HEADLINE_KEY, key), "is missing")
+    if not isinstance(block[key], list):
+        fail(path, (fields.HEADLINE_KEY, key), f"is {json_kind(block[key])}, not a list")
+    return block[key]
+
+
+def _read_headline(path: str, document: dict) -> Headline | None:
+    """The top-level "lockstep_headline"; None when the file has none (written before it). Read leniently (a
+    key it does not name is ignored) but whole: what it reads is checked here, whatever the schema says."""
+    if fields.HEADLINE_KEY not in document:
+        return None
+    block = document[fields.HEADLINE_KEY]
+    at = (fields.HEADLINE_KEY,)
+    if not isinstance(block, dict):
+        fail(path, at, f"is {json_kind(block)}, not an object")
+    lines = tuple(_headline_text(path, at + ("lines", index), line)
+                  for index, line in enumerate(_headline_list(path, block, "lines")))
+    if not lines:
+        fail(path, at + ("lines",), "is empty: a run's answer has at least its first line")
+    collapsed, keys = [], set()
+    for index, name in enumerate(_headline_list(path, block, "collapsed")):
+        key = parse_name(_headline_text(path, at + ("collapsed", index), name))
+        if not key.family:
+            fail(path, at + ("collapsed", index), f"is {shown(name)}: no benchmark family")
+        if key not in keys:
+            collapsed.append(name)
+            keys.add(key)
+    recommendations = []
+    for index, raw in enumerate(_headline_list(path, block, "recommendations")):
+        here = at + ("recommendations", index)
+        if not isinstance(raw, dict):
+            fail(path, here, f"is {json_kind(raw)}, not an object")
+        item = CheckedObject(path, raw, schemas.json_path(here))
+        texts = {}
+        for key in ("pin", "model", "entry", "sync", "layout", "basis"):
+            texts[key] = _headline_text(path, here + (key,), item.get(key, required=True))
+        if texts["basis"] not in fields.HEADLINE_BASES:
+            fail(path, here + ("basis",), f"is {shown(texts['basis'])}, not one of {', '.join(fields.HEADLINE_BASES)}")
+        threads = item.get("threads", required=True)
+        if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
+            fail(path, here + ("threads",), f"is {shown(threads)}, not a thread count (a whole number from 1)")
+        entry_key = parse_name(texts["entry"])
+        if not entry_key.family:
+            fail(path, here + ("entry",), f"is {shown(texts['entry'])}: no benchmark family")
+        step = item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")
+        recommendations.append(Recommendation(threads, texts["pin"], texts["model"], texts["entry"], entry_key,
+                                              texts["sync"], texts["layout"], step, texts["basis"]))
+    return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys))
+
+
+def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
+    """A `lockstep run` or `lockstep mpi` document that read_document has checked against its schema."""
+    if document.get("kind") not in (None, "mpi"):
+        raise InputError(path, f"is `lockstep {document['kind']}` output, not benchmark results: compare takes "
+                               "the JSON of `lockstep run`")
+    context_values, warnings = read_context(path, label, document["context"])
+    lockstep_schema = context_values.get("lockstep_schema")
+    batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
+    pace = _read_pace(path, document)
+    pairs = _read_pairs(path, document, pace)
+
+    runs: dict[BenchmarkKey, Run] = {}
+    seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
+    first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
+    first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
+    for index, raw in enumerate(document["benchmarks"]):
+        name = raw["name"]
+        entry = CheckedObject(path, raw, f"benchmarks[{index}] ({shown(name)})")
+        aggregate = raw["aggregate_name"] if raw["run_type"] == "aggregate" else None
+        base = raw.get("run_name") or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate)
+                                       else name)
+        key = parse_name(base)
+        if not key.family:
+            entry.fail("name", "has no benchmark family")
+        if aggregate is None:
+            repetition_index = raw.get("repetition_index")
+            identity = (key, "repetition", repetition_index if repetition_index is not None
+                        else json.dumps(raw, sort_keys=True))
+        else:
+            identity = (key, "aggregate", aggregate)
+        if identity in seen:
+            what = f"aggregate {aggregate}" if aggregate else "repetition"
+            raise InputError(path, f"{entry.where} repeats entry {seen[identity]} (the same {what} of the same "
+                                   "benchmark): a damaged or concatenated file")
+        seen[identity] = index
+
+        run = runs.setdefault(key, Run(key=key))
+        if base not in run.names:
+            run.names.append(base)
+        failure = None  # Google Benchmark 1.8 writes error_occurred + error_message, or skipped + skip_message
+        for flag, message_key in (("error_occurred", "error_message"), ("skipped", "skip_message")):
+            if raw.get(flag) and failure is None:
+                failure = raw.get(message_key) or f"{flag.replace('_', ' ')} (message {fields.UNAVAILABLE})"
+        if failure is not None:
+            if failure not in run.errors:
+                run.errors.append(failure)
+                run.errors.sort()  # the file's order of entries is not part of the result
+            continue
+        scale = fields.TIME_UNIT_NS[raw["time_unit"]]
+        if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
+            continue  # stddev, cv and other statistics: not read
+        # The repetitions of one benchmark carry the same read counters (but fields.PER_REPETITION_COUNTERS,
+        # which the writer may omit from one repetition), and every entry read (repetitions,
+        # median, mean) the same per-unit counter: a counter missing from one of them is a damaged file,
+        # and a time per batch read as a time per step would be off by the batch size.
+        present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
+        if aggregate is None:
+            paced = (present - frozenset(fields.PER_REPETITION_COUNTERS)) | frozenset(
+                name for name in fields.PACE_COUNTERS if name in entry.value)
+            _same_counters(entry, paced, first_repetition.setdefault(key, (index, paced)))
+        units = present & frozenset(fields.UNIT_COUNTERS)
+        _same_counters(entry, units, first_read.setdefault(key, (index, units)))
+        # An aggregate's pace counters (a median of mode indices) mean nothing: only repetitions carry a pace.
+        repetition_pace = _repetition_pace(entry, run, pace) if aggregate is None else None
+        values = _measured_values(entry, run, scale, fields.SHORTEST_NS, batch_times)
+        if values is None:
+            continue
+        if aggregate is not None:
+            run.aggregates[aggregate] = values
+        else:
+            values.pace = repetition_pace
+            run.repetitions.append(values)
+    for key in sorted(runs, key=BenchmarkKey.sort_key):
+        left_out = runs[key].unavailable
+        if left_out:
+            counts = ", ".join(f"{count} {what}(s)" for what, count in sorted(left_out.items()))
+            warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
+                            f"{counts}")
+    return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
+                   pairs=pairs, scaling=_read_scaling(path, document), headline=_read_headline(path, document),
+                   mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None)
+
+
+def _same_counters(entry: CheckedObject, counters: frozenset, first: tuple[int, frozenset]) -> None:
+    index, expected = first
+    if counters != expected:
+        missing, extra = sorted(expected - counters), sorted(counters - expected)
+        problem = (f"lacks {', '.join(missing)}, which entry {index} of the same benchmark has" if missing
+                   else f"has {', '.join(extra)}, which entry {index} of the same benchmark lacks")
+        raise InputError(entry.path, f"{entry.where} {problem}: the entries of one benchmark carry the same "
+                                     "counters")
