@@ -8,7 +8,8 @@ from dataclasses import dataclass, field
 
 from . import fields
 from .checks import Distribution, fail, read_distribution
-from .schemas import shown
+from .schemas import json_kind, shown
+from .words import DELAY_CAUSES
 
 
 @dataclass(frozen=True)
@@ -96,6 +97,25 @@ class DelayExtras:
     settings: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class CauseRow:
+    """One bar of the causes: a percentile of the tail ("above p99", steps summed) or one CPU's steps above p99,
+    and the ns of excess per cause key."""
+    label: str
+    steps: int | None  # a tail row's steps; None for a CPU's row
+    cpu: int | None  # a CPU's row's CPU; None for a tail row
+    cause_ns: dict[str, float]
+
+
+@dataclass(frozen=True)
+class DelayCauses:
+    """A delay file's `causes` (bench/delay/delay_report.cpp, causes_json): why the late steps were late.
+    names: (key, words) of every cause in the order of the writer's enum (the file's causes.names; a file without
+    it: words.DELAY_CAUSES)."""
+    names: tuple[tuple[str, str], ...]
+    rows: tuple[CauseRow, ...]
+
+
 @dataclass
 class DelayFile:
     path: str
@@ -105,6 +125,7 @@ class DelayFile:
     unpinned: PacedRun | None
     histogram: Histogram  # of the pinned run's wake-ups
     extras: DelayExtras = field(default_factory=DelayExtras)
+    causes: DelayCauses | None = None  # None: the run kept no record, or the file predates the causes
 
 
 def _figure5(path: str, document: dict, key: str) -> list[Figure5Row]:
@@ -166,9 +187,8 @@ def _delay_extras(path: str, document: dict) -> DelayExtras:
     raw = document.get("per_cpu")
     if raw is not None:
         for index, row in enumerate(raw["cpus"]):
-            per_cpu.append(CpuLatency(row["cpu"], read_distribution(path, ("per_cpu", "cpus", index, "wakeup_latency_ns"),
-                                                                    row["wakeup_latency_ns"]),
-                                      row.get("deadline_misses")))
+            wakeup = read_distribution(path, ("per_cpu", "cpus", index, "wakeup_latency_ns"), row["wakeup_latency_ns"])
+            per_cpu.append(CpuLatency(row["cpu"], wakeup, row.get("deadline_misses")))
         worst = raw.get("noisiest")
         if worst is not None:
             noisiest = (worst["cpu"], worst.get("rule") or "")
@@ -232,4 +252,38 @@ def read_delay(path: str, label: str, document: dict) -> DelayFile:
     return DelayFile(path=path, label=label, settings=_settings(document), pinned=pinned,
                      unpinned=(_paced_run(path, unpinned, document, "figure5_unpinned", ("unpinned",))
                                if unpinned is not None else None),
-                     histogram=Histogram(bucket, first, counts), extras=_delay_extras(path, document))
+                     histogram=Histogram(bucket, first, counts), extras=_delay_extras(path, document),
+                     causes=read_causes(path, document))
+
+
+def _cause_names(path: str, causes: dict) -> tuple[tuple[str, str], ...]:
+    """The causes' keys and words in the writer's order: causes.names ([{"key", "words"}, ...]) where the file
+    has it; a file written before it gets words.DELAY_CAUSES, a copy of the writer's enum at the time. The schema
+    does not name causes.names yet, so what is read is checked here."""
+    raw = causes.get("names")
+    if raw is None:
+        return DELAY_CAUSES
+    if not isinstance(raw, list) or not raw:
+        fail(path, ("causes", "names"), f"is {json_kind(raw)}, not a list of causes")
+    names = []
+    for index, item in enumerate(raw):
+        if not isinstance(item, dict) or not all(isinstance(item.get(key), str) and item[key]
+                                                 for key in ("key", "words")):
+            fail(path, ("causes", "names", index), "is not an object with the texts key and words")
+        if any(item["key"] == key for key, _ in names):
+            fail(path, ("causes", "names", index, "key"), f"repeats {shown(item['key'])}: a cause is named once")
+        names.append((item["key"], item["words"]))
+    return tuple(names)
+
+
+def read_causes(path: str, document: dict) -> DelayCauses | None:
+    """The file's causes: each tail row, then each CPU's steps above p99; None when the run kept no record (null,
+    or unavailable says why) or no row has a step."""
+    causes = document.get("causes")
+    if not causes or causes.get("unavailable"):
+        return None
+    rows = [CauseRow(row["label"], int(row["steps"]), None, dict(row["cause_ns"]))
+            for row in causes.get("tail", [])]
+    rows += [CauseRow("above p99", None, int(entry["cpu"]), dict(entry["cause_ns"]))
+             for entry in causes.get("per_cpu", [])]
+    return DelayCauses(_cause_names(path, causes), tuple(rows)) if rows else None

@@ -474,10 +474,10 @@ class StepSplit:
     parts_ns: tuple[float, ...]
 
 
-def step_splits(run_file, pin: str, threads: int, split_values, collapsed=frozenset()) -> list[StepSplit]:
+def step_splits(run_file, pin: str, threads: int, collapsed=frozenset()) -> list[StepSplit]:
     """Per primitive of one placement and thread count (fastest first), its fastest layout's split: the median
-    of each part over the repetitions that carry the three (split_values: {key: [(compute, waiting, release),
-    ...]}); collapsed entries left out. Empty for a file written before the split."""
+    of each part over the repetitions that carry the three (Run.step_splits); collapsed entries left out. Empty
+    for a file written before the split."""
     _, layouts = _syncs_layouts(run_file)
     splits = []
     for sync in ranked_syncs(run_file, pin, threads, layouts, collapsed):
@@ -485,7 +485,8 @@ def step_splits(run_file, pin: str, threads: int, split_values, collapsed=frozen
         for layout in layouts:
             key = _rk4_key(run_file, sync, layout, pin, threads)
             step = run_median(run_file, key) if key not in collapsed else None
-            repetitions = split_values.get(key)
+            run = run_file.runs.get(key)
+            repetitions = run.step_splits if run is not None else None
             if step is not None and repetitions:
                 measured.append(StepSplit(key, step, tuple(statistics.median(part) for part in zip(*repetitions))))
         if measured:
@@ -775,6 +776,33 @@ def delay_histogram(delay) -> str:
     axes.set_title(f"paced wake-up latency ({delay.label}; period {format_ns(delay.settings.get('period_ns'))})")
     if axes.get_legend_handles_labels()[0]:
         axes.legend(fontsize=7)
+    return to_svg(figure)
+
+
+def delay_causes(rows: list[tuple[str, dict[str, float]]], names) -> str:
+    """Why a delay run's late steps were late: one stacked horizontal bar per row (label, {cause key: ns of
+    excess}), each cause's share of the row's excess, the causes in the order of names ((key, words)); a cause no
+    row has is left out of the legend."""
+    figure, axes = plt.subplots(figsize=(8, 0.5 * len(rows) + 1.4))
+    colours = plt.get_cmap("tab10").colors
+    labels = [label for label, _ in rows]
+    shares = []
+    for _, split in rows:
+        total = sum(split.get(key, 0.0) for key, _ in names)
+        shares.append({key: (split.get(key, 0.0) / total if total > 0 else 0.0) for key, _ in names})
+    left = [0.0] * len(rows)
+    for index, (key, words) in enumerate(names):
+        widths = [100 * split[key] for split in shares]
+        if not any(widths):
+            continue
+        axes.barh(labels, widths, left=left, color=colours[index % len(colours)], label=words)
+        left = [a + b for a, b in zip(left, widths)]
+    axes.invert_yaxis()
+    axes.set_xlim(0, 100)
+    axes.set_xlabel("share of the excess over the median completion (%)")
+    axes.set_title("Why the late steps were late")
+    axes.legend(loc="upper center", bbox_to_anchor=(0.5, -0.25), ncol=4, fontsize="small", frameon=False)
+    figure.tight_layout()
     return to_svg(figure)
 
 

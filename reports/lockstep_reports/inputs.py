@@ -19,8 +19,9 @@ reader of its kind turns it into what the tools use and checks what a schema can
   verify     verify_reader.py (the CSV, which is not JSON)
   the rest   context_reader.py (the machine context, for compare's fingerprint)
 
-A key no schema names is ignored, whatever it holds; NaN and Infinity
-make one value of a benchmark entry unavailable, and anywhere else a damaged file.
+No other module parses a result file: compare and report take what these readers give (the split of a step
+and a delay run's causes included). A key no schema names is ignored, whatever it holds; NaN and Infinity make one
+value of a benchmark entry unavailable, and anywhere else a damaged file.
 
 A file that is unreadable, truncated, of another kind, or holds a value that
 cannot be right raises InputError, whose text is one line naming the file,

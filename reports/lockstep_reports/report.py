@@ -15,8 +15,6 @@ matplotlib's hash salt and drops its date; nothing here reads the clock).
 from __future__ import annotations
 
 import functools
-import json
-import math
 import os
 import re
 from dataclasses import dataclass, field
@@ -24,9 +22,9 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import delay_causes, figures, paper, statistics
+from . import figures, paper, statistics
 from .compare import calibration, fingerprint, layout_effects, per_mode_medians, rank_tables, run_median
-from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, LONGEST_NS, PINGPONG_P50_COUNTER,
+from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .c2c_reader import C2cFile
@@ -263,37 +261,12 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     return section
 
 
-def step_split_values(path: str) -> dict:
-    """{entry key: [(compute, waiting, release) per repetition that carries all three]} of a run file
-    (fields.STEP_SPLIT_COUNTERS). inputs.py has read and checked the file once already; the split is taken again
-    here because a repetition may lack it where the next has it, which the reader's rule for its counters
-    refuses. A part that is not a finite number within fields.LONGEST_NS leaves its repetition out."""
-    try:
-        with open(path, encoding="utf-8") as handle:
-            document = json.load(handle)
-    except (OSError, ValueError, RecursionError):
-        return {}
-    entries = document.get("benchmarks") if isinstance(document, dict) else None
-    values: dict = {}
-    for raw in entries if isinstance(entries, list) else []:
-        if not isinstance(raw, dict) or raw.get("run_type") != "iteration" or raw.get("error_occurred") \
-                or raw.get("skipped"):
-            continue
-        name = raw.get("run_name") or raw.get("name")
-        parts = [raw.get(counter) for counter, _ in STEP_SPLIT_COUNTERS]
-        if isinstance(name, str) and all(isinstance(part, (int, float)) and not isinstance(part, bool)
-                                         and math.isfinite(part) and abs(part) <= LONGEST_NS for part in parts):
-            values.setdefault(parse_name(name), []).append(tuple(float(part) for part in parts))
-    return values
-
-
 def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
     """Where an rk4 step's time goes (compute, waiting for the others, release), per primitive at its fastest
     layout, one figure per placement and thread count, and the medians in a table; None for a file without
     the split (written before it)."""
-    split_values = step_split_values(run_file.path)
-    groups = [(pin, threads, figures.step_splits(run_file, pin, threads, split_values, run_file.collapsed))
-              for pin, threads in figures.rk4_groups(run_file)] if split_values else []
+    groups = [(pin, threads, figures.step_splits(run_file, pin, threads, run_file.collapsed))
+              for pin, threads in figures.rk4_groups(run_file)]
     if not any(splits for _, _, splits in groups):
         return None
     names = [word for _, word in STEP_SPLIT_COUNTERS]
@@ -772,17 +745,6 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
     return rows
 
 
-def _delay_causes_figure(path: str) -> str | None:
-    """The causes figure of a delay file (delay_causes.py), None when the file has no causes. The file was
-    read and checked once already (inputs.py); only its causes object is taken again."""
-    try:
-        with open(path, encoding="utf-8") as handle:
-            document = json.load(handle)
-    except (OSError, ValueError):
-        return None
-    return delay_causes.causes_figure(document) if isinstance(document, dict) else None
-
-
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
     extras = item.extras
     runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
@@ -854,11 +816,13 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
                             trial_rows, caption="find-period: the trials in the order they ran"))
         section_figures.append(Figure(f"delay-{counter[0]}-find-period", f"{item.label}, find-period search",
                                       figures.period_search(search)))
-    causes = _delay_causes_figure(item.path)
-    if causes is not None:
+    if item.causes is not None:
         paragraphs.append("Why the late steps were late: each tail's excess over the median step, split by cause "
                           "(`lockstep delay` prints the same table and the latest steps one line each).")
-        section_figures.append(Figure(f"delay-{counter[0]}-causes", f"{item.label}, causes of the tail", causes))
+        rows = [(f"{row.label} ({row.steps} steps)" if row.cpu is None else f"CPU {row.cpu}, {row.label}",
+                 row.cause_ns) for row in item.causes.rows]
+        section_figures.append(Figure(f"delay-{counter[0]}-causes", f"{item.label}, causes of the tail",
+                                      figures.delay_causes(rows, item.causes.names)))
     tables.append(figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper"))
     if item.unpinned:
         tables.append(figure5_table(item.unpinned.figure5,

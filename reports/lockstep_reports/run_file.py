@@ -52,6 +52,9 @@ class Run:
     aggregates: dict[str, Repetition] = field(default_factory=dict)  # fields.READ_AGGREGATES
     errors: list[str] = field(default_factory=list)
     unavailable: Counter = field(default_factory=Counter)  # what was NaN or infinite -> how many values
+    # The split of a step (fields.STEP_SPLIT_COUNTERS, in their order) of each repetition that carries all three
+    # parts as finite numbers; empty for an entry or a file without it (run_reader.step_split).
+    step_splits: list[tuple[float, ...]] = field(default_factory=list)
 
     @property
     def errored(self) -> bool:

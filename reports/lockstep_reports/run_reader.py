@@ -294,6 +294,9 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
                 run.errors.append(failure)
                 run.errors.sort()  # the file's order of entries is not part of the result
             continue
+        split = step_split(raw) if aggregate is None else None
+        if split is not None:
+            run.step_splits.append(split)
         scale = fields.TIME_UNIT_NS[raw["time_unit"]]
         if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
             continue  # stddev, cv and other statistics: not read
@@ -327,6 +330,18 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
                    pairs=pairs, scaling=_read_scaling(path, document), headline=_read_headline(path, document),
                    mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None)
+
+
+def step_split(raw: dict) -> tuple[float, ...] | None:
+    """A repetition's split of its step (fields.STEP_SPLIT_COUNTERS: compute, waiting, release), or None when it
+    lacks a part or a part is not a finite number within fields.LONGEST_NS. Read apart from the counters, whose
+    presence must agree across an entry's repetitions: the writer leaves the split out of a repetition with too
+    few split syncs and keeps it in the next."""
+    parts = [raw.get(counter) for counter, _ in fields.STEP_SPLIT_COUNTERS]
+    if all(isinstance(part, (int, float)) and not isinstance(part, bool) and math.isfinite(part)
+           and abs(part) <= fields.LONGEST_NS for part in parts):
+        return tuple(float(part) for part in parts)
+    return None
 
 
 def _same_counters(entry: CheckedObject, counters: frozenset, first: tuple[int, frozenset]) -> None:

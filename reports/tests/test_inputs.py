@@ -13,6 +13,7 @@ from lockstep_reports.delay_reader import DelayFile
 from lockstep_reports.inputs import InputError, load_any, load_run_file
 from lockstep_reports.run_file import against_best_other_views
 from lockstep_reports.verify_reader import VerifyFile
+from lockstep_reports.words import DELAY_CAUSES
 from lockstep_reports.names import parse_name
 
 
@@ -407,6 +408,46 @@ class LeaderLine(unittest.TestCase):
         run_file = load_run_file(fixture("paced_every_pair.json"))
         views = against_best_other_views(run_file.pairs)
         self.assertEqual(views, [pair for pair in run_file.pairs if pair.comparison == "against_best_other"])
+
+class DelayCausesNames(Scratch):
+    """The delay causes' order and words come from the file (causes.names, the writer's enum) where it has them;
+    a file written before them reads with words.DELAY_CAUSES."""
+
+    def document(self, names=None):
+        with open(fixture("delay_a.json"), encoding="utf-8") as stream:
+            document = json.load(stream)
+        split = {key: 10.0 * index for index, (key, _) in enumerate(DELAY_CAUSES)}
+        document["causes"] = {"unavailable": None, "worst": [], "per_cpu": [{"cpu": 1, "cause_ns": split}],
+                              "tail": [{"label": "above p99", "threshold_ns": 5000.0, "steps": 10, "excess_ns": 280.0,
+                                        "cause_ns": split, "explained_share": 1.0, "guest_share": 1.0,
+                                        "top": "unexplained"}]}
+        if names is not None:
+            document["causes"]["names"] = names
+        return document
+
+    def test_a_file_without_names_reads_the_enum_as_it_was(self):
+        causes = load_any(self.write("delay.json", self.document())).causes
+        self.assertEqual(causes.names, DELAY_CAUSES)
+        self.assertEqual([(row.label, row.steps, row.cpu) for row in causes.rows],
+                         [("above p99", 10, None), ("above p99", None, 1)])
+
+    def test_the_files_names_are_read_in_its_order(self):
+        names = [{"key": key, "words": words.upper()} for key, words in reversed(DELAY_CAUSES)]
+        causes = load_any(self.write("delay.json", self.document(names))).causes
+        self.assertEqual(causes.names, tuple((item["key"], item["words"]) for item in names))
+
+    def test_names_that_are_not_a_list_of_key_and_words_are_refused_in_one_line(self):
+        for names, problem in (({"compute": "compute"}, "causes.names: is an object, not a list of causes"),
+                               ([{"key": "compute"}], "causes.names[0]: is not an object with the texts key and words"),
+                               ([{"key": "compute", "words": "a"}, {"key": "compute", "words": "b"}],
+                                "causes.names[1].key: repeats 'compute'")):
+            with self.subTest(problem):
+                path = self.write("delay.json", self.document(names))
+                status, _, err = run_tool("report", path, "--out", os.path.join(self.directory.name, "out"))
+                self.assertEqual(status, 2)
+                self.assertIn(problem, err)
+                self.assertEqual(len(err.splitlines()), 1)
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -552,8 +552,7 @@ class CpuPerStep(Scratch):
 
     def test_split_bars_are_shares_of_the_parts(self):
         run_file = load_run_file(fixture(CPU_SPLIT))
-        splits = figures.step_splits(run_file, "none", 2, report.step_split_values(fixture(CPU_SPLIT)),
-                                     run_file.collapsed)
+        splits = figures.step_splits(run_file, "none", 2, run_file.collapsed)
         self.assertEqual([split.key.get("sync") for split in splits],
                          ["ck_tas", "seqlock", "futex_spin", "std_barrier"])  # fastest first
         captured = []
@@ -570,8 +569,9 @@ if __name__ == "__main__":
 
 
 class DelayCauses(Scratch):
-    """A delay file's causes object (bench/delay/delay_report.cpp, causes_json) becomes the delay section's
-    stacked bars (delay_causes.py), placed by report.py's delay_section; a file without one gets none."""
+    """A delay file's causes object (bench/delay/delay_report.cpp, causes_json), read by delay_reader.read_causes,
+    becomes the delay section's stacked bars (figures.delay_causes), placed by report.py's delay_section; a file
+    without one gets none."""
 
     def delay_document(self):
         with open(fixture("delay_a.json"), encoding="utf-8") as stream:
