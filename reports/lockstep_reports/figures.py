@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
 from . import paper, statistics  # noqa: E402
-from .compare import median_ratio, run_median, sample  # noqa: E402
+from .run_analysis import median_ratio, run_median, sample  # noqa: E402
 from .fields import STEP_SPLIT_COUNTERS, TEAM_CPU_COUNTERS  # noqa: E402
 from .formatting import format_ns  # noqa: E402
 from .names import BenchmarkKey  # noqa: E402

@@ -109,7 +109,7 @@ def tool_parser(tool: str, description: str, files_metavar: str, files_help: str
 
 
 def compare_parser() -> argparse.ArgumentParser:
-    from .compare import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
+    from .comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
 
     parser = tool_parser(
         "compare",
@@ -188,7 +188,7 @@ def report_parser() -> argparse.ArgumentParser:
 
 
 def run_compare(argv: list[str]) -> int:
-    from . import compare
+    from . import compare, compare_text
 
     options = compare_parser().parse_args(argv)
     if len(options.files) < 2:
@@ -217,7 +217,7 @@ def run_compare(argv: list[str]) -> int:
     if identical:
         sys.stdout.write(identical)
         return EXIT_OK
-    sys.stdout.write(compare.render_text(run_files, comparisons, options.time, context_files, options.everything))
+    sys.stdout.write(compare_text.render_text(run_files, comparisons, options.time, context_files, options.everything))
     if options.fail_above is not None:
         failures = [(c, row) for c in comparisons for row in c.regressions_beyond(options.fail_above)]
         groups = [(c, aggregate) for c in comparisons for aggregate in c.failed_groups(options.fail_above)]
@@ -226,7 +226,7 @@ def run_compare(argv: list[str]) -> int:
             sys.stderr.write(f"lockstep compare: regression beyond {options.fail_above:g}%: {what} "
                              f"({aggregate.entries} entries) is {(aggregate.ratio - 1) * 100:.1f}% slower in "
                              f"{comparison.contender.label} (geometric mean of B/A "
-                             f"{compare.aggregate_text(comparison, aggregate)}, beyond the {options.noise:g}% noise "
+                             f"{compare_text.aggregate_text(comparison, aggregate)}, beyond the {options.noise:g}% noise "
                              f"band)\n")
         if groups and not failures:
             return EXIT_REGRESSION

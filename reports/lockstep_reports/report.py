@@ -23,14 +23,15 @@ import jinja2
 import markupsafe
 
 from . import figures, paper, statistics
-from .compare import calibration, fingerprint, layout_effects, per_mode_medians, rank_tables, run_median
+from .normalisation import fingerprint, layout_effects, rank_tables
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
 from .formatting import format_count, format_duration, format_ns, format_number, format_rate
 from .c2c_reader import C2cFile
 from .delay_reader import DelayExtras, DelayFile
 from .inputs import load_any, unique_labels
-from .run_file import RunFile, against_best_other_views
+from .run_analysis import against_best_other_views, calibration, per_mode_medians, run_median
+from .run_file import RunFile
 from .verify_reader import VerifyFile
 from .names import parse_name
 from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory

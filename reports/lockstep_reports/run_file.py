@@ -144,36 +144,6 @@ class PacePair:
                         statistics.inverse_verdict(self.verdict), self.block_ms, not self.inverted)
 
 
-def _best_other_group(pair: PacePair) -> tuple:
-    """Which "each primitive against the best other" group a pair belongs to: its kind of entry (an RK4 step,
-    a bare episode), model, placement and thread count, read from its numerator's name."""
-    key = pair.a_key
-    return key.family, key.get("model") or "", key.get("pin") or "", key.threads or 0
-
-
-def against_best_other_views(pairs: list[PacePair]) -> list[PacePair]:
-    """Every primitive's line of "each primitive against the best other", group by group in the file's order.
-
-    Since lockstep run measures each unordered comparison once (docs/pace.md), a group's leader (its fastest
-    primitive by median) has no pair of its own: every pair of the group has the leader as its denominator,
-    and the leader's line is its pair with the runner-up read the other way round (PacePair.inverse), put
-    first. The runner-up's pair is the group's first in the file (lockstep run writes them in its plan's
-    order, the runner-up first: bench/run/paired_blocks.hpp). A file written before that, where every
-    primitive has a pair of its own, leader included, gives its pairs as they are."""
-    groups: dict[tuple, list[PacePair]] = {}
-    for pair in pairs:
-        if pair.comparison == "against_best_other":
-            groups.setdefault(_best_other_group(pair), []).append(pair)
-    views = []
-    for members in groups.values():
-        leaders = {pair.b_key for pair in members}
-        leader = next(iter(leaders))
-        if len(leaders) == 1 and all(pair.a_key != leader for pair in members):
-            views.append(members[0].inverse())
-        views += members
-    return views
-
-
 @dataclass(frozen=True)
 class ScalingPoint:
     sync: str

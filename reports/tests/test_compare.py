@@ -11,8 +11,10 @@ import unittest
 import synthetic_runs
 from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import compare, statistics
-from lockstep_reports.compare import compare_pair, layout_effects, normalised, rank_tables
+from lockstep_reports import compare_text, pace_statistics, statistics
+from lockstep_reports.compare import compare_pair
+from lockstep_reports.comparison import PaceAware, verdict_of
+from lockstep_reports.normalisation import layout_effects, normalised, rank_tables
 from lockstep_reports.inputs import load_run_file
 from lockstep_reports.main import compare_parser, report_parser
 from lockstep_reports.names import parse_name
@@ -225,7 +227,7 @@ class AcrossMachines(unittest.TestCase):
         self.assertAlmostEqual(vs_c2c, sync / 61.5)
 
     def test_in_run_entries_stand_in_for_missing_context_calibrations(self):
-        from lockstep_reports.compare import calibration
+        from lockstep_reports.run_analysis import calibration
         run_file = load("machine_a.json")
         del run_file.context["serial_step_ns"]
         run_file.context["c2c_one_way_ns"] = "unavailable"
@@ -786,7 +788,7 @@ class CompareSummary(Scratch):
         status, out, err = run_tool("compare", fixture(HEADLINE), slower)
         self.assertEqual(status, 0, err)
         shown = [line for line in out.splitlines() if line.startswith("  rk4/sync:")]
-        self.assertEqual(len(shown), compare.SHOWN_CHANGES)
+        self.assertEqual(len(shown), compare_text.SHOWN_CHANGES)
         self.assertRegex(out, r"\n  \.\.\. and [0-9]+ more slower \(--all lists every entry\)\n")
         self.assertLessEqual(len(out.splitlines()), 45)
         # a collapsed entry is said to be one: counted as collapsed, never listed as slower, nor untested
@@ -951,7 +953,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertEqual(overall.verdict, "unsure")
         ratios = [row.beyond_pace_ratio() for row in comparison.combinations]
         entries_only = statistics.geometric_mean_interval(ratios, statistics.seed_of("all"))
-        self.assertEqual(compare.verdict_of(entries_only[1:], 5.0), "slower")
+        self.assertEqual(verdict_of(entries_only[1:], 5.0), "slower")
         # A one-cluster drift is not called either; a uniform shift on top of the block still is.
         self.assertNotEqual(self.overall(self.drifted(1.0, {("futex_spin", 4): 2.0})).verdict, "slower")
         shifted = self.overall(self.drifted(1.15, block))
@@ -984,16 +986,16 @@ class AggregatesAndPooledEvidence(ScratchFiles):
 
     def test_repetitions_in_another_c2c_state_of_one_mode_are_set_apart(self):
         shifted = self.two_states(1.15)
-        self.assertEqual({row.pace.method for row in shifted.rows}, {compare.PACE_ONE_STATE})
+        self.assertEqual({row.pace.method for row in shifted.rows}, {pace_statistics.PACE_ONE_STATE})
         self.assertEqual({(row.pace.repetitions_a, row.pace.repetitions_b) for row in shifted.rows}, {(4, 4)})
         self.assertIn("within 1.2x of 30 ns (A 4 of 5, B 4 of 5)", shifted.rows[0].pace.detail)
         slower = [row for row in shifted.rows if shifted.beyond_pace(row) == "slower"]
         self.assertGreaterEqual(len(slower), 0.9 * len(shifted.rows))
         # All five repetitions, the fast one included, leave every entry's interval too wide to call it.
         for row in shifted.rows:
-            row.pace = compare.PaceAware("one mode", "", row.ratio, None, 5, 5, *(
+            row.pace = PaceAware("one mode", "", row.ratio, None, 5, 5, *(
                 tuple(run.times_ns("real")) for run in (shifted.baseline.runs[row.key], shifted.contender.runs[row.key])))
-        compare.pool_evidence(shifted.rows)
+        pace_statistics.pool_evidence(shifted.rows)
         self.assertLess(sum(shifted.beyond_pace(row) == "slower" for row in shifted.rows), 0.5 * len(shifted.rows))
         same = self.two_states(1.0)
         called = [row for row in same.rows if same.beyond_pace(row) in ("slower", "faster")]
@@ -1026,8 +1028,8 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         for shift in (1.0, 1.15):
             b = self.write("b.json", self.states_document(2, shift, (0, 2, 2, 1, 2)))
             comparison = compare_pair(load_run_file(a), load_run_file(b))
-            self.assertEqual({row.pace.method for row in comparison.rows}, {compare.PACE_NORMALISED})
-            elasticities = compare.pace_elasticities(comparison.baseline, comparison.contender, "real")
+            self.assertEqual({row.pace.method for row in comparison.rows}, {pace_statistics.PACE_NORMALISED})
+            elasticities = pace_statistics.pace_elasticities(comparison.baseline, comparison.contender, "real")
             for (sync, threads), elasticity in elasticities.items():
                 if sync == "std_barrier":
                     self.assertLess(elasticity, 0.1, threads)
@@ -1042,7 +1044,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
                                   if comparison.beyond_pace(row) in ("slower", "faster")])
                 # Divided by the whole reading, std_barrier's entries would read 2-3x faster.
                 row = barrier[0]
-                whole = compare.pace_aware(comparison.baseline.runs[row.key], comparison.contender.runs[row.key],
+                whole = pace_statistics.pace_aware(comparison.baseline.runs[row.key], comparison.contender.runs[row.key],
                                            comparison.baseline, comparison.contender, [(0, 0), (1, 1), (2, 2)], "real")
                 self.assertLess(whole.ratio, 0.5)
             else:

@@ -9,7 +9,7 @@ import unittest
 
 from support import fixture, run_tool
 
-from lockstep_reports.compare import is_calibration
+from lockstep_reports.run_analysis import is_calibration
 from lockstep_reports.inputs import InputError, load_any
 from lockstep_reports.names import parse_name
 

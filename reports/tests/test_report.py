@@ -10,8 +10,8 @@ from unittest import mock
 
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import figures, paper, report
-from lockstep_reports.compare import run_median
+from lockstep_reports import figures, paper
+from lockstep_reports.run_analysis import run_median
 from lockstep_reports.inputs import load_any, load_run_file
 
 # headline.json with team_cpu_* and the split of a step: fixtures/make_cpu_fixture.py.

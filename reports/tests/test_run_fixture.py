@@ -11,7 +11,7 @@ import tempfile
 import unittest
 
 from support import REPORTS_DIR, run_tool
-from lockstep_reports import compare, inputs, run_file, run_reader, statistics
+from lockstep_reports import comparison, inputs, run_analysis, run_file, run_reader, statistics
 from lockstep_reports.formatting import format_number
 
 FIXTURE = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.json")
@@ -59,19 +59,19 @@ class RunFixture(unittest.TestCase):
     def test_compare_says_each_pairs_verdict_in_its_words(self):
         for pair, again in zip(self.run_file.pairs, self.recomputed):
             with self.subTest(f"{pair.a} / {pair.b}"):
-                self.assertEqual(compare.verdict_of((again.ci_low, again.ci_high), 100.0 * pair.noise),
-                                 compare.VERDICT_WORDS[pair.verdict])
+                self.assertEqual(comparison.verdict_of((again.ci_low, again.ci_high), 100.0 * pair.noise),
+                                 comparison.VERDICT_WORDS[pair.verdict])
 
     def test_the_report_prints_each_pairs_figures(self):
         """The report's Markdown holds a row per pair, and per "against the best other" group the leader's row
-        (its pair with the runner-up inverted, run_file.against_best_other_views), each with the median, interval
+        (its pair with the runner-up inverted, run_analysis.against_best_other_views), each with the median, interval
         and verdict statistics.py recomputes."""
         with tempfile.TemporaryDirectory(prefix="lockstep-run-fixture-") as directory:
             status, _, err = run_tool("report", FIXTURE, "--out", directory)
             self.assertEqual(status, 0, err)
             with open(os.path.join(directory, "report.md"), encoding="utf-8") as page:
                 rows = [line for line in page.read().splitlines() if line.startswith("|")]
-        expected = self.recomputed + [view for view in run_file.against_best_other_views(self.recomputed)
+        expected = self.recomputed + [view for view in run_analysis.against_best_other_views(self.recomputed)
                                       if view.inverted]
         self.assertTrue(any(view.inverted for view in expected))
         for pair in expected:

@@ -11,7 +11,7 @@ import unittest
 import numpy as np
 
 from support import REPORTS_DIR
-from lockstep_reports import compare, fields, statistics
+from lockstep_reports import comparison, fields, statistics
 
 GOLDEN = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "statistics", "golden.json")
 with open(GOLDEN, encoding="utf-8") as golden_file:
@@ -80,9 +80,9 @@ class Golden(unittest.TestCase):
         words = {"penalty": "slower", "gain": "faster", "within noise": "within noise", "unsure": "unsure"}
         for case in GOLDEN_CASES["verdicts"]:
             with self.subTest(case["name"]):
-                self.assertEqual(compare.verdict_of((case["low"], case["high"]), 100.0 * case["noise"]),
+                self.assertEqual(comparison.verdict_of((case["low"], case["high"]), 100.0 * case["noise"]),
                                  words[case["verdict"]])
-        self.assertEqual(compare.verdict_of(None, 5.0), "untested")
+        self.assertEqual(comparison.verdict_of(None, 5.0), "untested")
 
     # One ratio with no interval against the band [1 / (1 + noise), 1 + noise], an end on an edge inside
     # (statistics.beyond_noise): each edge, and the doubles either side of it, written out as the golden file
