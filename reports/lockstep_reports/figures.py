@@ -1,5 +1,8 @@
 """The report's figures, each drawn by matplotlib into SVG text with deterministic bytes.
 
+Each figure draws what it is given: the cells, bars, points and rows that matrix.py, c2c_analysis.py, paper.py
+and the readers derive; nothing here reads a run file's entries or computes a statistic of them.
+
 Determinism: the SVG backend's ids come from a hash salted by svg.hashsalt
 (fixed here instead of random), the Date metadata is removed, glyphs are
 written as paths (no font lookup in the browser), and every loop runs over
@@ -10,7 +13,6 @@ from __future__ import annotations
 import io
 import math
 import re
-from dataclasses import dataclass
 
 import matplotlib
 
@@ -22,11 +24,10 @@ import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-from . import paper, statistics  # noqa: E402
-from .run_analysis import median_ratio, run_median, sample  # noqa: E402
-from .fields import STEP_SPLIT_COUNTERS, TEAM_CPU_COUNTERS  # noqa: E402
+from . import words  # noqa: E402
+from .fields import STEP_SPLIT_COUNTERS  # noqa: E402
 from .formatting import format_ns  # noqa: E402
-from .names import BenchmarkKey  # noqa: E402
+from .matrix import CpuPoint, PenaltyRow, StepSplit, ordered  # noqa: E402
 
 matplotlib.rcParams.update({
     "svg.hashsalt": "lockstep-report",
@@ -37,27 +38,8 @@ matplotlib.rcParams.update({
     "savefig.bbox": "tight",
 })
 
-LAYOUT_ORDER = ("packed", "padded64", "padded128", "per_thread")
-PIN_ORDER = ("compact", "scatter", "none", "migrate")
-RELATION_RANK = {"same core": 0, "shared L2": 1, "shared L3": 2, "same package": 3, "same NUMA node": 4,
-                 "cross package": 5, "other package": 5}
-UNKNOWN_RELATION_RANK = 6
 # Digits of a value written inside a figure's cell.
 CELL_DIGITS = 3
-
-
-def relation_rank(relation: str) -> int:
-    return RELATION_RANK.get(relation, UNKNOWN_RELATION_RANK)
-
-
-def relation_order(relation: str) -> tuple[int, str]:
-    """Closest relation first, then by name."""
-    return relation_rank(relation), relation
-
-
-def ordered(values, preferred):
-    values = set(values)
-    return [v for v in preferred if v in values] + sorted(values - set(preferred))
 
 
 def to_svg(figure) -> str:
@@ -76,69 +58,20 @@ def inline_svg(svg: str, prefix: str) -> str:
     return svg.strip()
 
 
-def rk4_groups(run_file) -> list[tuple[str, int]]:
-    groups = {(key.get("pin"), key.threads) for key in run_file.runs
-              if key.family == "rk4" and key.get("sync") and key.get("layout") and key.get("pin")}
-    pins = ordered({pin for pin, _ in groups}, PIN_ORDER)
-    return sorted(groups, key=lambda group: (pins.index(group[0]), group[1] or 0))
-
-
-def _model_at(run_file, threads) -> str | None:
-    """The model segment of the run's rk4 entries at this thread count (a chain's "chain8"), or None: the
-    paper's two-mass system, whose names carry no model."""
-    for key in run_file.runs:
-        if key.family == "rk4" and key.threads == threads and key.get("sync"):
-            return key.get("model")
-    return None
-
-
-def _rk4_key(run_file, sync, layout, pin, threads) -> BenchmarkKey:
-    segments = [("sync", sync), ("layout", layout), ("pin", pin), ("threads", str(threads))]
-    model = _model_at(run_file, threads)
-    if model:
-        segments.append(("model", model))
-    return BenchmarkKey("rk4", tuple(sorted(segments)))
-
-
-def _syncs_layouts(run_file):
-    syncs = sorted({key.get("sync") for key in run_file.runs if key.family == "rk4" and key.get("sync")})
-    layouts = ordered({key.get("layout") for key in run_file.runs if key.family == "rk4" and key.get("layout")},
-                      LAYOUT_ORDER)
-    return syncs, layouts
-
-
-def ranked_syncs(run_file, pin: str, threads: int, layouts, collapsed=frozenset()) -> list[str]:
-    """The primitives of one placement and thread count, fastest first: by the median of each one's fastest
-    layout there; a primitive with nothing measured but collapsed or unavailable entries comes last."""
-    syncs, _ = _syncs_layouts(run_file)
-
-    def best(sync):
-        values = [run_median(run_file, key) for key in (_rk4_key(run_file, sync, layout, pin, threads)
-                                                         for layout in layouts) if key not in collapsed]
-        values = [value for value in values if value is not None]
-        return (0, min(values), sync) if values else (1, 0.0, sync)
-
-    return sorted(syncs, key=best)
-
-
-def heatmap(run_file, pin: str, threads: int, within_noise=frozenset(), collapsed=frozenset(),
-            recommended: tuple[str, str] | None = None) -> str:
+def heatmap(cells) -> str:
     """Median step time, primitive (rows, fastest first) x layout (columns), for one placement and thread
-    count; the colour scale is in the cells' unit (a time, on a log scale) and spans the entries that count.
-    within_noise: (sync, layout) cells whose paired false-sharing comparison (lockstep_pairs) was within noise
-    or unsure: hatched, their value marked with "≈". collapsed: entries (keys) that collapsed (the headline's):
-    grey, out of the colour scale. recommended: the (sync, layout) the headline recommends here: outlined."""
-    _, layouts = _syncs_layouts(run_file)
-    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
+    count (matrix.HeatmapCells); the colour scale is in the cells' unit (a time, on a log scale) and spans the
+    entries that count. A cell within noise (its false-sharing pair made no call) is hatched, its value marked
+    with "≈"; a collapsed one is grey and out of the colour scale; the recommended one is outlined."""
+    pin, threads, within_noise, recommended = cells.pin, cells.threads, cells.within_noise, cells.recommended
+    syncs, layouts = list(cells.syncs), list(cells.layouts)
     grid = np.full((len(syncs), len(layouts)), np.nan)
     gone = np.zeros((len(syncs), len(layouts)), dtype=bool)
-    for row, sync in enumerate(syncs):
-        for column, layout in enumerate(layouts):
-            key = _rk4_key(run_file, sync, layout, pin, threads)
-            value = run_median(run_file, key)
+    for row, values in enumerate(cells.values):
+        for column, value in enumerate(values):
             if value is not None:
                 grid[row, column] = value
-                gone[row, column] = key in collapsed
+                gone[row, column] = (row, column) in cells.collapsed
     figure, axes = plt.subplots(figsize=(1.0 * len(layouts) + 2.4, 0.36 * len(syncs) + 1.5))
     counted = grid[np.isfinite(grid) & ~gone]
     norm = (LogNorm(vmin=float(counted.min()), vmax=float(max(counted.max(), counted.min() * 1.0001)))
@@ -208,40 +141,27 @@ def duration_axis(axis, unit_ns: float = 1.0) -> None:
     axis.set_minor_formatter(matplotlib.ticker.NullFormatter())
 
 
-def bars_with_spread(run_file, pin: str, threads: int, collapsed=frozenset()) -> str:
-    """Per primitive (fastest first), one bar per layout at the median; the whisker spans the interquartile
-    range and each dot is one repetition. The time axis is logarithmic: the primitives' step times span
-    decades (a spinning barrier's hundreds of ns beside a sleeping one's 100 us). collapsed: entries (keys)
-    left out (the headline's collapsed entries), named under the title."""
-    _, layouts = _syncs_layouts(run_file)
-    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
-    left_out = sorted({sync for sync in syncs for layout in layouts
-                       if _rk4_key(run_file, sync, layout, pin, threads) in collapsed})
-    syncs = [sync for sync in syncs if any(_rk4_key(run_file, sync, layout, pin, threads) not in collapsed
-                                           for layout in layouts)]
+def bars_with_spread(bars) -> str:
+    """Per primitive (fastest first), one bar per layout at the median (matrix.SpreadBars); the whisker spans
+    the interquartile range and each dot is one repetition. The time axis is logarithmic: the primitives' step
+    times span decades (a spinning barrier's hundreds of ns beside a sleeping one's 100 us). The primitives with
+    a collapsed entry are named under the title."""
+    pin, threads, left_out = bars.pin, bars.threads, bars.left_out
+    syncs, layouts = list(bars.syncs), list(bars.layouts)
     figure, axes = plt.subplots(figsize=(min(10.0, max(6.0, 0.62 * len(syncs) + 1.6)), 3.8))
     axes.set_yscale("log")
     width = 0.8 / max(1, len(layouts))
     colors = plt.get_cmap("tab10")
     drawn = []
-    for column, layout in enumerate(layouts):
-        for row, sync in enumerate(syncs):
-            key = _rk4_key(run_file, sync, layout, pin, threads)
-            run = run_file.runs.get(key)
-            if run is None or run.errored or key in collapsed:
-                continue
-            times, _ = sample(run)
-            if not times:
-                continue
-            x = row + (column - (len(layouts) - 1) / 2) * width
-            center = run_median(run_file, key)  # the median every table shows (compare.run_median)
-            low, high = statistics.quantile(times, 0.25), statistics.quantile(times, 0.75)
-            drawn += list(times)
-            axes.bar(x, center, width * 0.9, color=colors(column), label=layout if not any(
-                label == layout for label in axes.get_legend_handles_labels()[1]) else None)
-            axes.errorbar(x, center, yerr=[[center - low], [high - center]], color="black", capsize=2, lw=0.8)
-            offsets = np.linspace(-width * 0.3, width * 0.3, len(times)) if len(times) > 1 else [0.0]
-            axes.scatter(np.asarray(offsets) + x, sorted(times), s=3, color="black", zorder=3)
+    for bar in bars.bars:
+        column, layout, times, center = bar.column, layouts[bar.column], bar.times, bar.median
+        x = bar.row + (column - (len(layouts) - 1) / 2) * width
+        drawn += list(times)
+        axes.bar(x, center, width * 0.9, color=colors(column), label=layout if not any(
+            label == layout for label in axes.get_legend_handles_labels()[1]) else None)
+        axes.errorbar(x, center, yerr=[[center - bar.low], [bar.high - center]], color="black", capsize=2, lw=0.8)
+        offsets = np.linspace(-width * 0.3, width * 0.3, len(times)) if len(times) > 1 else [0.0]
+        axes.scatter(np.asarray(offsets) + x, sorted(times), s=3, color="black", zorder=3)
     if drawn:
         axes.set_ylim(log_floor(min(drawn) * 0.9), log_ceiling(max(drawn) * 1.1))
     duration_axis(axes.yaxis)
@@ -264,42 +184,6 @@ def bars_with_spread(run_file, pin: str, threads: int, collapsed=frozenset()) ->
 
 # ---------------------------------------------------------------- CPU per step, and the step's split
 
-@dataclass(frozen=True)
-class CpuPoint:
-    """One entry of an rk4/ or barrier/ family: its median time per unit (step or episode) and the median CPU
-    time its whole team burned per unit (fields.TEAM_CPU_COUNTERS), both statistics.median over the
-    repetitions (the unit's time as compare.run_median takes it)."""
-
-    key: BenchmarkKey
-    unit_ns: float
-    team_cpu_ns: float
-
-    @property
-    def cpus_busy(self) -> float:
-        return self.team_cpu_ns / self.unit_ns
-
-
-def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
-    """The entries of one family (rk4: the sync/layout/pin/threads matrix; barrier: the bare barriers) with a
-    time and a team CPU time per unit, collapsed entries (the headline's) left out; sorted by name. An entry
-    without the counter (a file written before it) has no point."""
-    points = []
-    for key in sorted(run_file.runs, key=BenchmarkKey.sort_key):
-        if key.family != family or not key.get("sync") or not key.get("pin") or key.threads is None:
-            continue
-        if key in collapsed or run_file.runs[key].errored:
-            continue
-        cpu = next((values for values in (run_file.runs[key].counter_values(name) for name in TEAM_CPU_COUNTERS)
-                    if values), None)
-        unit = run_median(run_file, key)
-        if cpu and unit:
-            team_cpu = statistics.median(cpu)
-            if team_cpu > 0:
-                points.append(CpuPoint(key, unit, team_cpu))
-    return points
-
-
-PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
 # Panels of one CPU figure side by side (one per thread count); more wrap to the next row.
 CPU_PANELS_PER_ROW = 3
 # Up to this many CPUs a panel draws every line k CPUs busy; beyond, the powers of two (the lines of 15 and 16
@@ -397,8 +281,8 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
     fewest CPUs busy are named; the `recommended` entries (keys: the headline's choices) are ringed in red, as
     the heat maps outline them."""
     thread_counts = sorted({point.key.threads for point in points})
-    layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, LAYOUT_ORDER)
-    pins = ordered({point.key.get("pin") for point in points}, PIN_ORDER)
+    layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, words.LAYOUT_ORDER)
+    pins = ordered({point.key.get("pin") for point in points}, words.PIN_ORDER)
     palette = plt.get_cmap("tab10")
     colors = {layout: palette(index) for index, layout in enumerate(layouts)}
     columns = min(len(thread_counts), CPU_PANELS_PER_ROW)
@@ -429,7 +313,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
                           ha="left", va="center", fontsize=7, color=color, annotation_clip=False)
         for point in members:
             axes.scatter([point.unit_ns], [point.team_cpu_ns], s=22, zorder=3,
-                         marker=PIN_MARKERS.get(point.key.get("pin"), "P"),
+                         marker=words.PIN_MARKERS.get(point.key.get("pin"), "P"),
                          color=colors.get(point.key.get("layout"), "#4c72b0"), edgecolors="black", linewidths=0.3,
                          alpha=0.85)
         for point in members:
@@ -444,7 +328,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
         axes.set_ylabel(f"median team CPU per {unit} (log)")
         over = f" on {cpus} CPUs" if cpus is not None and threads > cpus else ""
         axes.set_title(f"{threads} thread{'s' if threads != 1 else ''}{over}", fontsize=9)
-    handles = [matplotlib.lines.Line2D([], [], ls="none", marker=PIN_MARKERS.get(pin, "P"), color="white",
+    handles = [matplotlib.lines.Line2D([], [], ls="none", marker=words.PIN_MARKERS.get(pin, "P"), color="white",
                                        markeredgecolor="black", label=f"pin:{pin}") for pin in pins]
     handles += [matplotlib.patches.Patch(color=colors[layout], label=layout) for layout in layouts]
     handles.append(matplotlib.lines.Line2D([], [], ls="--", color="#555555", lw=0.7, label="k CPUs busy: y = k x"))
@@ -462,36 +346,6 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
         members = [point for point in points if point.key.threads == threads]
         _place_names(axes, _named_points(members), members)
     return to_svg(figure)
-
-
-@dataclass(frozen=True)
-class StepSplit:
-    """An rk4 entry's median step time and the medians of its split (fields.STEP_SPLIT_COUNTERS, in their
-    order): computing, waiting for the others, the release."""
-
-    key: BenchmarkKey
-    step_ns: float
-    parts_ns: tuple[float, ...]
-
-
-def step_splits(run_file, pin: str, threads: int, collapsed=frozenset()) -> list[StepSplit]:
-    """Per primitive of one placement and thread count (fastest first), its fastest layout's split: the median
-    of each part over the repetitions that carry the three (Run.step_splits); collapsed entries left out. Empty
-    for a file written before the split."""
-    _, layouts = _syncs_layouts(run_file)
-    splits = []
-    for sync in ranked_syncs(run_file, pin, threads, layouts, collapsed):
-        measured = []
-        for layout in layouts:
-            key = _rk4_key(run_file, sync, layout, pin, threads)
-            step = run_median(run_file, key) if key not in collapsed else None
-            run = run_file.runs.get(key)
-            repetitions = run.step_splits if run is not None else None
-            if step is not None and repetitions:
-                measured.append(StepSplit(key, step, tuple(statistics.median(part) for part in zip(*repetitions))))
-        if measured:
-            splits.append(min(measured, key=lambda split: split.step_ns))
-    return splits
 
 
 SPLIT_COLORS = ("#4c72b0", "#dd8452", "#c44e52")
@@ -523,56 +377,6 @@ def step_split_bars(splits: list[StepSplit], title: str) -> str:
     axes.set_title(title, fontsize=9)
     axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return to_svg(figure)
-
-
-@dataclass(frozen=True)
-class PenaltyRow:
-    """One penalty: kind ("false sharing: packed / padded128"), primitive, placement, thread count, time
-    ratio; from a paired measurement (lockstep_pairs) also its interval and verdict. label: what the bar
-    is, as its figure names it (default: primitive, placement, threads)."""
-
-    kind: str
-    sync: str
-    threads: int
-    ratio: float
-    ci_low: float | None = None
-    ci_high: float | None = None
-    verdict: str | None = None
-    pin: str = "compact"
-    label: str = ""
-
-    @property
-    def shown_label(self) -> str:
-        return self.label or f"{self.sync}, pin:{self.pin}, {self.threads} thread{'s' if self.threads != 1 else ''}"
-
-
-def penalty_rows(run_file, collapsed=frozenset()) -> list[PenaltyRow]:
-    """False sharing (packed / padded, pinned compactly) and migration (migrate or none / compact), per
-    primitive, from the entries' medians (a file without lockstep_pairs); collapsed entries left out."""
-    syncs, layouts = _syncs_layouts(run_file)
-    padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
-    groups = rk4_groups(run_file)
-    threads_list = sorted({threads for _, threads in groups})
-    rows = []
-
-    def ratio_of(sync, threads, numerator, denominator):
-        """median_ratio of two entries (layout, pin) of one primitive and thread count."""
-        return median_ratio(run_file, _rk4_key(run_file, sync, *numerator, threads),
-                            _rk4_key(run_file, sync, *denominator, threads), collapsed=collapsed)
-
-    for sync in syncs:
-        for threads in threads_list:
-            if padded and "packed" in layouts:
-                ratio = ratio_of(sync, threads, ("packed", "compact"), (padded, "compact"))
-                if ratio is not None:
-                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads, ratio, pin="compact"))
-            base_layout = padded or (layouts[0] if layouts else None)
-            for moved in ("migrate", "none"):
-                ratio = ratio_of(sync, threads, (base_layout, moved), (base_layout, "compact"))
-                if ratio is not None:
-                    rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
-                                           ratio, pin=moved))
-    return rows
 
 
 # Where a verdict of a paired ratio is drawn (statistics.VERDICTS): the bar's colour, hatched and pale when the
@@ -706,40 +510,11 @@ def paired_ratios(rows: list[PenaltyRow], title: str, noise: float | None = None
     return to_svg(figure)
 
 
-def topology_order(pairs) -> list[int]:
-    """CPUs ordered so that those sharing closer caches sit together: group by each relation level,
-    farthest first, keyed by the smallest CPU id of each group (inputs.C2cPair)."""
-    cpus = sorted({pair.a for pair in pairs} | {pair.b for pair in pairs})
-    ranks = sorted({relation_rank(pair.relation) for pair in pairs}, reverse=True)
-    keys = {cpu: [] for cpu in cpus}
-    for level in ranks:
-        parent = {cpu: cpu for cpu in cpus}
-
-        def find(cpu):
-            while parent[cpu] != cpu:
-                parent[cpu] = parent[parent[cpu]]
-                cpu = parent[cpu]
-            return cpu
-
-        for pair in pairs:
-            if relation_rank(pair.relation) < level:
-                first, second = find(pair.a), find(pair.b)
-                if first != second:
-                    parent[max(first, second)] = min(first, second)
-        for cpu in cpus:
-            keys[cpu].append(find(cpu))
-    return sorted(cpus, key=lambda cpu: (keys[cpu], cpu))
-
-
-def c2c_heatmap(c2c_file, method: str | None = None) -> str:
-    """The p50 one-way latency of every pair of one method (inputs.C2cFile), CPUs in topology order."""
-    order = topology_order(c2c_file.pairs)
-    index = {cpu: i for i, cpu in enumerate(order)}
-    grid = np.full((len(order), len(order)), np.nan)
-    for pair in c2c_file.pairs:
-        if (method is None or pair.method == method) and pair.p50_ns is not None:
-            grid[index[pair.a], index[pair.b]] = pair.p50_ns
-            grid[index[pair.b], index[pair.a]] = pair.p50_ns
+def c2c_heatmap(latencies) -> str:
+    """The p50 one-way latency of every pair of one method, CPUs in topology order (c2c_analysis.LatencyGrid)."""
+    order, method = list(latencies.cpus), latencies.method
+    grid = np.array([[np.nan if value is None else value for value in row] for row in latencies.p50_ns],
+                    dtype=float).reshape(len(order), len(order))
     size = max(3.2, 0.38 * len(order) + 1.8)
     figure, axes = plt.subplots(figsize=(size + 1.0, size))
     image = axes.imshow(np.ma.masked_invalid(grid), cmap="magma_r", aspect="equal")
@@ -753,13 +528,13 @@ def c2c_heatmap(c2c_file, method: str | None = None) -> str:
                               color="white" if grid[i, j] > np.nanmean(grid) else "black")
     axes.set_xlabel("CPU (ordered by topology)")
     axes.set_ylabel("CPU")
-    axes.set_title(f"core-to-core one-way latency, p50 ({c2c_file.label}{', ' + method if method else ''})")
+    axes.set_title(f"core-to-core one-way latency, p50 ({latencies.label}{', ' + method if method else ''})")
     figure.colorbar(image, ax=axes, label="ns")
     return to_svg(figure)
 
 
 def delay_histogram(delay) -> str:
-    """The wake-up latency histogram of a paced run (inputs.DelayFile), its p50, p99 and p99.9 marked."""
+    """The wake-up latency histogram of a paced run (delay_reader.DelayFile), its p50, p99 and p99.9 marked."""
     histogram = delay.histogram
     counts = np.asarray(histogram.counts, dtype=float)
     edges_us = (histogram.first_ns + histogram.bucket_ns * np.arange(counts.size + 1)) / 1e3
@@ -791,11 +566,11 @@ def delay_causes(rows: list[tuple[str, dict[str, float]]], names) -> str:
         total = sum(split.get(key, 0.0) for key, _ in names)
         shares.append({key: (split.get(key, 0.0) / total if total > 0 else 0.0) for key, _ in names})
     left = [0.0] * len(rows)
-    for index, (key, words) in enumerate(names):
+    for index, (key, name) in enumerate(names):
         widths = [100 * split[key] for split in shares]
         if not any(widths):
             continue
-        axes.barh(labels, widths, left=left, color=colours[index % len(colours)], label=words)
+        axes.barh(labels, widths, left=left, color=colours[index % len(colours)], label=name)
         left = [a + b for a, b in zip(left, widths)]
     axes.invert_yaxis()
     axes.set_xlim(0, 100)
@@ -806,18 +581,12 @@ def delay_causes(rows: list[tuple[str, dict[str, float]]], names) -> str:
     return to_svg(figure)
 
 
-def trajectory_deviation(verify) -> float:
-    """The largest deviation of a trajectory (inputs.VerifyFile) from the analytic solution."""
-    reference_x1, reference_x2 = paper.analytic_trajectory(verify.t)
-    return float(max(np.max(np.abs(np.asarray(verify.x1) - reference_x1)),
-                     np.max(np.abs(np.asarray(verify.x2) - reference_x2))))
-
-
-def trajectory(verify, deviation: float) -> str:
-    """The paper's Figure 2: x1 and x2 against time, with the analytic solution dashed."""
+def trajectory(verify, reference, deviation: float) -> str:
+    """The paper's Figure 2: x1 and x2 of a verify trajectory against time, with the analytic solution
+    (reference: its x1 and x2 at the trajectory's times) dashed."""
     t = np.asarray(verify.t)
     x1, x2 = np.asarray(verify.x1), np.asarray(verify.x2)
-    reference_x1, reference_x2 = paper.analytic_trajectory(t)
+    reference_x1, reference_x2 = reference
     label = verify.label
     figure, axes = plt.subplots(figsize=(6.8, 3.2))
     axes.plot(t, x1, lw=1.0, label="x1 (lockstep)")
@@ -832,7 +601,7 @@ def trajectory(verify, deviation: float) -> str:
 
 
 def wakeup_histograms(histograms, panels, title: str, marks=None) -> str:
-    """Wake-up latency histograms in 1 us buckets (report.LatencyHistograms) on a logarithmic latency axis
+    """Wake-up latency histograms in 1 us buckets (delay_reader.LatencyHistograms) on a logarithmic latency axis
     and a logarithmic count axis: the body (a few us) and the tail (hundreds of us) both show, and the tail
     is the point. panels: (title, counts, overflow, highlighted) each; side by side, sharing both axes.
     The wake-ups beyond the bound stand as one hatched overflow bar at its right. marks: {name: ns} drawn
@@ -888,7 +657,7 @@ def wakeup_histograms(histograms, panels, title: str, marks=None) -> str:
 
 
 def period_search(search) -> str:
-    """The find-period search (report.PeriodSearch): each trial's period against its observed miss rate
+    """The find-period search (delay_reader.PeriodSearch): each trial's period against its observed miss rate
     (whisker up to the upper bound that decided it), the target rate and the answer marked, the trials
     numbered in the order they ran. A trial without a miss sits on the axis's floor, marked as zero."""
     trials = list(search.trials)
@@ -989,7 +758,7 @@ def scaling_curve(curve) -> str:
     """`lockstep run --scaling`: the curve's counter against threads on log-log axes, one line per primitive on
     its best layout at each count (a bar: the min..max over repetitions), hollow markers where the threads
     outnumbered the CPUs, and the run's
-    core-to-core one-way latency as a reference line. curve: inputs.ScalingCurve."""
+    core-to-core one-way latency as a reference line. curve: run_file.ScalingCurve."""
     figure, axes = plt.subplots(figsize=(7.2, 4.2))
     lines = {}
     for point in curve.points:
@@ -1032,7 +801,7 @@ def scaling_curve(curve) -> str:
 
 def mpi_distributions(exchanges, field: str, keys, title: str, reference_ns: float | None = None,
                       reference_label: str = "", ylabel: str = "") -> str:
-    """Grouped bars on a log axis: one group per exchange of a `lockstep mpi` file (inputs.MpiExchange),
+    """Grouped bars on a log axis: one group per exchange of a `lockstep mpi` file (mpi_reader.MpiExchange),
     one bar per statistic of its `field` distribution (stage, skew); a dashed line at reference_ns."""
     labels = [exchange.label for exchange in exchanges]
     width = 0.8 / len(keys)

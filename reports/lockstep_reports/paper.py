@@ -50,3 +50,15 @@ def analytic_trajectory(t, c_over_m: float = C_OVER_M, start=INITIAL_POSITIONS):
     t = np.asarray(t, dtype=float)
     positions = modes @ (amplitudes[:, None] * np.cos(np.outer(frequencies, t)))
     return positions[0], positions[1]
+
+
+def trajectory_reference(verify):
+    """x1 and x2 of the analytic solution at the times of a verify trajectory (verify_reader.VerifyFile)."""
+    return analytic_trajectory(verify.t)
+
+
+def trajectory_deviation(verify, reference) -> float:
+    """The largest deviation of a trajectory from its reference (trajectory_reference)."""
+    reference_x1, reference_x2 = reference
+    return float(max(np.max(np.abs(np.asarray(verify.x1) - reference_x1)),
+                     np.max(np.abs(np.asarray(verify.x2) - reference_x2))))

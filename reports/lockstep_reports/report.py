@@ -22,7 +22,7 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import figures, paper, statistics
+from . import c2c_analysis, figures, matrix, paper, statistics, words
 from .normalisation import fingerprint, layout_effects, rank_tables
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
@@ -149,7 +149,7 @@ def recommended_cell(run_file: RunFile, pin: str, threads: int) -> tuple[str, st
 
 def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     sections = []
-    groups = figures.rk4_groups(run_file)
+    groups = matrix.rk4_groups(run_file)
     if not groups:
         return [Section(f"Results: {run_file.label}",
                         paragraphs=["No `rk4/sync:.../layout:.../pin:.../threads:...` entries in this file."])]
@@ -167,18 +167,18 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
     if left_out:
         heat.paragraphs.append(left_out + " Their cells are grey.")
         bars.paragraphs.append(left_out)
-    noisy_cells = within_noise_cells(run_file)
+    noisy_cells = matrix.within_noise_cells(run_file)
     if noisy_cells:
         heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
                                "padded layout was within noise or unsure (its confidence interval lies inside the "
                                "noise band, or straddles its edge): the two cells do not differ measurably.")
     for pin, threads in groups:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
-                                   figures.heatmap(run_file, pin, threads,
-                                                   noisy_cells.get((pin, threads), frozenset()), collapsed,
-                                                   recommended_cell(run_file, pin, threads))))
+                                   figures.heatmap(matrix.heatmap_cells(
+                                       run_file, pin, threads, noisy_cells.get((pin, threads), frozenset()),
+                                       collapsed, recommended_cell(run_file, pin, threads)))))
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
-                                   figures.bars_with_spread(run_file, pin, threads, collapsed)))
+                                   figures.bars_with_spread(matrix.spread_bars(run_file, pin, threads, collapsed))))
     sections += [heat, bars, cpu_section(run_file, counter)]
     split = split_section(run_file, counter)
     if split:
@@ -235,7 +235,7 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     barriers; a file without team_cpu_* (written before it) gets one line saying why there is no figure."""
     title = f"Step time against CPU per step: {run_file.label}"
     collapsed = run_file.collapsed
-    families = [(family, unit, figures.cpu_points(run_file, family, collapsed))
+    families = [(family, unit, matrix.cpu_points(run_file, family, collapsed))
                 for family, unit in (("rk4", "step"), ("barrier", "episode"))]
     if not any(points for _, _, points in families):
         return Section(title, paragraphs=[
@@ -266,8 +266,8 @@ def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
     """Where an rk4 step's time goes (compute, waiting for the others, release), per primitive at its fastest
     layout, one figure per placement and thread count, and the medians in a table; None for a file without
     the split (written before it)."""
-    groups = [(pin, threads, figures.step_splits(run_file, pin, threads, run_file.collapsed))
-              for pin, threads in figures.rk4_groups(run_file)]
+    groups = [(pin, threads, matrix.step_splits(run_file, pin, threads, run_file.collapsed))
+              for pin, threads in matrix.rk4_groups(run_file)]
     if not any(splits for _, _, splits in groups):
         return None
     names = [word for _, word in STEP_SPLIT_COUNTERS]
@@ -385,7 +385,7 @@ def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
                    tables=[Table(["primitive"] + [f"{t} threads" for t in curve.threads], rows)])
 
 
-def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
+def penalty_table(rows: list[matrix.PenaltyRow]) -> Table:
     """One line per bar of the penalties figure: what it compares, for which primitive, placement and thread
     count, its ratio and (a paired one) its interval and verdict."""
     lines = []
@@ -399,17 +399,6 @@ def penalty_table(rows: list[figures.PenaltyRow]) -> Table:
 
 PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): shared lines / isolated",
                     "migration": "migration (paired): pin:{pin} / pin:compact"}
-
-
-def within_noise_cells(run_file: RunFile) -> dict[tuple[str, int], frozenset]:
-    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair made no call: within
-    noise or unsure (statistics.verdict)."""
-    cells: dict[tuple[str, int], set] = {}
-    for pair in run_file.pairs:
-        if pair.comparison == "false_sharing" and pair.verdict in (statistics.WITHIN_NOISE, statistics.UNSURE):
-            key = pair.a_key
-            cells.setdefault((key.get("pin"), key.threads), set()).add((key.get("sync"), key.get("layout")))
-    return {group: frozenset(members) for group, members in cells.items()}
 
 
 def _threads_words(threads) -> str:
@@ -433,27 +422,27 @@ def pair_label(pair) -> str:
     return _difference(a, b).replace(" / ", " vs ")
 
 
-def paired_penalty_rows(run_file: RunFile) -> list[figures.PenaltyRow]:
+def paired_penalty_rows(run_file: RunFile) -> list[matrix.PenaltyRow]:
     """The false-sharing and migration penalties measured as pairs (lockstep_pairs), with their intervals."""
     rows = []
     for pair in run_file.pairs:
         if pair.comparison in PAIRED_PENALTIES and pair.a_key.get("sync") and pair.a_key.threads is not None:
             kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"))
-            rows.append(figures.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
+            rows.append(matrix.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
                                            pair.ci_low, pair.ci_high, pair.verdict, pin=pair.a_key.get("pin") or "",
                                            label=pair_label(pair)))
     return rows
 
 
 def _pins_words(pins) -> str:
-    return ", ".join(f"pin:{pin}" for pin in figures.ordered(pins, figures.PIN_ORDER))
+    return ", ".join(f"pin:{pin}" for pin in matrix.ordered(pins, words.PIN_ORDER))
 
 
 def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
     paired = paired_penalty_rows(run_file)
     # A kind of penalty the file measured as pairs is drawn from its pairs; the others from the medians.
     covered = {"false sharing" if row.kind.startswith("false sharing") else "migration" for row in paired}
-    rows = paired + [row for row in figures.penalty_rows(run_file, run_file.collapsed)
+    rows = paired + [row for row in matrix.penalty_rows(run_file, run_file.collapsed)
                      if not any(row.kind.startswith(kind) for kind in covered)]
     if not rows:
         return None
@@ -509,7 +498,7 @@ def best_other_section(run_file: RunFile, counter: list[int]) -> Section | None:
     if not views:
         return None
     noise = max(pair.noise for pair in views)
-    rows = [figures.PenaltyRow("against_best_other", pair.a_key.get("sync") or "", pair.a_key.threads or 0,
+    rows = [matrix.PenaltyRow("against_best_other", pair.a_key.get("sync") or "", pair.a_key.threads or 0,
                                pair.median, pair.ci_low, pair.ci_high, pair.verdict, pin=pair.a_key.get("pin") or "",
                                label=pair_label(pair) + (" *" if pair.inverted else ""))
              for pair in views]
@@ -540,7 +529,7 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
     for kind in kinds:
         if kind in PAIRS_DRAWN:
             members = [p for p in run_file.pairs if p.comparison == kind]
-            rows = [figures.PenaltyRow(kind, "", 0, p.median, p.ci_low, p.ci_high, p.verdict, label=pair_label(p))
+            rows = [matrix.PenaltyRow(kind, "", 0, p.median, p.ci_low, p.ci_high, p.verdict, label=pair_label(p))
                     for p in members]
             section_figures.append(Figure(f"pairs-{counter[0]}-{_slug(kind)}", COMPARISON_TITLES[kind],
                                           figures.paired_ratios(rows, COMPARISON_TITLES[kind],
@@ -639,12 +628,12 @@ def c2c_section(item: C2cFile, counter: list[int]) -> Section:
         for pair in item.pairs:
             if pair.method == method and pair.p50_ns is not None:
                 by_relation.setdefault(pair.relation, []).append(pair.p50_ns)
-        for relation in sorted(by_relation, key=figures.relation_order):
+        for relation in sorted(by_relation, key=c2c_analysis.relation_order):
             values = sorted(by_relation[relation])
             rows.append([method, relation, str(len(values)), format_ns(values[0]),
                          format_ns(statistics.median(values)), format_ns(values[-1])])
         section_figures.append(Figure(f"c2c-{counter[0]}-{_slug(method)}", f"{item.label}, method {method}",
-                                      figures.c2c_heatmap(item, method)))
+                                      figures.c2c_heatmap(c2c_analysis.latency_grid(item, method))))
     paragraphs = ["One-way latency of a cache line passed between two CPUs (median of its samples), CPUs "
                   "ordered so that those sharing a core or a cache sit next to each other; one map per "
                   "measuring method."]
@@ -833,8 +822,9 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
 
 
 def trajectory_section(item: VerifyFile, counter: list[int]) -> Section:
-    deviation = figures.trajectory_deviation(item)
-    figure = Figure(f"trajectory-{counter[0]}", item.label, figures.trajectory(item, deviation))
+    reference = paper.trajectory_reference(item)
+    deviation = paper.trajectory_deviation(item, reference)
+    figure = Figure(f"trajectory-{counter[0]}", item.label, figures.trajectory(item, reference, deviation))
     counter[0] += 1
     return Section(f"Trajectory: {item.label}",
                    paragraphs=[f"x1 and x2 of the two-mass system from x(0) = (2, -3) (the paper's Figure 2), with "

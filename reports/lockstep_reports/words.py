@@ -7,6 +7,14 @@ them: each such fallback says which field of the file replaces it.
 """
 from __future__ import annotations
 
+# ---------------------------------------------------------------- layouts and placements
+
+# The order of the layouts' columns (a heat map's, the CPU figure's colours).
+LAYOUT_ORDER = ("packed", "padded64", "padded128", "per_thread")
+# The order of the placements' groups, and each one's marker in the CPU figure.
+PIN_ORDER = ("compact", "scatter", "none", "migrate")
+PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
+
 # ---------------------------------------------------------------- delay causes (`lockstep delay --out`, causes)
 
 # The causes of a late step, in the order of bench/delay/delay_report.hpp's delay_cause, with their words: the

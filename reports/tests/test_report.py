@@ -10,7 +10,7 @@ from unittest import mock
 
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import figures, paper
+from lockstep_reports import c2c_analysis, figures, matrix, paper
 from lockstep_reports.run_analysis import run_median
 from lockstep_reports.inputs import load_any, load_run_file
 
@@ -262,7 +262,7 @@ class ScalingReport(unittest.TestCase):
 
 class Pieces(unittest.TestCase):
     def test_topology_order_puts_siblings_and_cache_domains_together(self):
-        order = figures.topology_order(load_any(fixture("c2c_b.json")).pairs)
+        order = c2c_analysis.topology_order(load_any(fixture("c2c_b.json")).pairs)
         self.assertEqual(order[:4], [0, 8, 1, 9])
         self.assertEqual(set(order[:8]), {0, 1, 2, 3, 8, 9, 10, 11})
 
@@ -369,8 +369,8 @@ class Figures(unittest.TestCase):
 
     def test_the_heat_map_ranks_its_rows_and_keeps_collapsed_cells_out_of_its_scale(self):
         run_file = load_run_file(fixture(HEADLINE))
-        figure = self.drawn(figures.heatmap, run_file, "compact", 4, frozenset(), run_file.collapsed,
-                            ("futex_spin", "padded128"))
+        cells = matrix.heatmap_cells(run_file, "compact", 4, frozenset(), run_file.collapsed, ("futex_spin", "padded128"))
+        figure = self.drawn(figures.heatmap, cells)
         axes = figure.axes[0]
         rows = [label.get_text() for label in axes.get_yticklabels()]
         self.assertEqual(rows, ["futex_spin", "std_barrier", "ck_tas", "seqlock"])  # fastest first, collapsed last
@@ -382,9 +382,9 @@ class Figures(unittest.TestCase):
         self.assertEqual(axes.get_xlabel(), "layout")
 
     def test_penalty_bars_each_have_a_line_and_the_axis_covers_them(self):
-        rows = [figures.PenaltyRow("false sharing", "mailbox", 4, 1.3, 1.2, 1.4, "penalty", pin="compact"),
-                figures.PenaltyRow("false sharing", "mailbox", 4, 0.97, 0.9, 1.02, "unsure", pin="none"),
-                figures.PenaltyRow("false sharing", "ck_tas", 4, 3500.0, pin="compact")]
+        rows = [matrix.PenaltyRow("false sharing", "mailbox", 4, 1.3, 1.2, 1.4, "penalty", pin="compact"),
+                matrix.PenaltyRow("false sharing", "mailbox", 4, 0.97, 0.9, 1.02, "unsure", pin="none"),
+                matrix.PenaltyRow("false sharing", "ck_tas", 4, 3500.0, pin="compact")]
         figure = self.drawn(figures.penalties, rows, 0.05)
         axes = figure.axes[0]
         labels = [label.get_text() for label in axes.get_yticklabels()]
@@ -414,9 +414,9 @@ class Figures(unittest.TestCase):
 
 
 class CpuPerStep(Scratch):
-    """Step time against the team's CPU per step (report.cpu_section, figures.cpu_against_time) and the split of
-    a step (report.split_section), on fixtures/cpu_split.json: headline.json with team_cpu_* and the split
-    (fixtures/make_cpu_fixture.py: every entry's team CPU is a fixed number of CPUs busy x its time)."""
+    """Step time against the team's CPU per step (report.cpu_section, matrix.cpu_points, figures.cpu_against_time)
+    and the split of a step (report.split_section), on fixtures/cpu_split.json: headline.json with team_cpu_* and
+    the split (fixtures/make_cpu_fixture.py: every entry's team CPU is a fixed number of CPUs busy x its time)."""
 
     CPUS_BUSY = {"ck_tas": {2: 2.0, 4: 2.0}, "seqlock": {2: 2.0, 4: 2.0}, "futex_spin": {2: 1.9, 4: 1.6},
                  "std_barrier": {2: 0.5, 4: 0.8}}  # as make_cpu_fixture.py writes them
@@ -427,7 +427,7 @@ class CpuPerStep(Scratch):
 
     def test_one_point_per_entry_but_the_collapsed_at_its_medians(self):
         run_file = load_run_file(fixture(CPU_SPLIT))
-        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        points = matrix.cpu_points(run_file, "rk4", run_file.collapsed)
         entries = [key for key in run_file.runs if key.family == "rk4" and key.get("sync")]
         self.assertEqual(len(entries), 48)  # 4 primitives x 3 layouts x 2 placements x 2 thread counts
         self.assertEqual(len(run_file.collapsed), 12)  # ck_tas and seqlock at 4 threads
@@ -437,14 +437,14 @@ class CpuPerStep(Scratch):
             self.assertEqual(point.unit_ns, run_median(run_file, point.key))  # the median every table shows
             self.assertAlmostEqual(point.cpus_busy, self.CPUS_BUSY[point.key.get("sync")][point.key.threads],
                                    places=4)
-        barrier = figures.cpu_points(run_file, "barrier", run_file.collapsed)
+        barrier = matrix.cpu_points(run_file, "barrier", run_file.collapsed)
         self.assertEqual(len(barrier), 4)
         self.assertEqual({point.key.get("sync"): round(point.cpus_busy, 4) for point in barrier},
                          {sync: busy[2] for sync, busy in self.CPUS_BUSY.items()})
 
     def test_the_figure_draws_them_log_log_with_a_line_per_cpu_count(self):
         run_file = load_run_file(fixture(CPU_SPLIT))
-        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        points = matrix.cpu_points(run_file, "rk4", run_file.collapsed)
         captured = []
         recommended = frozenset(item.entry_key for item in run_file.headline.recommendations)
         with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
@@ -534,7 +534,7 @@ class CpuPerStep(Scratch):
         """fixtures/run_quick_split.json: `lockstep run --quick --threads 2 --sync mailbox,std_barrier,futex_spin
         --pairs 0` on a 2-CPU VM, as bench/run/rk4_entries.cpp writes the split."""
         run_file = load_run_file(fixture(REAL_SPLIT))
-        points = figures.cpu_points(run_file, "rk4", run_file.collapsed)
+        points = matrix.cpu_points(run_file, "rk4", run_file.collapsed)
         self.assertEqual(len(points), 18)  # 3 primitives x (4 layouts, mailbox 1) x 2 placements, at 2 threads
         self.assertTrue(all(0.0 < point.cpus_busy < 2.1 for point in points))  # the team has the VM's 2 CPUs
         # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/run/headline.hpp, the
@@ -552,7 +552,7 @@ class CpuPerStep(Scratch):
 
     def test_split_bars_are_shares_of_the_parts(self):
         run_file = load_run_file(fixture(CPU_SPLIT))
-        splits = figures.step_splits(run_file, "none", 2, run_file.collapsed)
+        splits = matrix.step_splits(run_file, "none", 2, run_file.collapsed)
         self.assertEqual([split.key.get("sync") for split in splits],
                          ["ck_tas", "seqlock", "futex_spin", "std_barrier"])  # fastest first
         captured = []

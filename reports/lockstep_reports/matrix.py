@@ -1,0 +1,286 @@
+"""A run file's sync x layout x placement x threads matrix as the report shows it: its groups (a placement and a
+thread count), each group's primitives fastest first, the cells of a heat map, the bars with their spread, the
+CPU per step, the split of a step, and the penalties of the entries' medians where the file has no pair for them.
+figures.py draws what these give; nothing here draws."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from . import statistics, words
+from .fields import TEAM_CPU_COUNTERS
+from .names import BenchmarkKey
+from .run_analysis import median_ratio, run_median, sample
+
+
+def ordered(values, preferred):
+    """The values in the preferred order, then the others sorted."""
+    values = set(values)
+    return [v for v in preferred if v in values] + sorted(values - set(preferred))
+
+
+def rk4_groups(run_file) -> list[tuple[str, int]]:
+    """(pin, threads) of every group of rk4 entries, placements in words.PIN_ORDER, then by thread count."""
+    groups = {(key.get("pin"), key.threads) for key in run_file.runs
+              if key.family == "rk4" and key.get("sync") and key.get("layout") and key.get("pin")}
+    pins = ordered({pin for pin, _ in groups}, words.PIN_ORDER)
+    return sorted(groups, key=lambda group: (pins.index(group[0]), group[1] or 0))
+
+
+def model_at(run_file, threads) -> str | None:
+    """The model segment of the run's rk4 entries at this thread count (a chain's "chain8"), or None: the
+    paper's two-mass system, whose names carry no model."""
+    for key in run_file.runs:
+        if key.family == "rk4" and key.threads == threads and key.get("sync"):
+            return key.get("model")
+    return None
+
+
+def rk4_key(run_file, sync, layout, pin, threads) -> BenchmarkKey:
+    """The rk4 entry of a primitive, layout, placement and thread count (with the run's model there)."""
+    segments = [("sync", sync), ("layout", layout), ("pin", pin), ("threads", str(threads))]
+    model = model_at(run_file, threads)
+    if model:
+        segments.append(("model", model))
+    return BenchmarkKey("rk4", tuple(sorted(segments)))
+
+
+def syncs_layouts(run_file) -> tuple[list[str], list[str]]:
+    """The primitives of the run's rk4 entries (sorted) and their layouts (in words.LAYOUT_ORDER)."""
+    syncs = sorted({key.get("sync") for key in run_file.runs if key.family == "rk4" and key.get("sync")})
+    layouts = ordered({key.get("layout") for key in run_file.runs if key.family == "rk4" and key.get("layout")},
+                      words.LAYOUT_ORDER)
+    return syncs, layouts
+
+
+def ranked_syncs(run_file, pin: str, threads: int, layouts, collapsed=frozenset()) -> list[str]:
+    """The primitives of one placement and thread count, fastest first: by the median of each one's fastest
+    layout there; a primitive with nothing measured but collapsed or unavailable entries comes last."""
+    syncs, _ = syncs_layouts(run_file)
+
+    def best(sync):
+        values = [run_median(run_file, key) for key in (rk4_key(run_file, sync, layout, pin, threads)
+                                                         for layout in layouts) if key not in collapsed]
+        values = [value for value in values if value is not None]
+        return (0, min(values), sync) if values else (1, 0.0, sync)
+
+    return sorted(syncs, key=best)
+
+
+# ---------------------------------------------------------------- the heat map and the bars
+
+@dataclass(frozen=True)
+class HeatmapCells:
+    """One heat map (figures.heatmap): the median step time of each primitive (rows, fastest first) with each
+    layout (columns) at one placement and thread count. values[row][column]: None where the combination was not
+    run or errored; collapsed: the (row, column) of cells whose entry collapsed (the headline's: grey, out of the
+    colour scale); within_noise: the (sync, layout) cells whose false-sharing pair made no call (hatched, "≈");
+    recommended: the (sync, layout) the headline recommends there (outlined)."""
+
+    pin: str
+    threads: int
+    syncs: tuple[str, ...]
+    layouts: tuple[str, ...]
+    values: tuple[tuple[float | None, ...], ...]
+    collapsed: frozenset = frozenset()
+    within_noise: frozenset = frozenset()
+    recommended: tuple[str, str] | None = None
+
+
+def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), collapsed=frozenset(),
+                  recommended: tuple[str, str] | None = None) -> HeatmapCells:
+    """The heat map of one placement and thread count (HeatmapCells); collapsed: the entries (keys) that
+    collapsed."""
+    _, layouts = syncs_layouts(run_file)
+    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
+    values, gone = [], set()
+    for row, sync in enumerate(syncs):
+        cells = []
+        for column, layout in enumerate(layouts):
+            key = rk4_key(run_file, sync, layout, pin, threads)
+            value = run_median(run_file, key)
+            cells.append(value)
+            if value is not None and key in collapsed:
+                gone.add((row, column))
+        values.append(tuple(cells))
+    return HeatmapCells(pin, threads, tuple(syncs), tuple(layouts), tuple(values), frozenset(gone),
+                        frozenset(within_noise), recommended)
+
+
+@dataclass(frozen=True)
+class SpreadBar:
+    """One bar of figures.bars_with_spread: a primitive (row) at a layout (column), its repetitions' times, their
+    median (the one every table shows: run_analysis.run_median) and interquartile range."""
+
+    row: int
+    column: int
+    times: tuple[float, ...]
+    median: float
+    low: float
+    high: float
+
+
+@dataclass(frozen=True)
+class SpreadBars:
+    """Per primitive (fastest first) of one placement and thread count, one bar per layout; left_out: the
+    primitives with a collapsed entry there (named under the title)."""
+
+    pin: str
+    threads: int
+    syncs: tuple[str, ...]
+    layouts: tuple[str, ...]
+    bars: tuple[SpreadBar, ...]  # by layout, then by primitive
+    left_out: tuple[str, ...]
+
+
+def spread_bars(run_file, pin: str, threads: int, collapsed=frozenset()) -> SpreadBars:
+    """The bars of one placement and thread count; collapsed entries (keys) are left out, and a primitive with
+    nothing else there is not drawn."""
+    _, layouts = syncs_layouts(run_file)
+    syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
+    left_out = sorted({sync for sync in syncs for layout in layouts
+                       if rk4_key(run_file, sync, layout, pin, threads) in collapsed})
+    syncs = [sync for sync in syncs if any(rk4_key(run_file, sync, layout, pin, threads) not in collapsed
+                                           for layout in layouts)]
+    bars = []
+    for column, layout in enumerate(layouts):
+        for row, sync in enumerate(syncs):
+            key = rk4_key(run_file, sync, layout, pin, threads)
+            run = run_file.runs.get(key)
+            if run is None or run.errored or key in collapsed:
+                continue
+            times, _ = sample(run)
+            if not times:
+                continue
+            bars.append(SpreadBar(row, column, tuple(times), run_median(run_file, key),
+                                  statistics.quantile(times, 0.25), statistics.quantile(times, 0.75)))
+    return SpreadBars(pin, threads, tuple(syncs), tuple(layouts), tuple(bars), tuple(left_out))
+
+
+# ---------------------------------------------------------------- CPU per step, and the step's split
+
+@dataclass(frozen=True)
+class CpuPoint:
+    """One entry of an rk4/ or barrier/ family: its median time per unit (step or episode) and the median CPU
+    time its whole team burned per unit (fields.TEAM_CPU_COUNTERS), both statistics.median over the
+    repetitions (the unit's time as run_analysis.run_median takes it)."""
+
+    key: BenchmarkKey
+    unit_ns: float
+    team_cpu_ns: float
+
+    @property
+    def cpus_busy(self) -> float:
+        return self.team_cpu_ns / self.unit_ns
+
+
+def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
+    """The entries of one family (rk4: the sync/layout/pin/threads matrix; barrier: the bare barriers) with a
+    time and a team CPU time per unit, collapsed entries (the headline's) left out; sorted by name. An entry
+    without the counter (a file written before it) has no point."""
+    points = []
+    for key in sorted(run_file.runs, key=BenchmarkKey.sort_key):
+        if key.family != family or not key.get("sync") or not key.get("pin") or key.threads is None:
+            continue
+        if key in collapsed or run_file.runs[key].errored:
+            continue
+        cpu = next((values for values in (run_file.runs[key].counter_values(name) for name in TEAM_CPU_COUNTERS)
+                    if values), None)
+        unit = run_median(run_file, key)
+        if cpu and unit:
+            team_cpu = statistics.median(cpu)
+            if team_cpu > 0:
+                points.append(CpuPoint(key, unit, team_cpu))
+    return points
+
+
+@dataclass(frozen=True)
+class StepSplit:
+    """An rk4 entry's median step time and the medians of its split (fields.STEP_SPLIT_COUNTERS, in their
+    order): computing, waiting for the others, the release."""
+
+    key: BenchmarkKey
+    step_ns: float
+    parts_ns: tuple[float, ...]
+
+
+def step_splits(run_file, pin: str, threads: int, collapsed=frozenset()) -> list[StepSplit]:
+    """Per primitive of one placement and thread count (fastest first), its fastest layout's split: the median
+    of each part over the repetitions that carry the three (Run.step_splits); collapsed entries left out. Empty
+    for a file written before the split."""
+    _, layouts = syncs_layouts(run_file)
+    splits = []
+    for sync in ranked_syncs(run_file, pin, threads, layouts, collapsed):
+        measured = []
+        for layout in layouts:
+            key = rk4_key(run_file, sync, layout, pin, threads)
+            step = run_median(run_file, key) if key not in collapsed else None
+            run = run_file.runs.get(key)
+            repetitions = run.step_splits if run is not None else None
+            if step is not None and repetitions:
+                measured.append(StepSplit(key, step, tuple(statistics.median(part) for part in zip(*repetitions))))
+        if measured:
+            splits.append(min(measured, key=lambda split: split.step_ns))
+    return splits
+
+
+# ---------------------------------------------------------------- ratios drawn as bars
+
+@dataclass(frozen=True)
+class PenaltyRow:
+    """One bar of a ratio figure (figures.penalties, figures.paired_ratios): kind ("false sharing: ..."),
+    primitive, placement, thread count, time ratio; from a paired measurement (lockstep_pairs) also its interval
+    and verdict. label: what the bar is, as its figure names it (default: primitive, placement, threads)."""
+
+    kind: str
+    sync: str
+    threads: int
+    ratio: float
+    ci_low: float | None = None
+    ci_high: float | None = None
+    verdict: str | None = None
+    pin: str = ""
+    label: str = ""
+
+    @property
+    def shown_label(self) -> str:
+        return self.label or f"{self.sync}, pin:{self.pin}, {self.threads} thread{'s' if self.threads != 1 else ''}"
+
+
+def penalty_rows(run_file, collapsed=frozenset()) -> list[PenaltyRow]:
+    """False sharing (packed / padded, pinned compactly) and migration (migrate or none / compact), per
+    primitive, from the entries' medians (a file without lockstep_pairs); collapsed entries left out."""
+    syncs, layouts = syncs_layouts(run_file)
+    padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
+    groups = rk4_groups(run_file)
+    threads_list = sorted({threads for _, threads in groups})
+    rows = []
+
+    def ratio_of(sync, threads, numerator, denominator):
+        """median_ratio of two entries (layout, pin) of one primitive and thread count."""
+        return median_ratio(run_file, rk4_key(run_file, sync, *numerator, threads),
+                            rk4_key(run_file, sync, *denominator, threads), collapsed=collapsed)
+
+    for sync in syncs:
+        for threads in threads_list:
+            if padded and "packed" in layouts:
+                ratio = ratio_of(sync, threads, ("packed", "compact"), (padded, "compact"))
+                if ratio is not None:
+                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads, ratio, pin="compact"))
+            base_layout = padded or (layouts[0] if layouts else None)
+            for moved in ("migrate", "none"):
+                ratio = ratio_of(sync, threads, (base_layout, moved), (base_layout, "compact"))
+                if ratio is not None:
+                    rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
+                                           ratio, pin=moved))
+    return rows
+
+
+def within_noise_cells(run_file) -> dict[tuple[str, int], frozenset]:
+    """(pin, threads) -> the (sync, layout) cells of that heat map whose false-sharing pair made no call: within
+    noise or unsure (statistics.verdict)."""
+    cells: dict[tuple[str, int], set] = {}
+    for pair in run_file.pairs:
+        if pair.comparison == "false_sharing" and pair.verdict in (statistics.WITHIN_NOISE, statistics.UNSURE):
+            key = pair.a_key
+            cells.setdefault((key.get("pin"), key.threads), set()).add((key.get("sync"), key.get("layout")))
+    return {group: frozenset(members) for group, members in cells.items()}
