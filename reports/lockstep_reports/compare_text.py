@@ -14,6 +14,7 @@ from .names import BenchmarkKey
 from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
+from .run_analysis import sharing_layout
 from .run_file import RunFile
 
 def mode_text(mode) -> str:
@@ -396,10 +397,11 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
         headings += [f"{letter} x serial", f"{letter} x c2c"]
     out += _table(headings, rows, right=set(range(1, len(headings))))
     out.append("")
-    out.append("Layouts against packed (speed-up = packed time / layout time, on each machine):")
+    reference = sharing_layout(run_files[0])
+    out.append(f"Layouts against {reference} (speed-up = {reference} time / layout time, on each machine):")
     effect_rows = [[sync, pin, str(threads), layout] + [(_number(s) + "x") if s else "-" for s in speedups]
-                   for sync, pin, threads, layout, speedups in layout_effects(run_files, time_kind=time_kind)]
-    out += _table(["sync", "pin", "threads", "layout"] + [f"{letter} vs packed" for letter in letters],
+                   for sync, pin, threads, layout, speedups in layout_effects(run_files, reference, time_kind)]
+    out += _table(["sync", "pin", "threads", "layout"] + [f"{letter} vs {reference}" for letter in letters],
                   effect_rows, right=set(range(4, 4 + len(letters))))
     out.append("")
     out.append("Rank per machine (fastest first; sync/layout, step time, x serial):")

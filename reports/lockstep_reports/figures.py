@@ -272,16 +272,17 @@ def _place_names(axes, named: list[CpuPoint], members: list[CpuPoint]) -> None:
                           arrowprops=dict(arrowstyle="-", color="#777777", lw=0.5, shrinkA=1, shrinkB=3))
 
 
-def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, recommended=frozenset()) -> str:
+def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, recommended=frozenset(),
+                     layout_order=()) -> str:
     """Median time per unit (x) against the median CPU time the team burned per unit (y), log-log, one panel
     per thread count (CPU_PANELS_PER_ROW to a row), one point per entry: marker by placement, colour by layout
     (rk4). The lines y = k x for k = 1 .. threads (busy_lines: up to the machine's `cpus`, and the thread count
     dotted beyond them) are "k CPUs busy", named at the panel's right edge: a spinning team sits on k = its
     threads (or the CPUs it has), a sleeping one below. The fastest primitives and the entry that keeps the
     fewest CPUs busy are named; the `recommended` entries (keys: the headline's choices) are ringed in red, as
-    the heat maps outline them."""
+    the heat maps outline them. layout_order: the layouts in the order of their colours (matrix.syncs_layouts)."""
     thread_counts = sorted({point.key.threads for point in points})
-    layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, words.LAYOUT_ORDER)
+    layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, layout_order)
     pins = ordered({point.key.get("pin") for point in points}, words.PIN_ORDER)
     palette = plt.get_cmap("tab10")
     colors = {layout: palette(index) for index, layout in enumerate(layouts)}

@@ -226,8 +226,8 @@ def run_compare(argv: list[str]) -> int:
             sys.stderr.write(f"lockstep compare: regression beyond {options.fail_above:g}%: {what} "
                              f"({aggregate.entries} entries) is {(aggregate.ratio - 1) * 100:.1f}% slower in "
                              f"{comparison.contender.label} (geometric mean of B/A "
-                             f"{compare_text.aggregate_text(comparison, aggregate)}, beyond the {options.noise:g}% noise "
-                             f"band)\n")
+                             f"{compare_text.aggregate_text(comparison, aggregate)}, beyond the {options.noise:g}% "
+                             f"noise band)\n")
         if groups and not failures:
             return EXIT_REGRESSION
         if failures:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from . import statistics, words
 from .fields import TEAM_CPU_COUNTERS
 from .names import BenchmarkKey
-from .run_analysis import median_ratio, run_median, sample
+from .run_analysis import layout_facts, median_ratio, run_median, sample
 
 
 def ordered(values, preferred):
@@ -45,10 +45,11 @@ def rk4_key(run_file, sync, layout, pin, threads) -> BenchmarkKey:
 
 
 def syncs_layouts(run_file) -> tuple[list[str], list[str]]:
-    """The primitives of the run's rk4 entries (sorted) and their layouts (in words.LAYOUT_ORDER)."""
+    """The primitives of the run's rk4 entries (sorted) and their layouts (in the registry's order:
+    run_analysis.layout_facts)."""
     syncs = sorted({key.get("sync") for key in run_file.runs if key.family == "rk4" and key.get("sync")})
     layouts = ordered({key.get("layout") for key in run_file.runs if key.family == "rk4" and key.get("layout")},
-                      words.LAYOUT_ORDER)
+                      [facts.name for facts in layout_facts(run_file)])
     return syncs, layouts
 
 
@@ -246,33 +247,67 @@ class PenaltyRow:
         return self.label or f"{self.sync}, pin:{self.pin}, {self.threads} thread{'s' if self.threads != 1 else ''}"
 
 
-def penalty_rows(run_file, collapsed=frozenset()) -> list[PenaltyRow]:
-    """False sharing (packed / padded, pinned compactly) and migration (migrate or none / compact), per
-    primitive, from the entries' medians (a file without lockstep_pairs); collapsed entries left out."""
+PENALTY_KINDS = ("false_sharing", "migration")
+
+
+def _layouts_compared(run_file, layouts) -> tuple[str | None, str | None]:
+    """(the layout whose writers share lines, the one the medians' false sharing divides by) among the layouts
+    present, by their traits: the shared layout with the widest writer isolation, else a private copy. This is
+    the rule of the reports before lockstep_planned_pairs, kept for files without the run's plan; lockstep run
+    plans the fastest isolating shared layout of each group (bench/run/paired_blocks.cpp)."""
+    facts = [facts for facts in layout_facts(run_file) if facts.name in layouts]
+    sharing = next((facts.name for facts in facts if facts.shares_lines), None)
+    isolating = sorted((facts for facts in facts if not facts.shares_lines),
+                       key=lambda facts: (facts.kind != "shared", -facts.writer_isolation))
+    return sharing, (isolating[0].name if isolating else None)
+
+
+def penalty_row(run_file, comparison: str, a: BenchmarkKey, b: BenchmarkKey, collapsed=frozenset()):
+    """The ratio of two entries' medians as a penalty's bar (no interval, no verdict), None when either is missing
+    or collapsed: false sharing (a's layout / b's) or migration (a's placement / b's, on their layout)."""
+    ratio = median_ratio(run_file, a, b, collapsed=collapsed)
+    if ratio is None or not a.get("sync") or a.threads is None:
+        return None
+    if comparison == "false_sharing":
+        kind = f"false sharing: {a.get('layout')} / {b.get('layout')}"
+    else:
+        kind = f"migration: pin:{a.get('pin')} / pin:{b.get('pin')} ({a.get('layout')})"
+    return PenaltyRow(kind, a.get("sync"), a.threads, ratio, pin=a.get("pin") or "")
+
+
+def _replanned(run_file) -> list[tuple[str, BenchmarkKey, BenchmarkKey]]:
+    """The false-sharing and migration comparisons of a file without the run's plan (lockstep_planned_pairs),
+    planned again here by the layouts' traits (_layouts_compared): per primitive and thread count, the
+    sharing layout against the isolating one pinned (words.PINNED_PLACEMENT), and each moving placement
+    (words.MOVED_PLACEMENTS) against the pinned one on the isolating layout."""
     syncs, layouts = syncs_layouts(run_file)
-    padded = next((layout for layout in ("padded128", "padded64", "per_thread") if layout in layouts), None)
-    groups = rk4_groups(run_file)
-    threads_list = sorted({threads for _, threads in groups})
-    rows = []
-
-    def ratio_of(sync, threads, numerator, denominator):
-        """median_ratio of two entries (layout, pin) of one primitive and thread count."""
-        return median_ratio(run_file, rk4_key(run_file, sync, *numerator, threads),
-                            rk4_key(run_file, sync, *denominator, threads), collapsed=collapsed)
-
+    sharing, isolating = _layouts_compared(run_file, layouts)
+    base = isolating or (layouts[0] if layouts else None)
+    pinned = words.PINNED_PLACEMENT
+    planned = []
     for sync in syncs:
-        for threads in threads_list:
-            if padded and "packed" in layouts:
-                ratio = ratio_of(sync, threads, ("packed", "compact"), (padded, "compact"))
-                if ratio is not None:
-                    rows.append(PenaltyRow(f"false sharing: packed / {padded}", sync, threads, ratio, pin="compact"))
-            base_layout = padded or (layouts[0] if layouts else None)
-            for moved in ("migrate", "none"):
-                ratio = ratio_of(sync, threads, (base_layout, moved), (base_layout, "compact"))
-                if ratio is not None:
-                    rows.append(PenaltyRow(f"migration: pin:{moved} / pin:compact ({base_layout})", sync, threads,
-                                           ratio, pin=moved))
-    return rows
+        for threads in sorted({threads for _, threads in rk4_groups(run_file)}):
+            if sharing and isolating:
+                planned.append(("false_sharing", rk4_key(run_file, sync, sharing, pinned, threads),
+                                rk4_key(run_file, sync, isolating, pinned, threads)))
+            planned += [("migration", rk4_key(run_file, sync, base, moved, threads),
+                         rk4_key(run_file, sync, base, pinned, threads)) for moved in words.MOVED_PLACEMENTS]
+    return planned
+
+
+def penalty_rows(run_file, collapsed=frozenset(), paired_kinds=frozenset()) -> list[PenaltyRow]:
+    """The false-sharing and migration penalties that were not measured as pairs, from the entries' medians;
+    collapsed entries left out. A file with the run's plan (lockstep_planned_pairs): the planned comparisons
+    without a pair in lockstep_pairs. A file written before the plan: the kinds with no pair at all
+    (paired_kinds: those with one), planned again here (_replanned)."""
+    if run_file.planned is not None:
+        measured = {(pair.comparison, pair.a_key, pair.b_key) for pair in run_file.pairs}
+        planned = [(pair.comparison, pair.a_key, pair.b_key) for pair in run_file.planned
+                   if pair.comparison in PENALTY_KINDS and (pair.comparison, pair.a_key, pair.b_key) not in measured]
+    else:
+        planned = [item for item in _replanned(run_file) if item[0] not in paired_kinds]
+    rows = [penalty_row(run_file, comparison, a, b, collapsed) for comparison, a, b in planned]
+    return [row for row in rows if row is not None]
 
 
 def within_noise_cells(run_file) -> dict[tuple[str, int], frozenset]:

@@ -65,10 +65,13 @@ def rk4_keys(run_files: list[RunFile]) -> list[BenchmarkKey]:
     return sorted(keys, key=BenchmarkKey.sort_key)
 
 
-def layout_effects(run_files: list[RunFile], reference: str = "packed", time_kind: str = "real"):
+def layout_effects(run_files: list[RunFile], reference: str | None, time_kind: str = "real"):
     """Rows (sync, pin, threads, layout, [speed-up over the reference layout per file]); a file where either
-    entry collapsed (its headline's) has none."""
+    entry collapsed (its headline's) has none. The reference is the layout whose writers share lines
+    (run_analysis.sharing_layout); None: no rows."""
     rows = []
+    if reference is None:
+        return rows
     for key in rk4_keys(run_files):
         layout = key.get("layout")
         if layout is None or layout == reference:
@@ -88,19 +91,22 @@ def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10
     for key in rk4_keys(run_files):
         group = (key.get("pin") or "", key.threads or 0)
         groups.setdefault(group, [])
-    tables = {}
-    for group in sorted(groups):
-        per_file = []
-        for run_file in run_files:
-            entries = []
-            for key in rk4_keys([run_file]):
-                if (key.get("pin") or "", key.threads or 0) != group or key in run_file.collapsed:
-                    continue
-                step = run_median(run_file, key, time_kind)
-                if step is None:
-                    continue
-                entries.append((f"{key.get('sync')}/{key.get('layout')}", step, normalised(run_file, key, time_kind)[0]))
-            entries.sort(key=lambda entry: (entry[1], entry[0]))
-            per_file.append(entries[:top])
-        tables[group] = per_file
-    return tables
+    return {group: [_ranked(run_file, group, time_kind)[:top] for run_file in run_files] for group in sorted(groups)}
+
+
+def _ranked(run_file: RunFile, group: tuple[str, int], time_kind: str) -> list[tuple[str, float, float | None]]:
+    """One file's rk4 entries of a group (pin, threads), fastest first: (sync/layout, median ns, x serial). The
+    run's own ranking where its file has it (lockstep_rankings, by real time); for CPU time, or a file written
+    before the rankings, ranked here by the medians (collapsed entries left out)."""
+    if time_kind == "real" and run_file.rankings is not None:
+        ranking = next((item for item in run_file.rankings if (item.pin, item.threads) == group), None)
+        return [(f"{key.get('sync')}/{key.get('layout')}", step, vs_serial)
+                for key, step, vs_serial in (ranking.entries if ranking else ())]
+    entries = []
+    for key in rk4_keys([run_file]):
+        if (key.get("pin") or "", key.threads or 0) != group or key in run_file.collapsed:
+            continue
+        step = run_median(run_file, key, time_kind)
+        if step is not None:
+            entries.append((f"{key.get('sync')}/{key.get('layout')}", step, normalised(run_file, key, time_kind)[0]))
+    return sorted(entries, key=lambda entry: (entry[1], entry[0]))

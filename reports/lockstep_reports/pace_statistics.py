@@ -138,7 +138,8 @@ def pace_aware(run_a, run_b, baseline: RunFile, contender: RunFile, matches, tim
         if best and filled >= min_in_mode:
             chosen = (PACE_MATCHING_MODES,
                       f"the repetitions in matching modes A {best[0]} / B {best[1]} (c2c "
-                      f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / {_short(contender.pace.modes[best[1]].c2c_ns)} ns)",
+                      f"{_short(baseline.pace.modes[best[0]].c2c_ns)} / "
+                      f"{_short(contender.pace.modes[best[1]].c2c_ns)} ns)",
                       in_mode(values_a, best[0]), in_mode(values_b, best[1]))
     # A mode of the trace can join two states of the machine that its readings bridge (this VM: c2c 14 and
     # 32 ns in one mode, the spinning primitives 2x apart between them); a repetition's own reading tells them

@@ -1,8 +1,13 @@
-"""What Al-Oraiqat's paper reported ("Parallel implementation of the coupled harmonic oscillator"), for the side-by-side tables,
-and the model's own values computed the same way lockstep's kernel defines them."""
+"""What Al-Oraiqat's paper reported ("Parallel implementation of the coupled harmonic oscillator"), for the
+side-by-side tables, and the model's own values.
+
+The model's constants and normal modes are the run's (a run file's lockstep_model, a verify trajectory's exact_x
+columns) where the file states them; for a file written before it they are computed here as lockstep's kernel
+defines them (kernels/oscillator.hpp, kernels/normal_modes.hpp): a copy that the file's values replace."""
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -26,6 +31,31 @@ PAPER_FIGURE5 = (
     ("worker 4", 0, 26903, 0.0),
 )
 PAPER_MACHINE = "Intel Core i5-2400, 3.1 GHz, 4 cores, Windows 10, Visual Studio 2013"
+
+
+# A serial RK4 step of the two-mass system evaluates D1..D4 once per stage.
+EVALUATIONS_PER_STEP = 16
+
+
+@dataclass(frozen=True)
+class ModelValues:
+    """C/m, the model's normal modes (fast, slow, rad/s), the paper's printed ones, the C/m those imply, and the
+    derivative evaluations of a serial step."""
+    c_over_m: float
+    roots: tuple[float, float]
+    paper_roots: tuple[float, float]
+    paper_implied_c_over_m: float
+    evaluations_per_step: int
+
+
+def model_values(run_files) -> ModelValues:
+    """The model as the first run file that states it says (run_file.ModelConstants); without one (files written
+    before lockstep_model) computed here (model_roots, c_over_m_from_roots)."""
+    stated = next((run_file.model for run_file in run_files if run_file.model is not None), None)
+    if stated is not None:
+        return ModelValues(stated.c_over_m, stated.roots_rad_s, stated.paper_roots_rad_s,
+                           stated.paper_implied_c_over_m, stated.evaluations_per_step)
+    return ModelValues(C_OVER_M, model_roots(), PAPER_ROOTS, c_over_m_from_roots(), EVALUATIONS_PER_STEP)
 
 
 def model_roots(c_over_m: float = C_OVER_M) -> tuple[float, float]:
@@ -53,7 +83,11 @@ def analytic_trajectory(t, c_over_m: float = C_OVER_M, start=INITIAL_POSITIONS):
 
 
 def trajectory_reference(verify):
-    """x1 and x2 of the analytic solution at the times of a verify trajectory (verify_reader.VerifyFile)."""
+    """x1 and x2 of the analytic solution at the times of a verify trajectory (verify_reader.VerifyFile): the
+    file's own exact columns where it has them; a file written before them gets the two-mass solution computed
+    here (analytic_trajectory)."""
+    if verify.exact is not None:
+        return np.asarray(verify.exact[0]), np.asarray(verify.exact[1])
     return analytic_trajectory(verify.t)
 
 

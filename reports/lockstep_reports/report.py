@@ -30,7 +30,7 @@ from .formatting import format_count, format_duration, format_ns, format_number,
 from .c2c_reader import C2cFile
 from .delay_reader import DelayExtras, DelayFile
 from .inputs import load_any, unique_labels
-from .run_analysis import against_best_other_views, calibration, per_mode_medians, run_median
+from .run_analysis import against_best_other_views, calibration, mode_medians, run_median, sharing_layout
 from .run_file import RunFile
 from .verify_reader import VerifyFile
 from .names import parse_name
@@ -92,11 +92,12 @@ def machines_section(loaded, run_files: list[RunFile]) -> Section:
         rows = [[key] + [p[key] or UNAVAILABLE for p in prints] for key in FINGERPRINT_KEYS]
         tables.append(Table(["context"] + [f.label for f in run_files], rows))
     if len(run_files) > 1:
+        reference = sharing_layout(run_files[0])
         effects = [[sync, pin, str(threads), layout] + [format_number(s, 2, "x") for s in speedups]
-                   for sync, pin, threads, layout, speedups in layout_effects(run_files)]
-        tables.append(Table(["sync", "pin", "threads", "layout"] + [f"{f.label}: vs packed" for f in run_files],
-                            effects, caption="Each layout's speed-up over packed (packed time / layout time), "
-                                             "on each machine: the false-sharing effect read side by side."))
+                   for sync, pin, threads, layout, speedups in layout_effects(run_files, reference)]
+        tables.append(Table(["sync", "pin", "threads", "layout"] + [f"{f.label}: vs {reference}" for f in run_files],
+                            effects, caption=f"Each layout's speed-up over {reference} ({reference} time / layout "
+                                             "time), on each machine: the false-sharing effect read side by side."))
     return Section("Machines and inputs", paragraphs=paragraphs, tables=tables)
 
 
@@ -169,9 +170,10 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         bars.paragraphs.append(left_out)
     noisy_cells = matrix.within_noise_cells(run_file)
     if noisy_cells:
-        heat.paragraphs.append("Hatched, marked ≈: the packed cell whose paired false-sharing ratio against its "
-                               "padded layout was within noise or unsure (its confidence interval lies inside the "
-                               "noise band, or straddles its edge): the two cells do not differ measurably.")
+        heat.paragraphs.append(f"Hatched, marked ≈: the {sharing_layout(run_file)} cell whose paired false-sharing "
+                               "ratio against its padded layout was within noise or unsure (its confidence interval "
+                               "lies inside the noise band, or straddles its edge): the two cells do not differ "
+                               "measurably.")
     for pin, threads in groups:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.heatmap(matrix.heatmap_cells(
@@ -255,7 +257,8 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
         if points:
             what = "the RK4 step (rk4/ entries)" if family == "rk4" else "the bare barrier (barrier/ entries)"
             section.figures.append(Figure(f"cpu-{counter[0]}-{family}", f"{what}, {len(points)} entries",
-                                          figures.cpu_against_time(points, unit, cpus, recommended)))
+                                          figures.cpu_against_time(points, unit, cpus, recommended,
+                                                                    matrix.syncs_layouts(run_file)[1])))
     if any(family == "barrier" and points for family, _, points in families):
         section.paragraphs.append("The barrier/ entries time the bare barrier, without the RK4 stages: per episode "
                                   "(one arrive_and_wait by every participant), read the same way.")
@@ -398,7 +401,7 @@ def penalty_table(rows: list[matrix.PenaltyRow]) -> Table:
 
 
 PAIRED_PENALTIES = {"false_sharing": "false sharing (paired): shared lines / isolated",
-                    "migration": "migration (paired): pin:{pin} / pin:compact"}
+                    "migration": "migration (paired): pin:{pin} / pin:{pinned}"}
 
 
 def _threads_words(threads) -> str:
@@ -407,8 +410,8 @@ def _threads_words(threads) -> str:
 
 def pair_label(pair) -> str:
     """What a paired bar compares, in a few words: the primitive(s) first, then what differs and where
-    ("seqlock vs mailbox (step, pin:compact, 4 threads)", "futex_spin, pin:none, 2 threads: packed vs
-    padded128")."""
+    ("<a's primitive> vs <b's> (step, pin:compact, 4 threads)", "<primitive>, pin:none, 2 threads: <a's layout> vs
+    <b's layout>")."""
     a, b = pair.a_key, pair.b_key
     threads = _threads_words(a.threads) if a.threads is not None else ""
     if pair.comparison == "against_best_other":
@@ -422,12 +425,17 @@ def pair_label(pair) -> str:
     return _difference(a, b).replace(" / ", " vs ")
 
 
+def _drawn_as_penalty(pair) -> bool:
+    """A pair the penalties draw: false sharing or migration, of a primitive at a thread count."""
+    return pair.comparison in PAIRED_PENALTIES and bool(pair.a_key.get("sync")) and pair.a_key.threads is not None
+
+
 def paired_penalty_rows(run_file: RunFile) -> list[matrix.PenaltyRow]:
     """The false-sharing and migration penalties measured as pairs (lockstep_pairs), with their intervals."""
     rows = []
     for pair in run_file.pairs:
-        if pair.comparison in PAIRED_PENALTIES and pair.a_key.get("sync") and pair.a_key.threads is not None:
-            kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"))
+        if _drawn_as_penalty(pair):
+            kind = PAIRED_PENALTIES[pair.comparison].format(pin=pair.a_key.get("pin"), pinned=pair.b_key.get("pin"))
             rows.append(matrix.PenaltyRow(kind, pair.a_key.get("sync"), pair.a_key.threads, pair.median,
                                            pair.ci_low, pair.ci_high, pair.verdict, pin=pair.a_key.get("pin") or "",
                                            label=pair_label(pair)))
@@ -440,23 +448,21 @@ def _pins_words(pins) -> str:
 
 def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
     paired = paired_penalty_rows(run_file)
-    # A kind of penalty the file measured as pairs is drawn from its pairs; the others from the medians.
-    covered = {"false sharing" if row.kind.startswith("false sharing") else "migration" for row in paired}
-    rows = paired + [row for row in matrix.penalty_rows(run_file, run_file.collapsed)
-                     if not any(row.kind.startswith(kind) for kind in covered)]
+    # What the file measured as pairs is drawn from its pairs; the rest from the medians (matrix.penalty_rows).
+    paired_kinds = {pair.comparison for pair in run_file.pairs if _drawn_as_penalty(pair)}
+    rows = paired + matrix.penalty_rows(run_file, run_file.collapsed, paired_kinds)
     if not rows:
         return None
     sharing = [row for row in rows if row.kind.startswith("false sharing")]
     moving = [row for row in rows if row.kind.startswith("migration")]
     paragraphs = []
     if sharing:
-        paragraphs.append("False sharing: the step time of the layout whose writers share cache lines (packed) over "
-                          "the layout that keeps them apart, per primitive at each placement measured: "
-                          f"{_pins_words({row.pin for row in sharing})}.")
+        paragraphs.append("False sharing: the step time of the layout whose writers share cache lines "
+                          f"({sharing_layout(run_file) or UNAVAILABLE}) over the layout that keeps them apart, per "
+                          f"primitive at each placement measured: {_pins_words({row.pin for row in sharing})}.")
     if moving:
         paragraphs.append("Migration: the step time with the threads "
-                          + " or ".join(sorted({"left to the OS (pin:none)" if row.pin == "none" else
-                                                "moved on purpose (pin:migrate)" for row in moving}))
+                          + " or ".join(sorted({words.placement_move(row.pin) for row in moving}))
                           + " over the same entry pinned compactly (pin:compact).")
     paragraphs.append("One bar per primitive, placement and thread count, named on its line. 1.0x is no penalty; "
                       "the ratio axis is logarithmic (a 2x penalty and a 2x gain lie equally far from 1) and covers "
@@ -481,7 +487,7 @@ def penalty_section(run_file: RunFile, counter: list[int]) -> Section | None:
                    tables=[penalty_table(rows)])
 
 
-COMPARISON_TITLES = {"false_sharing": "false sharing: packed against its best padded layout",
+COMPARISON_TITLES = {"false_sharing": "false sharing: the layout whose writers share lines against an isolating one",
                      "migration": "migration: unpinned against pinned compactly",
                      "against_best_other": "each primitive against the best other primitive",
                      "overhead": "the harness's own cost (accounting on against off)"}
@@ -558,7 +564,7 @@ def pairs_section(run_file: RunFile, counter: list[int]) -> Section:
 
 
 def _difference(a, b) -> str:
-    """What tells two entries apart ("layout:packed / layout:padded128"): the segments where they differ, or
+    """What tells two entries apart ("layout:<a's> / layout:<b's>"): the segments where they differ, or
     both names whole when their families differ."""
     if a.family != b.family:
         return f"{a.display} / {b.display}"
@@ -581,7 +587,7 @@ def per_mode_rows(run_file: RunFile) -> tuple[list[list[str]], int]:
         run = run_file.runs[key]
         if run.errored:
             continue
-        medians, spread, straddles = per_mode_medians(run)
+        medians, spread, straddles = mode_medians(run_file, key)
         if straddles:
             straddling += 1
         if spread is None:
@@ -834,24 +840,26 @@ def trajectory_section(item: VerifyFile, counter: list[int]) -> Section:
 
 
 def paper_section(run_files: list[RunFile]) -> Section:
-    fast, slow = paper.model_roots()
-    roots = Table(["root", "paper", f"model (C/m = {paper.C_OVER_M} s^-2)", "difference"],
+    model = paper.model_values(run_files)
+    roots = Table(["root", "paper", f"model (C/m = {model.c_over_m} s^-2)", "difference"],
                   [[f"mode {i + 1}", f"±{printed:.2f}j", f"±{computed:.2f}j", f"{computed - printed:+.2f}"]
-                   for i, (printed, computed) in enumerate(zip(paper.PAPER_ROOTS, (fast, slow)))],
-                  caption=f"The paper's printed roots fit C/m = {paper.c_over_m_from_roots():.1f} s^-2.")
+                   for i, (printed, computed) in enumerate(zip(model.paper_roots, model.roots))],
+                  caption=f"The paper's printed roots fit C/m = {model.paper_implied_c_over_m:.1f} s^-2.")
+    evaluations = [paper.model_values([run_file]).evaluations_per_step for run_file in run_files]
     equation_rows = []
     for equation, seconds in paper.PAPER_EQUATION_TIMES_S.items():
         cells = [equation, f"{seconds:.2e} s"]
-        for run_file in run_files:
+        for run_file, count in zip(run_files, evaluations):
             serial = calibration(run_file, SERIAL_CONTEXT)
-            # A serial RK4 step evaluates D1..D4 once per stage: 16 evaluations.
-            cells.append(f"{serial / 16 * 1e-9:.2e} s" if serial else UNAVAILABLE)  # the paper's notation
+            cells.append(f"{serial / count * 1e-9:.2e} s" if serial else UNAVAILABLE)  # the paper's notation
         equation_rows.append(cells)
     equations = Table(["equation", f"paper ({paper.PAPER_MACHINE})"]
-                      + [f"{f.label}: serial step / 16" for f in run_files], equation_rows,
+                      + [f"{f.label}: serial step / {count}" for f, count in zip(run_files, evaluations)],
+                      equation_rows,
                       caption="lockstep does not time each derivative alone: its column is the in-run serial "
-                              "RK4 step (context serial_step_ns) divided by its 16 derivative evaluations, the same "
-                              "for D1..D4. The paper's times include its own timer overhead.")
+                              f"RK4 step (context serial_step_ns) divided by its {model.evaluations_per_step} "
+                              "derivative evaluations, the same for D1..D4. The paper's times include its own timer "
+                              "overhead.")
     return Section("The paper's values beside this machine's",
                    paragraphs=["Al-Oraiqat, \"Parallel implementation of the coupled harmonic oscillator\": the "
                                "values it reports, beside what lockstep measured or computed. The Figure 5 table "

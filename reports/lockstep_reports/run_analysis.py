@@ -3,10 +3,10 @@ entries' medians, its repetitions per pace mode, the in-run calibrations, which 
 each primitive's line against the best other. Nothing here compares two files (compare.py) or draws."""
 from __future__ import annotations
 
-from . import statistics
+from . import statistics, words
 from .fields import C2C_COUNTER, SERIAL_CONTEXT
 from .names import BenchmarkKey, parse_name
-from .run_file import PacePair, Run, RunFile
+from .run_file import LayoutFacts, PacePair, Run, RunFile
 
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")
@@ -67,6 +67,20 @@ def per_mode_medians(run: Run) -> tuple[dict[int, tuple[float, int]], float | No
     return medians, spread, sum(1 for mode, _ in paced if mode < 0)
 
 
+def mode_medians(run_file: RunFile, key: BenchmarkKey) -> tuple[dict[int, tuple[float, int]], float | None, int]:
+    """per_mode_medians of an entry as the run grouped them where its file says (lockstep_pace's entry_medians:
+    an entry it does not list ran in one mode and straddled no change); a file written before them gets them
+    grouped here from each repetition's pace_mode."""
+    if run_file.mode_medians is None:
+        return per_mode_medians(run_file.runs[key])
+    found = run_file.mode_medians.get(key)
+    if found is None:
+        return {}, None, 0
+    medians = found.medians
+    spread = medians[max(medians)][0] / medians[min(medians)][0] if len(medians) >= 2 else None
+    return medians, spread, found.straddling
+
+
 def calibration(run_file: RunFile, context_key: str) -> float | None:
     """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry
     (for c2c, of its one_way_ns counter when it has one: its iteration time includes thread start-up)."""
@@ -113,3 +127,16 @@ def against_best_other_views(pairs: list[PacePair]) -> list[PacePair]:
             views.append(members[0].inverse())
         views += members
     return views
+
+
+def layout_facts(run_file: RunFile) -> tuple[LayoutFacts, ...]:
+    """The layouts' traits in the registry's order: the file's lockstep_layouts; a file written before it gets
+    words.LAYOUTS, the registry as it stood when the writer did not state it."""
+    if run_file.layouts is not None:
+        return run_file.layouts
+    return tuple(LayoutFacts(name, kind, isolation) for name, kind, isolation in words.LAYOUTS)
+
+
+def sharing_layout(run_file: RunFile) -> str | None:
+    """The layout whose writers share cache lines on purpose (the false-sharing case), by its traits."""
+    return next((facts.name for facts in layout_facts(run_file) if facts.shares_lines), None)

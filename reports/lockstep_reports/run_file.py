@@ -166,6 +166,70 @@ class ScalingCurve:
     c2c_one_way_ns: float | None
 
 
+# ---------------------------------------------------------------- what the run derived (derived_reader.py)
+
+@dataclass(frozen=True)
+class LayoutFacts:
+    """One layout of the registry as the run's file states it (lockstep_layouts), or as words.LAYOUTS states it for
+    a file written before: its kind ("shared": the participants write into one state; "private_copy": each
+    computes from its own copy) and its writer isolation in bytes (0: writers share cache lines on purpose)."""
+
+    name: str
+    kind: str
+    writer_isolation: int
+
+    @property
+    def shares_lines(self) -> bool:
+        return self.kind == "shared" and self.writer_isolation == 0
+
+
+@dataclass(frozen=True)
+class PlannedPair:
+    """One comparison the run planned (lockstep_planned_pairs), measured as a pair or not: lockstep_pairs holds
+    the ones measured."""
+
+    comparison: str  # fields.PAIR_COMPARISONS
+    group: str
+    a: str
+    b: str
+    a_key: BenchmarkKey
+    b_key: BenchmarkKey
+
+
+@dataclass(frozen=True)
+class ModeMedians:
+    """An entry whose repetitions ran in more than one pace mode, as the run grouped them (lockstep_pace's
+    entry_medians): {mode: (median time per unit, repetitions)} and the repetitions that straddled a change."""
+
+    key: BenchmarkKey
+    medians: dict[int, tuple[float, int]]
+    straddling: int
+
+
+@dataclass(frozen=True)
+class Ranking:
+    """One group's ranking as the run wrote it (lockstep_rankings): its rk4 entries fastest first, each with its
+    median step and its step over the serial step of its model (None: unavailable); collapsed entries out."""
+
+    pin: str
+    threads: int
+    entries: tuple[tuple[BenchmarkKey, float, float | None], ...]
+
+
+@dataclass(frozen=True)
+class ModelConstants:
+    """The model the run integrated, as the run states it (lockstep_model): C/m, the initial positions, the
+    normal modes' angular frequencies (fast, slow), the paper's printed ones and the C/m they imply, and the
+    derivative evaluations of one serial RK4 step."""
+
+    c_over_m: float
+    positions: tuple[float, ...]
+    roots_rad_s: tuple[float, float]
+    paper_roots_rad_s: tuple[float, float]
+    paper_implied_c_over_m: float
+    evaluations_per_step: int
+
+
 @dataclass
 class RunFile:
     path: str
@@ -178,6 +242,12 @@ class RunFile:
     scaling: ScalingCurve | None = None  # None: not a --scaling run
     headline: Headline | None = None  # None: written before lockstep_headline
     mpi: "MpiDetails | None" = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
+    # What the run derived and wrote (derived_reader.py); None: a file written before the writer gave it.
+    layouts: tuple[LayoutFacts, ...] | None = None
+    planned: tuple[PlannedPair, ...] | None = None
+    mode_medians: dict[BenchmarkKey, ModeMedians] | None = None
+    rankings: tuple[Ranking, ...] | None = None
+    model: ModelConstants | None = None
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import math
 
-from . import fields, schemas
+from . import derived_reader, fields, schemas
 from .checks import CheckedObject, InputError, checked_number, fail
 from .context_reader import read_context
 from .mpi_reader import read_mpi
@@ -246,25 +246,20 @@ def _read_headline(path: str, document: dict) -> Headline | None:
     return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys))
 
 
-def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
-    """A `lockstep run` or `lockstep mpi` document that read_document has checked against its schema."""
-    if document.get("kind") not in (None, "mpi"):
-        raise InputError(path, f"is `lockstep {document['kind']}` output, not benchmark results: compare takes "
-                               "the JSON of `lockstep run`")
-    context_values, warnings = read_context(path, label, document["context"])
-    lockstep_schema = context_values.get("lockstep_schema")
-    batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
-    pace = _read_pace(path, document)
-    pairs = _read_pairs(path, document, pace)
+class _Entries:
+    """The benchmark entries of one file, read one by one into a Run per benchmark: each entry once, a failed
+    one's message kept, the counters read alike across a benchmark's entries, NaN counted as unavailable."""
 
-    runs: dict[BenchmarkKey, Run] = {}
-    seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
-    first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
-    first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
-    for index, raw in enumerate(document["benchmarks"]):
+    def __init__(self, path: str, pace: PaceTrace | None, batch_times: bool):
+        self.path, self.pace, self.batch_times = path, pace, batch_times
+        self.runs: dict[BenchmarkKey, Run] = {}
+        self.seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
+        self.first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
+        self.first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
+
+    def _identify(self, index: int, raw: dict, entry: CheckedObject, aggregate: str | None) -> tuple[str, BenchmarkKey]:
+        """(the benchmark's name as written, its key); a second entry of one repetition or aggregate is refused."""
         name = raw["name"]
-        entry = CheckedObject(path, raw, f"benchmarks[{index}] ({shown(name)})")
-        aggregate = raw["aggregate_name"] if raw["run_type"] == "aggregate" else None
         base = raw.get("run_name") or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate)
                                        else name)
         key = parse_name(base)
@@ -276,13 +271,31 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
                         else json.dumps(raw, sort_keys=True))
         else:
             identity = (key, "aggregate", aggregate)
-        if identity in seen:
+        if identity in self.seen:
             what = f"aggregate {aggregate}" if aggregate else "repetition"
-            raise InputError(path, f"{entry.where} repeats entry {seen[identity]} (the same {what} of the same "
-                                   "benchmark): a damaged or concatenated file")
-        seen[identity] = index
+            raise InputError(self.path, f"{entry.where} repeats entry {self.seen[identity]} (the same {what} of the "
+                                        "same benchmark): a damaged or concatenated file")
+        self.seen[identity] = index
+        return base, key
 
-        run = runs.setdefault(key, Run(key=key))
+    def _check_counters(self, index: int, entry: CheckedObject, key: BenchmarkKey, aggregate: str | None) -> None:
+        """The repetitions of one benchmark carry the same read counters (but fields.PER_REPETITION_COUNTERS,
+        which the writer may omit from one repetition), and every entry read (repetitions, median, mean) the same
+        per-unit counter: a counter missing from one of them is a damaged file, and a time per batch read as a
+        time per step would be off by the batch size."""
+        present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
+        if aggregate is None:
+            paced = (present - frozenset(fields.PER_REPETITION_COUNTERS)) | frozenset(
+                name for name in fields.PACE_COUNTERS if name in entry.value)
+            _same_counters(entry, paced, self.first_repetition.setdefault(key, (index, paced)))
+        units = present & frozenset(fields.UNIT_COUNTERS)
+        _same_counters(entry, units, self.first_read.setdefault(key, (index, units)))
+
+    def read(self, index: int, raw: dict) -> None:
+        entry = CheckedObject(self.path, raw, f"benchmarks[{index}] ({shown(raw['name'])})")
+        aggregate = raw["aggregate_name"] if raw["run_type"] == "aggregate" else None
+        base, key = self._identify(index, raw, entry, aggregate)
+        run = self.runs.setdefault(key, Run(key=key))
         if base not in run.names:
             run.names.append(base)
         failure = None  # Google Benchmark 1.8 writes error_occurred + error_message, or skipped + skip_message
@@ -293,34 +306,40 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
             if failure not in run.errors:
                 run.errors.append(failure)
                 run.errors.sort()  # the file's order of entries is not part of the result
-            continue
+            return
         split = step_split(raw) if aggregate is None else None
         if split is not None:
             run.step_splits.append(split)
-        scale = fields.TIME_UNIT_NS[raw["time_unit"]]
         if aggregate is not None and aggregate not in fields.READ_AGGREGATES:
-            continue  # stddev, cv and other statistics: not read
-        # The repetitions of one benchmark carry the same read counters (but fields.PER_REPETITION_COUNTERS,
-        # which the writer may omit from one repetition), and every entry read (repetitions,
-        # median, mean) the same per-unit counter: a counter missing from one of them is a damaged file,
-        # and a time per batch read as a time per step would be off by the batch size.
-        present = frozenset(name for name in fields.READ_COUNTERS if name in entry.value)
-        if aggregate is None:
-            paced = (present - frozenset(fields.PER_REPETITION_COUNTERS)) | frozenset(
-                name for name in fields.PACE_COUNTERS if name in entry.value)
-            _same_counters(entry, paced, first_repetition.setdefault(key, (index, paced)))
-        units = present & frozenset(fields.UNIT_COUNTERS)
-        _same_counters(entry, units, first_read.setdefault(key, (index, units)))
+            return  # stddev, cv and other statistics: not read
+        self._check_counters(index, entry, key, aggregate)
         # An aggregate's pace counters (a median of mode indices) mean nothing: only repetitions carry a pace.
-        repetition_pace = _repetition_pace(entry, run, pace) if aggregate is None else None
-        values = _measured_values(entry, run, scale, fields.SHORTEST_NS, batch_times)
+        repetition_pace = _repetition_pace(entry, run, self.pace) if aggregate is None else None
+        values = _measured_values(entry, run, fields.TIME_UNIT_NS[raw["time_unit"]], fields.SHORTEST_NS,
+                                  self.batch_times)
         if values is None:
-            continue
+            return
         if aggregate is not None:
             run.aggregates[aggregate] = values
         else:
             values.pace = repetition_pace
             run.repetitions.append(values)
+
+
+def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
+    """A `lockstep run` or `lockstep mpi` document that read_document has checked against its schema."""
+    if document.get("kind") not in (None, "mpi"):
+        raise InputError(path, f"is `lockstep {document['kind']}` output, not benchmark results: compare takes "
+                               "the JSON of `lockstep run`")
+    context_values, warnings = read_context(path, label, document["context"])
+    lockstep_schema = context_values.get("lockstep_schema")
+    batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
+    pace = _read_pace(path, document)
+    pairs = _read_pairs(path, document, pace)
+    entries = _Entries(path, pace, batch_times)
+    for index, raw in enumerate(document["benchmarks"]):
+        entries.read(index, raw)
+    runs = entries.runs
     for key in sorted(runs, key=BenchmarkKey.sort_key):
         left_out = runs[key].unavailable
         if left_out:
@@ -329,7 +348,12 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
                    pairs=pairs, scaling=_read_scaling(path, document), headline=_read_headline(path, document),
-                   mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None)
+                   mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None,
+                   layouts=derived_reader.read_layouts(path, document),
+                   planned=derived_reader.read_planned(path, document),
+                   mode_medians=derived_reader.read_mode_medians(path, document, pace),
+                   rankings=derived_reader.read_rankings(path, document),
+                   model=derived_reader.read_model(path, document))
 
 
 def step_split(raw: dict) -> tuple[float, ...] | None:

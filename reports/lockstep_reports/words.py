@@ -9,11 +9,26 @@ from __future__ import annotations
 
 # ---------------------------------------------------------------- layouts and placements
 
-# The order of the layouts' columns (a heat map's, the CPU figure's colours).
-LAYOUT_ORDER = ("packed", "padded64", "padded128", "per_thread")
+# The layouts of the registry (layouts/registry.hpp) in its order, with their kind and writer isolation in bytes
+# (docs/design.md, Layouts): the fallback for a run file without lockstep_layouts (run_analysis.layout_facts),
+# which states them itself. The order is the heat maps' columns; the traits decide which layout shares lines and
+# which isolates writers, never the names.
+LAYOUTS = (("packed", "shared", 0), ("padded64", "shared", 64), ("padded128", "shared", 128),
+           ("per_thread", "private_copy", 64))
 # The order of the placements' groups, and each one's marker in the CPU figure.
 PIN_ORDER = ("compact", "scatter", "none", "migrate")
 PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
+# A migration's comparison in a file without lockstep_planned_pairs (matrix.penalty_rows): the placements that
+# move the threads against the one that pins them, and what each move is called.
+PINNED_PLACEMENT = "compact"
+MOVED_PLACEMENTS = ("migrate", "none")
+PLACEMENT_MOVES = {"none": "left to the OS (pin:none)", "migrate": "moved on purpose (pin:migrate)"}
+
+
+def placement_move(pin: str) -> str:
+    """What a placement does to the threads, in the penalties' words."""
+    return PLACEMENT_MOVES.get(pin, f"placed at pin:{pin}")
+
 
 # ---------------------------------------------------------------- delay causes (`lockstep delay --out`, causes)
 
