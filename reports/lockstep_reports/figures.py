@@ -229,7 +229,7 @@ NAME_LINE_PX = 11.0
 
 
 def _point_name(point: CpuPoint) -> str:
-    """A named point's words: its primitive, and its layout where it has one ("mailbox (per_thread)")."""
+    """A named point's words: its primitive, and its layout where it has one ("<primitive> (<layout>)")."""
     return point.key.get("sync") + (f" ({point.key.get('layout')})" if point.key.get("layout") else "")
 
 

@@ -11,7 +11,7 @@ from .schemas import shown
 @dataclass(frozen=True)
 class MpiExchange:
     """One exchange of a `lockstep mpi` file, its last round's details (the "exchanges" list)."""
-    label: str      # "p2p", "shm_window/mailbox"
+    label: str      # "p2p", "shm_window/<primitive>"
     name: str       # its benchmark name, mpi/exchange:.../ranks:R/hosts:H
     stage: dict     # per-stage latency, ns: min, p50, p99, p999, max
     skew: dict      # per-stage arrival skew, ns: the same keys

@@ -1,12 +1,12 @@
 """Benchmark names as lockstep writes them: `key:value` segments after a family.
 
-    rk4/sync:futex_spin/layout:padded128/pin:compact/threads:4
-    rk4/model:chain8/sync:mailbox/layout:padded64/pin:compact/threads:16   (an s-mass chain; no model: the
-                                                                            paper's two masses)
-    barrier/sync:ck_centralized/pin:compact/threads:2
+    rk4/sync:<primitive>/layout:<layout>/pin:compact/threads:4
+    rk4/model:chain8/sync:<primitive>/layout:<layout>/pin:compact/threads:16   (an s-mass chain; no model: the
+                                                                                paper's two masses)
+    barrier/sync:<primitive>/pin:compact/threads:2
     rk4/serial
     c2c/pin:compact/threads:2
-    mpi/exchange:shm_window/sync:mailbox/ranks:4/hosts:1          (`lockstep mpi`)
+    mpi/exchange:shm_window/sync:<primitive>/ranks:4/hosts:1      (`lockstep mpi`)
     mpi/pingpong/ranks:2/hosts:1
 
 Two entries are the same benchmark when their family and identity segments are

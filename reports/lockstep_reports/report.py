@@ -741,7 +741,79 @@ def delay_settings_rows(settings: dict, extras: DelayExtras) -> list[list[str]]:
     return rows
 
 
+def _delay_histogram(item: DelayFile, number: int, histograms, period: str) -> Figure:
+    """The wake-up histogram of every thread (cyclictest's latency_histogram, the columns summed); a file from
+    before latency_histogram: the covering histogram, as before."""
+    if histograms is None:
+        return Figure(f"delay-{number}", item.label, figures.delay_histogram(item))
+    summed = [sum(column.counts[i] for column in histograms.columns if i < len(column.counts))
+              for i in range(max(len(column.counts) for column in histograms.columns))]
+    marks = {name: value for name, value in (("p50", item.pinned.wakeup.statistics.get("p50")),
+                                             ("p99", item.pinned.wakeup.statistics.get("p99")),
+                                             ("p99.9", item.pinned.wakeup.statistics.get("p999")))
+             if value is not None}
+    return Figure(f"delay-{number}", item.label, figures.wakeup_histograms(
+        histograms, [("all threads", summed, sum(column.overflow for column in histograms.columns), False)],
+        f"paced wake-up latency, every thread ({item.label}; period {period})", marks))
+
+
+def _add_per_cpu(section: Section, item: DelayFile, number: int, histograms, period: str) -> None:
+    """--per-cpu: the wake-up latency per CPU as a table, and one histogram panel per CPU (the noisiest marked)."""
+    extras = item.extras
+    noisy = f" Noisiest CPU: {extras.noisiest[0]} ({extras.noisiest[1]})." if extras.noisiest else ""
+    section.paragraphs.append("Per CPU: one paced thread on each CPU, each computing the step alone (cyclictest -S)."
+                              + noisy)
+    section.tables.append(Table(["cpu", "min", "p50", "p99", "p99.9", "max", "count", "deadline misses"],
+                                [[UNAVAILABLE if row.cpu is None else str(row.cpu)]
+                                 + [format_ns(row.wakeup.statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
+                                 + [format_count(row.wakeup.count), format_count(row.deadline_misses)]
+                                 for row in extras.per_cpu], caption="Wake-up latency per CPU"))
+    if histograms is not None:
+        noisiest = extras.noisiest[0] if extras.noisiest else None
+        panels = [(column.name, column.counts, column.overflow, column.cpu is not None and column.cpu == noisiest)
+                  for column in histograms.columns]
+        section.figures.append(Figure(f"delay-{number}-per-cpu", f"{item.label}, per CPU",
+                                      figures.wakeup_histograms(histograms, panels,
+                                                                f"wake-up latency per CPU (period {period})")))
+
+
+def _trial_row(first: str, trial) -> list[str]:
+    return [first, format_duration(trial.period_ns), format_count(trial.periods), format_count(trial.misses),
+            format_rate(trial.miss_rate), format_rate(trial.upper_bound), "holds" if trial.holds else "fails"]
+
+
+def _add_period_search(section: Section, item: DelayFile, number: int) -> None:
+    """--find-period: the answer in a line, the trials in a table and against their miss rate in a figure."""
+    search = item.extras.search
+    answer = (f"{format_duration(search.found_period_ns)}" if search.found_period_ns is not None
+              else "none (no period tried held)")
+    failed = f"; {format_duration(search.failed_period_ns)} failed" if search.failed_period_ns is not None else ""
+    cut = " The search budget cut the search: the bracket did not close." if search.budget_cut else ""
+    section.paragraphs.append(f"Shortest period that holds at miss rate {format_rate(search.miss_rate)}: {answer}"
+                              f"{failed} (stopped: {search.stopped_because or UNAVAILABLE}).{cut}"
+                              + (f" Rule: {search.rule}." if search.rule else ""))
+    trial_rows = [_trial_row(str(index), trial) for index, trial in enumerate(search.trials, start=1)]
+    if search.confirm is not None:
+        trial_rows.append(_trial_row("confirming run", search.confirm))
+    section.tables.append(Table(["trial", "period", "periods", "misses", "miss rate", "upper bound", "verdict"],
+                                trial_rows, caption="find-period: the trials in the order they ran"))
+    section.figures.append(Figure(f"delay-{number}-find-period", f"{item.label}, find-period search",
+                                  figures.period_search(search)))
+
+
+def _add_causes(section: Section, item: DelayFile, number: int) -> None:
+    """Why the late steps were late: the file's causes (delay_reader.read_causes) as stacked bars."""
+    section.paragraphs.append("Why the late steps were late: each tail's excess over the median step, split by cause "
+                              "(`lockstep delay` prints the same table and the latest steps one line each).")
+    rows = [(f"{row.label} ({row.steps} steps)" if row.cpu is None else f"CPU {row.cpu}, {row.label}", row.cause_ns)
+            for row in item.causes.rows]
+    section.figures.append(Figure(f"delay-{number}-causes", f"{item.label}, causes of the tail",
+                                  figures.delay_causes(rows, item.causes.names)))
+
+
 def delay_section(item: DelayFile, counter: list[int]) -> Section:
+    """A paced delay run: its settings and latency distributions, the wake-up histogram, what --per-cpu and
+    --find-period add, the causes of the tail, and Figure 5 beside the paper's."""
     extras = item.extras
     runs = [("", item.pinned)] + ([(" (unpinned)", item.unpinned)] if item.unpinned else [])
     summary_rows = []
@@ -752,79 +824,29 @@ def delay_section(item: DelayFile, counter: list[int]) -> Section:
             summary_rows.append([name + which] + [format_ns(statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
                                 + [format_count(count)])
     misses = [f"{format_count(run.deadline_misses)}{which}" for which, run in runs]
-    paragraphs = [f"Deadline misses: {', '.join(misses)}.",
-                  "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
-                  f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
-                  "per-thread accounting."]
-    tables = [Table(["setting", "value"], delay_settings_rows(item.settings, extras)),
-              Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"], summary_rows)]
-    section_figures = []
+    section = Section(f"Multi-core delay: {item.label}", paragraphs=[
+        f"Deadline misses: {', '.join(misses)}.",
+        "Figure 5 of the paper counts, per thread, the context switches that moved it to another core "
+        f"(Concurrency Visualizer, {paper.PAPER_MACHINE}); lockstep counts the same from the kernel's "
+        "per-thread accounting."], tables=[Table(["setting", "value"], delay_settings_rows(item.settings, extras)),
+                                           Table(["measure", "min", "p50", "p99", "p99.9", "max", "count"],
+                                                 summary_rows)])
     histograms = extras.histograms if extras.histograms and extras.histograms.columns else None
     period = format_duration(item.settings.get("period_ns"))
-    if histograms is None:  # a file from before latency_histogram: the covering histogram, as before
-        section_figures.append(Figure(f"delay-{counter[0]}", item.label, figures.delay_histogram(item)))
-    else:
-        summed = [sum(column.counts[i] for column in histograms.columns if i < len(column.counts))
-                  for i in range(max(len(column.counts) for column in histograms.columns))]
-        marks = {name: value for name, value in (("p50", item.pinned.wakeup.statistics.get("p50")),
-                                                 ("p99", item.pinned.wakeup.statistics.get("p99")),
-                                                 ("p99.9", item.pinned.wakeup.statistics.get("p999")))
-                 if value is not None}
-        section_figures.append(Figure(
-            f"delay-{counter[0]}", item.label, figures.wakeup_histograms(
-                histograms, [("all threads", summed, sum(column.overflow for column in histograms.columns), False)],
-                f"paced wake-up latency, every thread ({item.label}; period {period})", marks)))
+    section.figures.append(_delay_histogram(item, counter[0], histograms, period))
     if extras.per_cpu:
-        noisy = f" Noisiest CPU: {extras.noisiest[0]} ({extras.noisiest[1]})." if extras.noisiest else ""
-        paragraphs.append("Per CPU: one paced thread on each CPU, each computing the step alone (cyclictest -S)."
-                          + noisy)
-        tables.append(Table(["cpu", "min", "p50", "p99", "p99.9", "max", "count", "deadline misses"],
-                            [[UNAVAILABLE if row.cpu is None else str(row.cpu)]
-                             + [format_ns(row.wakeup.statistics.get(q)) for q in DISTRIBUTION_STATISTICS]
-                             + [format_count(row.wakeup.count), format_count(row.deadline_misses)]
-                             for row in extras.per_cpu], caption="Wake-up latency per CPU"))
-        if histograms is not None:
-            noisiest = extras.noisiest[0] if extras.noisiest else None
-            panels = [(column.name, column.counts, column.overflow, column.cpu is not None and column.cpu == noisiest)
-                      for column in histograms.columns]
-            section_figures.append(Figure(f"delay-{counter[0]}-per-cpu", f"{item.label}, per CPU",
-                                          figures.wakeup_histograms(histograms, panels,
-                                                                    f"wake-up latency per CPU (period {period})")))
+        _add_per_cpu(section, item, counter[0], histograms, period)
     if extras.search is not None:
-        search = extras.search
-        answer = (f"{format_duration(search.found_period_ns)}" if search.found_period_ns is not None
-                  else "none (no period tried held)")
-        failed = f"; {format_duration(search.failed_period_ns)} failed" if search.failed_period_ns is not None else ""
-        cut = " The search budget cut the search: the bracket did not close." if search.budget_cut else ""
-        paragraphs.append(f"Shortest period that holds at miss rate {format_rate(search.miss_rate)}: {answer}{failed} "
-                          f"(stopped: {search.stopped_because or UNAVAILABLE}).{cut}"
-                          + (f" Rule: {search.rule}." if search.rule else ""))
-        trial_rows = [[str(index), format_duration(trial.period_ns), format_count(trial.periods),
-                       format_count(trial.misses), format_rate(trial.miss_rate), format_rate(trial.upper_bound),
-                       "holds" if trial.holds else "fails"]
-                      for index, trial in enumerate(search.trials, start=1)]
-        if search.confirm is not None:
-            trial = search.confirm
-            trial_rows.append(["confirming run", format_duration(trial.period_ns), format_count(trial.periods),
-                               format_count(trial.misses), format_rate(trial.miss_rate),
-                               format_rate(trial.upper_bound), "holds" if trial.holds else "fails"])
-        tables.append(Table(["trial", "period", "periods", "misses", "miss rate", "upper bound", "verdict"],
-                            trial_rows, caption="find-period: the trials in the order they ran"))
-        section_figures.append(Figure(f"delay-{counter[0]}-find-period", f"{item.label}, find-period search",
-                                      figures.period_search(search)))
+        _add_period_search(section, item, counter[0])
     if item.causes is not None:
-        paragraphs.append("Why the late steps were late: each tail's excess over the median step, split by cause "
-                          "(`lockstep delay` prints the same table and the latest steps one line each).")
-        rows = [(f"{row.label} ({row.steps} steps)" if row.cpu is None else f"CPU {row.cpu}, {row.label}",
-                 row.cause_ns) for row in item.causes.rows]
-        section_figures.append(Figure(f"delay-{counter[0]}-causes", f"{item.label}, causes of the tail",
-                                      figures.delay_causes(rows, item.causes.names)))
-    tables.append(figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper"))
+        _add_causes(section, item, counter[0])
+    section.tables.append(figure5_table(item.pinned.figure5, "Figure 5: this machine (pinned) beside the paper"))
     if item.unpinned:
-        tables.append(figure5_table(item.unpinned.figure5,
-                                    "Figure 5: this machine unpinned (the paper's OpenMP case) beside the paper"))
+        section.tables.append(figure5_table(item.unpinned.figure5,
+                                            "Figure 5: this machine unpinned (the paper's OpenMP case) beside the "
+                                            "paper"))
     counter[0] += 1
-    return Section(f"Multi-core delay: {item.label}", paragraphs=paragraphs, tables=tables, figures=section_figures)
+    return section
 
 
 def trajectory_section(item: VerifyFile, counter: list[int]) -> Section:
