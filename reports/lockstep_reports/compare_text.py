@@ -519,7 +519,7 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real",
                 context_files=(), everything: bool = False) -> str:
     """The comparison as text: by default the summary (summary_lines per comparison, the context's differences),
-    everything: every table. `context_files`: results of other kinds (inputs.ContextFile), shown in the
+    everything: every table. `context_files`: results of other kinds (context_reader.ContextFile), shown in the
     fingerprint only, after the run files (so a run file's letter is its place among the compared files)."""
     if not everything:
         return render_summary(run_files, comparisons, context_files)

@@ -1,8 +1,9 @@
 """What lockstep's result files hold that the tools read: one place for each fact about the format.
 
-inputs.py checks every field named here when it reads a file (type and range),
-and the tools read nothing else: an unknown field is ignored, whatever it
-holds. compare.py and report.py take their names and headings from here.
+The readers (inputs.py and the reader of each kind) check every field named here
+when they read a file (type and range), and the tools read nothing else: an
+unknown field is ignored, whatever it holds. compare and report take their
+names and headings from here.
 """
 from __future__ import annotations
 

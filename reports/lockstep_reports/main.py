@@ -303,7 +303,7 @@ def comparison_json(comparisons) -> str:
                         for key, where, message in comparison.errored],
             "warnings": comparison.warnings,
         })
-    # allow_nan=False: inputs.py lets no NaN or infinity through to a figure; one here is a bug, not JSON.
+    # allow_nan=False: the readers let no NaN or infinity through to a figure; one here is a bug, not JSON.
     return json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n"
 
 
