@@ -40,6 +40,9 @@ class Repetition:
     cpu_ns: float
     counters: dict[str, float]
     pace: RepetitionPace | None = None
+    # Its split of the step (fields.STEP_SPLIT_COUNTERS: compute, waiting, release) beside its own step
+    # (real_ns), where it carries all three (run_reader.step_split); None otherwise.
+    split: tuple[float, ...] | None = None
 
 
 @dataclass
@@ -51,6 +54,7 @@ class Run:
     repetitions: list[Repetition] = field(default_factory=list)
     aggregates: dict[str, Repetition] = field(default_factory=dict)  # fields.READ_AGGREGATES
     errors: list[str] = field(default_factory=list)
+    failed: int = 0  # its repetitions (iteration rows) that errored: each says why in errors
     unavailable: Counter = field(default_factory=Counter)  # what was NaN or infinite -> how many values
     # The split of a step (fields.STEP_SPLIT_COUNTERS, in their order) of each repetition that carries all three
     # parts as finite numbers; empty for an entry or a file without it (run_reader.step_split).
@@ -278,6 +282,53 @@ class Recommendation:
     layout: str
     ns_per_step: float
     basis: str  # fields.HEADLINE_BASES: "paired" (its pair with the runner-up decided) or "medians"
+    # What the terminal's line says beside it, as lockstep run wrote it (None or the default: a file written
+    # before the key): the repetitions' spread (half their range over the median, in %), the pace modes they
+    # ran in and whether one straddled a change of pace, a stage's sync in c2c transfers, the CPUs the team
+    # kept busy, whether the threads outnumbered the CPUs, the median leader (the entry first by median).
+    spread_pct: float | None = None
+    paces: int | None = None
+    straddles_pace_change: bool = False
+    vs_c2c: float | None = None
+    cpus_busy: float | None = None
+    oversubscribed: bool = False
+    median_leader: str = ""
+    # The runner-up and the baseline primitive against the choice (their step / the choice's, paired), None
+    # where the run has none; tied: the pair with the runner-up is within noise or unsure, so the two are named
+    # as tied (false in a file written before the key).
+    runner_up: "HeadlineRival | None" = None
+    baseline: "HeadlineRival | None" = None
+    tied: bool = False
+
+
+@dataclass(frozen=True)
+class HeadlineRival:
+    """Another primitive set against a recommendation (lockstep_headline.recommendations[].runner_up, .baseline):
+    its entry and primitive, and its step over the chosen one's, paired: the median ratio, its interval and
+    verdict (fields.PAIR_VERDICTS: penalty, the rival is slower; gain, faster)."""
+
+    entry: str
+    entry_key: BenchmarkKey
+    sync: str
+    median: float
+    ci_low: float
+    ci_high: float
+    verdict: str
+
+
+@dataclass(frozen=True)
+class HeadlineAnswer:
+    """lockstep_headline.answer: the answer first, the best combination of the run (its thread count,
+    placement and entry, its median step) and that step against the serial step of its model (vs_serial:
+    the parallel step over the serial one)."""
+
+    threads: int
+    pin: str
+    entry: str
+    entry_key: BenchmarkKey
+    ns_per_step: float
+    serial_ns_per_step: float | None
+    vs_serial: float | None
 
 
 @dataclass(frozen=True)
@@ -291,3 +342,4 @@ class Headline:
     recommendations: tuple[Recommendation, ...]
     collapsed: tuple[str, ...]  # entry names as written, each once
     collapsed_keys: frozenset
+    answer: HeadlineAnswer | None = None  # None: a file written before lockstep_headline.answer

@@ -17,8 +17,8 @@ from .checks import CheckedObject, InputError, checked_number, fail
 from .context_reader import read_context
 from .mpi_reader import read_mpi
 from .names import BenchmarkKey, parse_name
-from .run_file import (Headline, PaceMode, PacePair, PaceReading, PaceTrace, Recommendation, Repetition,
-                       RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
+from .run_file import (Headline, HeadlineAnswer, HeadlineRival, PaceMode, PacePair, PaceReading, PaceTrace,
+                       Recommendation, Repetition, RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
 from .schemas import json_kind, shown
 
 
@@ -202,6 +202,92 @@ def _headline_list(path: str, block: dict, key: str) -> list:
     return block[key]
 
 
+def _headline_object(path: str, place: tuple, raw) -> CheckedObject:
+    if not isinstance(raw, dict):
+        fail(path, place, f"is {json_kind(raw)}, not an object")
+    return CheckedObject(path, raw, schemas.json_path(place))
+
+
+def _headline_entry(path: str, place: tuple, item: CheckedObject) -> tuple[str, BenchmarkKey]:
+    name = _headline_text(path, place + ("entry",), item.get("entry", required=True))
+    key = parse_name(name)
+    if not key.family:
+        fail(path, place + ("entry",), f"is {shown(name)}: no benchmark family")
+    return name, key
+
+
+def _headline_threads(path: str, place: tuple, threads) -> int:
+    if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
+        fail(path, place, f"is {shown(threads)}, not a thread count (a whole number from 1)")
+    return threads
+
+
+def _headline_flag(path: str, place: tuple, item: CheckedObject, key: str) -> bool:
+    """An optional true or false (false when the key is missing: a file written before it)."""
+    value = item.get(key, required=False)
+    if value is not None and not isinstance(value, bool):
+        fail(path, place + (key,), f"is {json_kind(value)}, not true or false")
+    return bool(value)
+
+
+def _read_rival(path: str, place: tuple, raw) -> HeadlineRival | None:
+    """A recommendation's runner_up or baseline: null (none), or its entry and its paired ratio to the choice."""
+    if raw is None:
+        return None
+    item = _headline_object(path, place, raw)
+    entry, key = _headline_entry(path, place, item)
+    sync = _headline_text(path, place + ("sync",), item.get("sync", required=True))
+    median, low, high = (item.number(name, fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
+                         for name in ("median", "ci_low", "ci_high"))
+    verdict = item.get("verdict", required=True)
+    if verdict not in fields.PAIR_VERDICTS:
+        fail(path, place + ("verdict",), f"is {shown(verdict)}, not one of {', '.join(fields.PAIR_VERDICTS)}")
+    return HeadlineRival(entry, key, sync, median, low, high, verdict)
+
+
+def _read_recommendation(path: str, here: tuple, raw) -> Recommendation:
+    """One of lockstep_headline.recommendations: what the table of choices shows, checked; the keys written
+    after the first headlines (spread, paces, runner-up, baseline, tied, ...) optional."""
+    item = _headline_object(path, here, raw)
+    texts = {}
+    for key in ("pin", "model", "entry", "sync", "layout", "basis"):
+        texts[key] = _headline_text(path, here + (key,), item.get(key, required=True))
+    if texts["basis"] not in fields.HEADLINE_BASES:
+        fail(path, here + ("basis",), f"is {shown(texts['basis'])}, not one of {', '.join(fields.HEADLINE_BASES)}")
+    threads = _headline_threads(path, here + ("threads",), item.get("threads", required=True))
+    entry, entry_key = _headline_entry(path, here, item)
+    step = item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")
+    paces = item.get("paces", required=False)
+    if paces is not None and (not isinstance(paces, int) or isinstance(paces, bool) or paces < 0):
+        fail(path, here + ("paces",), f"is {shown(paces)}, not a count of pace modes (a whole number from 0)")
+    leader = item.get("median_leader", required=False)
+    return Recommendation(
+        threads, texts["pin"], texts["model"], entry, entry_key, texts["sync"], texts["layout"], step, texts["basis"],
+        spread_pct=item.number("spread_pct", 0.0, fields.LARGEST_AMOUNT, required=False),
+        paces=paces, straddles_pace_change=_headline_flag(path, here, item, "straddles_pace_change"),
+        vs_c2c=item.number("vs_c2c", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
+        cpus_busy=item.number("cpus_busy", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
+        oversubscribed=_headline_flag(path, here, item, "oversubscribed"),
+        median_leader=_headline_text(path, here + ("median_leader",), leader) if leader is not None else "",
+        runner_up=_read_rival(path, here + ("runner_up",), item.value.get("runner_up")),
+        baseline=_read_rival(path, here + ("baseline",), item.value.get("baseline")),
+        tied=_headline_flag(path, here, item, "tied"))
+
+
+def _read_answer(path: str, place: tuple, raw) -> HeadlineAnswer | None:
+    """lockstep_headline.answer, the answer first (None: a file written before it)."""
+    if raw is None:
+        return None
+    item = _headline_object(path, place, raw)
+    threads = _headline_threads(path, place + ("threads",), item.get("threads", required=True))
+    pin = _headline_text(path, place + ("pin",), item.get("pin", required=True))
+    entry, key = _headline_entry(path, place, item)
+    return HeadlineAnswer(threads, pin, entry, key, item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns"),
+                          item.number("serial_ns_per_step", 0.0, fields.LONGEST_NS, required=False, nullable=True,
+                                      unit=" ns"),
+                          item.number("vs_serial", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True))
+
+
 def _read_headline(path: str, document: dict) -> Headline | None:
     """The top-level "lockstep_headline"; None when the file has none (written before it). Read leniently (a
     key it does not name is ignored) but whole: what it reads is checked here, whatever the schema says."""
@@ -223,27 +309,10 @@ def _read_headline(path: str, document: dict) -> Headline | None:
         if key not in keys:
             collapsed.append(name)
             keys.add(key)
-    recommendations = []
-    for index, raw in enumerate(_headline_list(path, block, "recommendations")):
-        here = at + ("recommendations", index)
-        if not isinstance(raw, dict):
-            fail(path, here, f"is {json_kind(raw)}, not an object")
-        item = CheckedObject(path, raw, schemas.json_path(here))
-        texts = {}
-        for key in ("pin", "model", "entry", "sync", "layout", "basis"):
-            texts[key] = _headline_text(path, here + (key,), item.get(key, required=True))
-        if texts["basis"] not in fields.HEADLINE_BASES:
-            fail(path, here + ("basis",), f"is {shown(texts['basis'])}, not one of {', '.join(fields.HEADLINE_BASES)}")
-        threads = item.get("threads", required=True)
-        if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
-            fail(path, here + ("threads",), f"is {shown(threads)}, not a thread count (a whole number from 1)")
-        entry_key = parse_name(texts["entry"])
-        if not entry_key.family:
-            fail(path, here + ("entry",), f"is {shown(texts['entry'])}: no benchmark family")
-        step = item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")
-        recommendations.append(Recommendation(threads, texts["pin"], texts["model"], texts["entry"], entry_key,
-                                              texts["sync"], texts["layout"], step, texts["basis"]))
-    return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys))
+    recommendations = [_read_recommendation(path, at + ("recommendations", index), raw)
+                       for index, raw in enumerate(_headline_list(path, block, "recommendations"))]
+    return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys),
+                    _read_answer(path, at + ("answer",), block.get("answer")))
 
 
 class _Entries:
@@ -303,6 +372,7 @@ class _Entries:
             if raw.get(flag) and failure is None:
                 failure = raw.get(message_key) or f"{flag.replace('_', ' ')} (message {fields.UNAVAILABLE})"
         if failure is not None:
+            run.failed += aggregate is None
             if failure not in run.errors:
                 run.errors.append(failure)
                 run.errors.sort()  # the file's order of entries is not part of the result
@@ -323,6 +393,7 @@ class _Entries:
             run.aggregates[aggregate] = values
         else:
             values.pace = repetition_pace
+            values.split = split
             run.repetitions.append(values)
 
 

@@ -328,6 +328,26 @@ class ReadingTheHeadline(Scratch):
         self.assertEqual(run_file.collapsed, frozenset(parse_name(name) for name in document["collapsed"]))
         self.assertIn(parse_name("rk4/sync:ck_tas/layout:packed/pin:none/threads:4"), run_file.collapsed)
 
+    def test_the_choices_rivals_tie_and_the_answer_first_are_read(self):
+        document = headline_document()
+        block = document["lockstep_headline"]
+        raw = block["recommendations"][0]
+        first = load_run_file(fixture(HEADLINE)).headline.recommendations[0]
+        self.assertFalse(first.tied)  # a file written before the key: no tie
+        self.assertEqual((first.runner_up.entry, first.runner_up.median, first.runner_up.verdict),
+                         (raw["runner_up"]["entry"], raw["runner_up"]["median"], raw["runner_up"]["verdict"]))
+        self.assertEqual(first.baseline.sync, raw["baseline"]["sync"])
+        self.assertEqual(first.spread_pct, raw["spread_pct"])
+        self.assertIsNone(load_run_file(fixture(HEADLINE)).headline.answer)
+        raw["tied"] = True
+        block["answer"] = {"threads": 2, "pin": "compact", "entry": raw["entry"], "ns_per_step": 316.9,
+                           "serial_ns_per_step": 182.0, "vs_serial": 1.74, "a_later_key": 1}
+        headline = load_run_file(self.write("tied.json", document)).headline
+        self.assertTrue(headline.recommendations[0].tied)
+        self.assertEqual((headline.answer.threads, headline.answer.pin, headline.answer.entry,
+                          headline.answer.ns_per_step, headline.answer.serial_ns_per_step, headline.answer.vs_serial),
+                         (2, "compact", raw["entry"], 316.9, 182.0, 1.74))
+
     def test_a_file_without_it_reads_as_before(self):
         run_file = load_run_file(fixture("paced_a.json"))
         self.assertIsNone(run_file.headline)
@@ -359,7 +379,18 @@ class ReadingTheHeadline(Scratch):
         def no_threads(block):
             block["recommendations"][0]["threads"] = 0
 
-        for mutate in (set_line, empty_lines, nameless, no_basis, endless_step, no_threads):
+        def tied_as_text(block):
+            block["recommendations"][0]["tied"] = "yes"
+
+        def answer_without_entry(block):
+            block["answer"] = {"threads": 2, "pin": "compact", "ns_per_step": 300.0}
+
+        def answer_at_no_threads(block):
+            block["answer"] = {"threads": 0, "pin": "compact", "entry": block["recommendations"][0]["entry"],
+                               "ns_per_step": 300.0}
+
+        for mutate in (set_line, empty_lines, nameless, no_basis, endless_step, no_threads, tied_as_text,
+                       answer_without_entry, answer_at_no_threads):
             with self.subTest(mutate.__name__):
                 document = headline_document()
                 mutate(document["lockstep_headline"])
