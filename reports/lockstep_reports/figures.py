@@ -86,6 +86,9 @@ def heatmap(cells) -> str:
         for column in range(len(layouts)):
             value = grid[row, column]
             text = format_ns(value, CELL_DIGITS) if math.isfinite(value) else "n/a"
+            if (row, column) in cells.errored:
+                _error_cell(axes, row, column)
+                continue
             if gone[row, column]:
                 axes.add_patch(matplotlib.patches.Rectangle((column - 0.5, row - 0.5), 1.0, 1.0, facecolor="#eeeeee",
                                                             hatch="xx", edgecolor="#bbbbbb", lw=0.0))
@@ -111,7 +114,36 @@ def heatmap(cells) -> str:
     if norm is not None:
         colorbar = figure.colorbar(image, ax=axes, label="median step time (log)")
         duration_axis(colorbar.ax.yaxis)
+    _missing_legend(axes, cells)
     return to_svg(figure)
+
+
+# An entry that errored, drawn apart from a combination not run (n/a): its colours and hatch.
+ERROR_FACE, ERROR_EDGE, ERROR_TEXT = "#f6d5d5", "#c44e52", "#8b1a1a"
+
+
+def _error_cell(axes, row: int, column: int) -> None:
+    axes.add_patch(matplotlib.patches.Rectangle((column - 0.5, row - 0.5), 1.0, 1.0, facecolor=ERROR_FACE,
+                                                hatch="\\\\", edgecolor=ERROR_EDGE, lw=0.0))
+    axes.text(column, row, "error", ha="center", va="center", fontsize=8, color=ERROR_TEXT, fontweight="bold")
+
+
+def _missing_legend(axes, cells) -> None:
+    """Under a heat map, what its cells without a time are: an entry that errored ("error") and a combination
+    not run ("n/a"), each when the map has one."""
+    missing = {(row, column) for row, values in enumerate(cells.values) for column, value in enumerate(values)
+               if value is None}
+    handles = []
+    if cells.errored:
+        handles.append(matplotlib.patches.Patch(facecolor=ERROR_FACE, edgecolor=ERROR_EDGE, hatch="\\\\",
+                                                label="error: the entry ran and failed (no time)"))
+    if missing - set(cells.errored):
+        handles.append(matplotlib.patches.Patch(facecolor="white", edgecolor="#999999",
+                                                label="n/a: not run (not applicable)"))
+    if handles:
+        # below the layouts' names and the axis's label: an offset in the legend's font size, whatever the map's height
+        axes.legend(handles=handles, fontsize=7, loc="upper left", bbox_to_anchor=(0.0, 0.0), borderaxespad=4.2,
+                    frameon=False)
 
 
 def log_floor(value: float) -> float:

@@ -73,7 +73,8 @@ def ranked_syncs(run_file, pin: str, threads: int, layouts, collapsed=frozenset(
 class HeatmapCells:
     """One heat map (figures.heatmap): the median step time of each primitive (rows, fastest first) with each
     layout (columns) at one placement and thread count. values[row][column]: None where the combination was not
-    run or errored; collapsed: the (row, column) of cells whose entry collapsed (the headline's: grey, out of the
+    run or errored; errored: the (row, column) of those that errored (drawn "error", apart from the ones not run,
+    "n/a"); collapsed: the (row, column) of cells whose entry collapsed (the headline's: grey, out of the
     colour scale); within_noise: the (sync, layout) cells whose false-sharing pair made no call (hatched, "≈");
     recommended: the (sync, layout) the headline recommends there (outlined)."""
 
@@ -85,6 +86,7 @@ class HeatmapCells:
     collapsed: frozenset = frozenset()
     within_noise: frozenset = frozenset()
     recommended: tuple[str, str] | None = None
+    errored: frozenset = frozenset()
 
 
 def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), collapsed=frozenset(),
@@ -93,7 +95,7 @@ def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), co
     collapsed."""
     _, layouts = syncs_layouts(run_file)
     syncs = ranked_syncs(run_file, pin, threads, layouts, collapsed)
-    values, gone = [], set()
+    values, gone, errored = [], set(), set()
     for row, sync in enumerate(syncs):
         cells = []
         for column, layout in enumerate(layouts):
@@ -102,9 +104,11 @@ def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), co
             cells.append(value)
             if value is not None and key in collapsed:
                 gone.add((row, column))
+            if key in run_file.runs and run_file.runs[key].errored:
+                errored.add((row, column))
         values.append(tuple(cells))
     return HeatmapCells(pin, threads, tuple(syncs), tuple(layouts), tuple(values), frozenset(gone),
-                        frozenset(within_noise), recommended)
+                        frozenset(within_noise), recommended, frozenset(errored))
 
 
 @dataclass(frozen=True)

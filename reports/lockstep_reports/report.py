@@ -22,7 +22,8 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import c2c_analysis, figures, matrix, paper, statistics, words
+from . import answer, c2c_analysis, figures, matrix, paper, statistics, words
+from .answer import Answer
 from .normalisation import fingerprint, layout_effects, rank_tables
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
@@ -60,15 +61,6 @@ class Section:
     tables: list[Table] = field(default_factory=list)
     figures: list[Figure] = field(default_factory=list)
     open: bool = False  # shown open in the HTML page (the first sections); the others open on a click
-
-
-@dataclass
-class Answer:
-    """What the page shows first for one `lockstep run` file: its headline's lines verbatim (lines empty: the
-    file has none, and `note` says so in one line), and where the rest is."""
-    label: str
-    lines: list[str]
-    note: str = ""
 
 
 # ---------------------------------------------------------------- sections
@@ -114,13 +106,13 @@ WHERE_THE_RESULTS_ARE = {
 
 
 def answer_of(run_file: RunFile) -> Answer:
-    """The run's answer as its terminal printed it (lockstep_headline.lines, verbatim), or one line saying the
-    file has none."""
+    """The run's answer (answer.py: the table of its choices, its other facts whole, what errored, the words
+    it uses), or one line saying the file has none."""
     if run_file.headline is None:
         return Answer(run_file.label, [], f"{run_file.label} has no headline (the run's answer, lockstep_headline, "
                                           f"is {UNAVAILABLE}: its `lockstep run` is older than the saved answer); its "
                                           "results are in the sections below.")
-    return Answer(run_file.label, list(run_file.headline.lines))
+    return answer.answer_of(run_file, _machine_cpus(run_file))
 
 
 def collapsed_line(run_file: RunFile) -> str:
@@ -140,6 +132,18 @@ def collapsed_line(run_file: RunFile) -> str:
             "ratios and colour scales below (the run's headline lists them).")
 
 
+def errored_section(run_file: RunFile, errored: list) -> Section:
+    """The entries that errored, each with its messages as the file holds them (whole)."""
+    rows = [[key.display, answer.failed_words(run_file.runs[key]), "; ".join(run_file.runs[key].errors)]
+            for key in errored]
+    return Section(f"Errored entries: {run_file.label}", paragraphs=[
+        f"Errored: {len(errored)} entr{'y' if len(errored) == 1 else 'ies'} whose repetitions failed (lockstep run "
+        "marked them errored: their times are not a measurement). An entry with a failed repetition gets no time "
+        "here: it is left out of every figure, ranking and ratio (the repetitions that finished stay in the file) "
+        "and drawn \"error\" in the heat maps. The messages are lockstep run's, as the file holds them."],
+        tables=[Table(["entry", "repetitions", "what failed"], rows)])
+
+
 def recommended_cell(run_file: RunFile, pin: str, threads: int) -> tuple[str, str] | None:
     """(sync, layout) the run's headline recommends at this placement and thread count, if it has one."""
     if run_file.headline is None:
@@ -155,10 +159,14 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         return [Section(f"Results: {run_file.label}",
                         paragraphs=["No `rk4/sync:.../layout:.../pin:.../threads:...` entries in this file."])]
     collapsed = run_file.collapsed
+    errored = answer.errored_keys(run_file)
     heat = Section(f"Step time, sync x layout: {run_file.label}",
                    paragraphs=["Median step time of each synchronisation primitive (rows, fastest first) with each "
                                "data layout (columns), one map per placement (pin) and thread count. Darker is "
-                               "slower; n/a: the combination was not run or errored."])
+                               "slower; n/a: the combination was not run (not applicable)."
+                               + (f" error, hatched red: the entry ran and failed, so it has no time ({len(errored)} "
+                                  "in this file: the section \"Errored entries\")."
+                                  if errored else "")])
     if any(recommended_cell(run_file, pin, threads) for pin, threads in groups):
         heat.paragraphs.append("Outlined in red: the combination the run recommends there (its headline).")
     bars = Section(f"Spread per primitive: {run_file.label}",
@@ -182,6 +190,8 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.bars_with_spread(matrix.spread_bars(run_file, pin, threads, collapsed))))
     sections += [heat, bars, cpu_section(run_file, counter)]
+    if errored:
+        sections.append(errored_section(run_file, errored))
     split = split_section(run_file, counter)
     if split:
         sections.append(split)
@@ -945,12 +955,6 @@ def _templates() -> jinja2.Environment:
     return environment
 
 
-def _fence(lines: list[str]) -> str:
-    """A Markdown code fence longer than any run of backticks in the lines, so that none can close it."""
-    longest = max((len(run) for line in lines for run in re.findall(r"`+", line)), default=0)
-    return "`" * max(3, longest + 1)
-
-
 def render_html(title: str, answers: list[Answer], sections: list[Section]) -> str:
     anchored = [(f"s{index}-{_slug(section.title)}", section) for index, section in enumerate(sections)]
     return _templates().get_template("report.html.j2").render(title=title, answers=answers, sections=anchored,
@@ -959,7 +963,7 @@ def render_html(title: str, answers: list[Answer], sections: list[Section]) -> s
 
 def render_markdown(title: str, answers: list[Answer], sections: list[Section]) -> str:
     text = _templates().get_template("report.md.j2").render(
-        title=title, answers=[(answer, _fence(answer.lines)) for answer in answers], sections=sections,
+        title=title, answers=answers, sections=sections,
         figures_directory=FIGURES_DIRECTORY, where=WHERE_THE_RESULTS_ARE["markdown"])
     return text.rstrip("\n") + "\n"
 

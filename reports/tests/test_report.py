@@ -10,7 +10,9 @@ from unittest import mock
 
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import c2c_analysis, figures, matrix, paper
+import matplotlib.figure
+
+from lockstep_reports import answer, c2c_analysis, figures, matrix, paper, report
 from lockstep_reports.run_analysis import run_median
 from lockstep_reports.inputs import load_any, load_run_file
 
@@ -295,19 +297,20 @@ class LeaderLineInTheReport(unittest.TestCase):
 
 
 class AnswerFirst(Scratch):
-    def test_the_headline_comes_first_verbatim_then_where_the_rest_is(self):
+    def test_the_answer_comes_first_as_a_table_then_where_the_rest_is(self):
         html, markdown = self.report(fixture(HEADLINE))
-        lines = headline_document()["lockstep_headline"]["lines"]
+        document = headline_document()["lockstep_headline"]
         body = html[html.index("<body>"):]
         answer = body.index('<section class="answer"')
         self.assertLess(answer, body.index("<details"))
-        shown = re.search(r'<pre class="headline">(.*?)</pre>', body, re.S).group(1)
-        self.assertEqual(shown.replace("&#39;", "'").replace("&lt;", "<").replace("&gt;", ">")
-                         .replace("&amp;", "&").split("\n"), lines)
+        self.assertNotIn("<pre", body[answer:body.index("<details")])  # not the terminal's monospace text
+        box = re.search(r'<table class="choices">(.*?)</table>', body, re.S).group(1)
+        self.assertEqual(box.count("<tr>") - 1, len(document["recommendations"]))  # a row per choice
         self.assertLess(body.index("The full results: the sections below"), body.index("<details"))
-        # Markdown: the same lines first, in a fence
-        self.assertTrue(markdown.startswith("# lockstep report\n\n## The answer: headline.json\n\n```\n"
-                                            + "\n".join(lines) + "\n```\n"))
+        self.assertTrue(markdown.startswith("# lockstep report\n\n## The answer: headline.json\n\n| threads, placement |"))
+        self.assertNotIn("```", markdown.split("## Step time")[0])
+        # the terminal's pointers (its result file, the next commands) are not in the box
+        self.assertNotIn("lockstep report ", markdown.split("The full results")[0])
 
     def test_every_section_folds_and_only_the_first_two_are_open(self):
         html, _ = self.report(fixture(HEADLINE))
@@ -328,11 +331,14 @@ class AnswerFirst(Scratch):
         self.assertNotIn('<section class="answer"', html)
         self.assertIn("## Step time, sync x layout: machine_a.json", markdown)
 
-    def test_a_backtick_run_in_a_line_cannot_close_the_markdown_fence(self):
+    def test_a_line_of_the_answer_reads_whole_whatever_it_holds(self):
         document = headline_document()
-        document["lockstep_headline"]["lines"][1] = "a line with ``` and ```` in it"
-        _, markdown = self.report(self.write("ticks.json", document))
-        self.assertIn("\n`````\nThe answer on this machine", markdown)
+        lines = document["lockstep_headline"]["lines"]
+        index = next(i for i, line in enumerate(lines) if line.startswith("Pace:"))
+        lines[index] = "Pace: a line with ``` and ```` and | and <b>not bold</b> in it"
+        html, markdown = self.report(self.write("ticks.json", document))
+        self.assertIn("\n- Pace: a line with ``` and ```` and | and <b>not bold</b> in it\n", markdown)
+        self.assertIn("<li>Pace: a line with ``` and ```` and | and &lt;b&gt;not bold&lt;/b&gt; in it</li>", html)
 
     def test_collapsed_entries_are_said_once_and_left_out_of_rankings(self):
         _, markdown = self.report(fixture(HEADLINE))
@@ -594,3 +600,181 @@ class DelayCauses(Scratch):
         document.pop("causes", None)
         html, _ = self.report(self.write("delay_plain.json", document))
         self.assertNotIn("causes of the tail", html)
+
+
+# ---------------------------------------------------------------- what a person reads, over the real run files
+
+REPOSITORY = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+QUICK_PAIRS = os.path.join(REPOSITORY, "tests", "fixtures", "run", "quick-pairs.json")
+XEON = fixture("xeon_default_run_trimmed.json")
+# The rows of the Xeon run's entry whose repetitions errored (fixtures/trim_real_run.py writes them).
+XEON_ERRORED = fixture("xeon_errored_entry.json")
+
+
+def _stand_in_svg(figure, stream, **_):
+    """Figure.savefig where a test reads the pages only: every figure is built, none rendered."""
+    stream.write('<svg xmlns="http://www.w3.org/2000/svg"/>')
+
+
+def load_document(path):
+    with open(path, encoding="utf-8") as stream:
+        return json.load(stream)
+
+
+def answer_boxes(html, markdown):
+    """The answer box of each page: the HTML <section class="answer">, the Markdown from its heading to "The
+    full results"."""
+    section = re.search(r'<section class="answer".*?</section>', html, re.S).group(0)
+    box = markdown.split("## The answer: ")[1].split("\nThe full results")[0]
+    return section, box
+
+
+def html_texts(section):
+    """The text of every cell, caption, paragraph and list item of an HTML fragment (tags inside removed)."""
+    texts = re.findall(r"<(td|th|li|p|caption|dd)\b[^>]*>(.*?)</\1>", section, re.S)
+    return [re.sub(r"<[^>]+>", "", text).strip() for _, text in texts]
+
+
+class Pages(Scratch):
+    def pages(self, *paths):
+        with mock.patch.object(matplotlib.figure.Figure, "savefig", _stand_in_svg):
+            return self.report(*paths)
+
+
+class AnswerBox(Pages):
+    """The answer a person reads first: the recommendations as a table, the headline's other lines whole, the
+    words explained (answer.py), over the real run files."""
+
+    def test_no_answer_line_ends_cut(self):
+        for path in (QUICK_PAIRS, XEON):
+            with self.subTest(os.path.basename(path)):
+                html, markdown = self.pages(path)
+                section, box = answer_boxes(html, markdown)
+                lines = [line.strip() for line in box.splitlines() if line.strip()]
+                texts = html_texts(section)
+                self.assertTrue(lines and texts)
+                for text in lines + texts:
+                    self.assertFalse(text.rstrip("*").endswith("..."), text)
+                written = load_document(path)["lockstep_headline"]["lines"]
+                for line in written:  # a line the file holds cut is said to be cut, in words
+                    if line.endswith(" ..."):
+                        self.assertIn(line[:-4].strip() + answer.CUT_NOTE, box)
+                        self.assertIn(line[:-4].strip() + answer.CUT_NOTE, html.replace("&#39;", "'"))
+
+    def test_whole_lines_read_whole_in_both_pages(self):
+        document = load_document(XEON)
+        lines = document["lockstep_headline"]["lines"]
+        long_lines = ["Collapsed when threads outnumber CPUs (50 entries at threads:4, 4.00 ms..52.01 ms a step or "
+                      "episode, left out of rankings): ck_centralized, ck_combining, ck_dissemination, ck_mcs, "
+                      "ck_tournament and 12 more, each of them named here so that the line runs past any width",
+                      "Not applicable (36): a dataflow channel carries each producer's values in its own slots "
+                      "straight into the consumers' copies, so a layout of the shared state has nothing to lay out "
+                      "for it and only its private copy runs"]
+        for index, line in enumerate(lines):
+            if line.startswith("Collapsed when"):
+                lines[index] = long_lines[0]
+            elif line.startswith("Not applicable"):
+                lines[index] = long_lines[1]
+        html, markdown = self.pages(self.write("whole.json", document))
+        section, box = answer_boxes(html, markdown)
+        for line in long_lines:
+            self.assertIn(f"\n- {line}\n", box)
+            self.assertIn(f"<li>{line.replace(chr(39), '&#39;')}</li>", section)
+        self.assertNotIn(answer.CUT_NOTE, box)
+
+    def test_the_table_is_the_files_recommendations(self):
+        html, markdown = self.pages(XEON)
+        _, box = answer_boxes(html, markdown)
+        rows = [line.split(" | ") for line in box.splitlines() if line.startswith("| ") and "threads" in line]
+        recommendations = load_document(XEON)["lockstep_headline"]["recommendations"]
+        self.assertEqual(len(rows) - 1, len(recommendations))  # the headings, then a row per choice
+        self.assertEqual(rows[0], ["| threads, placement", "use", "step (median ± spread)",
+                                   "a stage's sync, in c2c transfers", "runner-up: its step / the choice's",
+                                   "std_barrier: its step / the choice's |"])
+        self.assertEqual(rows[1], ["| 2 threads, pin:compact", "mailbox + per_thread", "767.0 ns ±12.6 %", "1.56",
+                                   "seqlock + per_thread: 1.03x [0.91, 1.09], unsure",
+                                   "11.45x [5.98, 25.34], slower |"])
+        self.assertEqual(rows[3][:3], ["| 4 threads on 2 CPUs, pin:compact", "seqlock + per_thread",
+                                       "5.232 us ±89.3 % over 2 paces: uncertain"])
+        # the choices' lines are the table's: none of them is repeated under it, nor the terminal's pointers
+        self.assertNotIn("next seqlock takes", box)
+        self.assertNotIn("Results: ", box)
+        self.assertNotIn("Report: lockstep report", box)
+        self.assertIn("- False sharing: two writers 8 B apart", box)
+
+    def test_a_tie_names_both(self):
+        document = load_document(XEON)
+        last = document["lockstep_headline"]["recommendations"][3]
+        last["tied"] = True
+        _, markdown = self.pages(self.write("tied.json", document))
+        row = next(line for line in markdown.splitlines() if line.startswith("| 4 threads on 2 CPUs, pin:none"))
+        cells = row.split(" | ")
+        self.assertEqual(cells[1], "spsc_queue + per_thread or mailbox + per_thread: tied")
+        self.assertEqual(cells[4], "tied: mailbox + per_thread: 0.88x [0.79, 0.96], unsure")
+
+    def test_the_answer_first_comes_before_the_table(self):
+        document = load_document(XEON)
+        block = document["lockstep_headline"]
+        block["answer"] = {"threads": 2, "pin": "compact", "entry": block["recommendations"][0]["entry"],
+                           "ns_per_step": 767.0364218455744, "serial_ns_per_step": 26.8, "vs_serial": 28.62}
+        block["lines"].insert(0, "Best: threads:2 pin:compact mailbox + per_thread, 28.6x the serial step")
+        html, markdown = self.pages(self.write("first.json", document))
+        section, box = answer_boxes(html, markdown)
+        first = ("Best of the run: 2 threads, pin:compact, mailbox + per_thread, 767.0 ns a step: 28.6x the serial "
+                 "step (26.8 ns); one thread alone computes it faster: the synchronisation costs more than sharing "
+                 "the work saves.")
+        self.assertTrue(box.startswith(f"default-run.json\n\n**{first}**\n\n| threads, placement |".replace(
+            "default-run.json", "first.json")), box[:400])
+        self.assertLess(section.index('<p class="first">'), section.index("<table"))
+        self.assertNotIn("Best: threads:2", box)  # the object says it; its line is not repeated
+
+    def test_the_words_it_uses_are_explained_in_the_box(self):
+        html, markdown = self.pages(XEON)
+        section, box = answer_boxes(html, markdown)
+        words = box.split("Words used above:")[1]
+        for word in ("**pace**", "Over 2 paces", "**c2c transfers a stage**", "**a write (false sharing)**",
+                     "**Nx [low, high]**", "tied"):
+            self.assertIn(word, words)
+        self.assertIn('<dl class="glossary">', section)
+        self.assertLess(box.index("gain a write"), box.index("Words used above:"))
+
+
+class ErroredEntries(Pages):
+    """An entry whose repetitions errored (the real Xeon run's rk4/sync:win_event_faithful/layout:padded128/
+    pin:compact/threads:4, lost wake-ups) is counted and named in the answer and drawn apart from the cells not
+    run in the heat maps."""
+
+    NAME = "rk4/sync:win_event_faithful/layout:padded128/pin:compact/threads:4"
+
+    def path(self):
+        document = load_document(XEON)
+        document["benchmarks"] += load_document(XEON_ERRORED)
+        return self.write("with_errored.json", document)
+
+    def test_it_is_counted_and_named_in_the_answer_and_its_section(self):
+        html, markdown = self.pages(self.path())
+        section, box = answer_boxes(html, markdown)
+        self.assertIn(f"- Errored: 1 entry with failed repetitions, so no time: {self.NAME} (3 of 5 repetitions "
+                      "failed).", box)
+        self.assertIn('<li class="errored">Errored: 1 entry', section)
+        errored = markdown.split("## Errored entries: with_errored.json")[1].split("\n## ")[0]
+        self.assertIn(f"| {self.NAME} | 3 of 5 repetitions failed | an earlier call stopped: bounded:", errored)
+        self.assertNotIn("Errored", answer_boxes(*self.pages(XEON))[1])  # none in the trimmed file
+
+    def test_the_heat_map_draws_it_apart_from_the_cells_not_run(self):
+        run_file = load_run_file(self.path())
+        cells = matrix.heatmap_cells(run_file, "compact", 4, frozenset(), run_file.collapsed)
+        row, column = cells.syncs.index("win_event_faithful"), cells.layouts.index("padded128")
+        self.assertEqual(cells.errored, frozenset({(row, column)}))
+        self.assertIsNone(cells.values[row][column])
+        not_run = {(r, c) for r, values in enumerate(cells.values) for c, value in enumerate(values) if value is None}
+        self.assertGreater(len(not_run - cells.errored), 0)  # the not-applicable cells, n/a
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            figures.heatmap(cells)
+        axes = captured[0].axes[0]
+        at = {(round(text.get_position()[1]), round(text.get_position()[0])): text.get_text() for text in axes.texts}
+        self.assertEqual(at[(row, column)], "error")
+        self.assertEqual({at[cell] for cell in not_run - cells.errored}, {"n/a"})
+        legend = [text.get_text() for text in axes.get_legend().get_texts()]
+        self.assertEqual(legend, ["error: the entry ran and failed (no time)", "n/a: not run (not applicable)"])
