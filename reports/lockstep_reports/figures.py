@@ -385,30 +385,44 @@ SPLIT_COLORS = ("#4c72b0", "#dd8452", "#c44e52")
 
 
 def step_split_bars(splits: list[StepSplit], title: str) -> str:
-    """One horizontal bar per entry (top: the fastest), split into its parts' shares of their sum (a part
-    below 0, a clock's noise, counts as 0), the entry's step time written at the bar's end."""
-    figure, axes = plt.subplots(figsize=(7.6, 0.28 * len(splits) + 1.4))
+    """One horizontal bar per entry (top: the fastest), its parts as shares of its step (a part below 0, a
+    clock's noise, drawn as 0), the step time written at the bar's end. A clamped split (StepSplit.clamped: the
+    sampled syncs took the whole step or more) has no compute: its two sync parts are drawn as measured, hatched,
+    past the step's line at 100 %."""
+    figure, axes = plt.subplots(figsize=(7.6, 0.28 * len(splits) + 1.6))
+    right = 100.0
     for row, split in enumerate(splits):
         parts = [max(0.0, part) for part in split.parts_ns]
-        total = sum(parts)
+        if split.clamped:
+            parts[0] = 0.0
         left = 0.0
         for index, part in enumerate(parts):
-            share = 100.0 * part / total if total > 0 else 0.0
+            share = 100.0 * part / split.step_ns
             axes.barh(row, share, 0.7, left=left, color=SPLIT_COLORS[index], lw=0,
+                      hatch="////" if split.clamped else None, edgecolor="white" if split.clamped else None,
                       label=STEP_SPLIT_COUNTERS[index][1] if row == 0 else None)
-            if share >= 12.0:
+            if share >= 12.0 and not split.clamped:
                 axes.text(left + share / 2, row, f"{share:.0f} %", ha="center", va="center", fontsize=6,
                           color="white")
             left += share
-        axes.text(101.0, row, format_ns(split.step_ns, CELL_DIGITS), ha="left", va="center", fontsize=7)
+        right = max(right, left)
+        end = format_ns(split.step_ns, CELL_DIGITS) + (f", syncs {left:.0f} %" if split.clamped else "")
+        axes.text(left + 1.0, row, end, ha="left", va="center", fontsize=7)
+    axes.axvline(100.0, color="black", lw=0.8, ls="--")
     labels = [f"{split.key.get('sync')} ({split.key.get('layout')})" for split in splits]
     axes.set_yticks(range(len(splits)), labels, fontsize=7)
     axes.set_ylim(len(splits) - 0.5, -0.5)
-    axes.set_xlim(0.0, 112.0)
-    axes.set_xticks([0, 25, 50, 75, 100], ["0 %", "25 %", "50 %", "75 %", "100 %"])
-    axes.set_xlabel("share of the three parts' sum (the median step time at the bar's end)")
+    clamped = any(split.clamped for split in splits)
+    axes.set_xlim(0.0, right + (24.0 if clamped else 12.0))
+    ticks = [tick for tick in range(0, int(right) + 1, 25)]
+    axes.set_xticks(ticks, [f"{tick} %" for tick in ticks])
+    axes.set_xlabel("share of the step (the median repetition's; its step at the bar's end; dashed: the step)")
     axes.set_title(title, fontsize=9)
-    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    handles, names = axes.get_legend_handles_labels()
+    if clamped:
+        handles.append(matplotlib.patches.Patch(facecolor="#999999", hatch="////", edgecolor="white"))
+        names.append("hatched: compute not measured")
+    axes.legend(handles, names, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     return to_svg(figure)
 
 

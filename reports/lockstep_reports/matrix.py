@@ -200,18 +200,55 @@ def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
 
 @dataclass(frozen=True)
 class StepSplit:
-    """An rk4 entry's median step time and the medians of its split (fields.STEP_SPLIT_COUNTERS, in their
-    order): computing, waiting for the others, the release."""
+    """Where an rk4 entry's step goes: the split (fields.STEP_SPLIT_COUNTERS, in their order: computing, waiting
+    for the others, the release) of its median repetition, the one whose step is the median of those that carry
+    the split (the lower middle one of an even count), as the writer wrote it, beside that repetition's step.
+
+    The writer measures the two parts of the four stage syncs (waiting and release) on sampled steps and writes
+    compute as the step less those syncs, clamped at 0 (docs/names-and-counters.md). So a repetition's three
+    parts add up to its step exactly, unless the sampled syncs took more than the whole step: then compute reads
+    0, which no measurement said, and the syncs' two parts add up to more than the step. Such a split is
+    `clamped`; `clamped_repetitions` of the entry's `repetitions` were."""
 
     key: BenchmarkKey
     step_ns: float
     parts_ns: tuple[float, ...]
+    clamped_repetitions: int = 0
+    repetitions: int = 1
+
+    @property
+    def syncs_ns(self) -> float:
+        """The four stage syncs as measured: waiting for the others and the release."""
+        return sum(self.parts_ns[1:])
+
+    @property
+    def clamped(self) -> bool:
+        """The sampled syncs took the whole step or more: compute was not measured (the writer's 0)."""
+        return self.syncs_ns >= self.step_ns
+
+
+def median_repetition(repetitions):
+    """Of the repetitions that carry the split, the one whose step is the median (the lower middle one of an
+    even count), None when none does."""
+    split = sorted((repetition for repetition in repetitions if repetition.split is not None),
+                   key=lambda repetition: repetition.real_ns)
+    return split[(len(split) - 1) // 2] if split else None
+
+
+def _entry_split(run, key) -> StepSplit | None:
+    middle = median_repetition(run.repetitions)
+    if middle is None:
+        return None
+    splits = [repetition.split for repetition in run.repetitions if repetition.split is not None]
+    clamped = sum(1 for repetition in run.repetitions if repetition.split is not None
+                  and sum(repetition.split[1:]) >= repetition.real_ns)
+    return StepSplit(key, middle.real_ns, tuple(middle.split), clamped, len(splits))
 
 
 def step_splits(run_file, pin: str, threads: int, collapsed=frozenset()) -> list[StepSplit]:
-    """Per primitive of one placement and thread count (fastest first), its fastest layout's split: the median
-    of each part over the repetitions that carry the three (Run.step_splits); collapsed entries left out. Empty
-    for a file written before the split."""
+    """Per primitive of one placement and thread count (fastest first), the split of its fastest layout (by the
+    entries' medians) there (StepSplit: its median repetition's); collapsed entries left out. Empty for a file
+    written before the split."""
     _, layouts = syncs_layouts(run_file)
     splits = []
     for sync in ranked_syncs(run_file, pin, threads, layouts, collapsed):
@@ -220,11 +257,11 @@ def step_splits(run_file, pin: str, threads: int, collapsed=frozenset()) -> list
             key = rk4_key(run_file, sync, layout, pin, threads)
             step = run_median(run_file, key) if key not in collapsed else None
             run = run_file.runs.get(key)
-            repetitions = run.step_splits if run is not None else None
-            if step is not None and repetitions:
-                measured.append(StepSplit(key, step, tuple(statistics.median(part) for part in zip(*repetitions))))
+            split = _entry_split(run, key) if run is not None and step is not None else None
+            if split is not None:
+                measured.append((step, split))
         if measured:
-            splits.append(min(measured, key=lambda split: split.step_ns))
+            splits.append(min(measured, key=lambda item: item[0])[1])
     return splits
 
 

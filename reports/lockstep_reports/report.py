@@ -275,21 +275,43 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     return section
 
 
+# What "Where a step's time goes" shows, and why (reports/README.md says the same).
+SPLIT_READING = (
+    "Each primitive at its fastest layout, its step split in three: computing the stages, waiting for the others "
+    "to arrive, and the release (from the latest awaited arrival to the departure: the synchronisation itself). "
+    "A step late for waiting is late because another participant was; a long release is the primitive's own "
+    "cost. Each split is one repetition's, the entry's median one (the repetition whose step is the median), "
+    "as lockstep run wrote it: the writer times the two parts of the four stage syncs on sampled steps and "
+    "writes compute as the step less those syncs, so the three parts add up to that repetition's step exactly. "
+    "A split of medians would not: each part's median comes from another repetition, and on a machine that "
+    "changes pace they can differ severalfold. The bars are shares of the step, the step at each bar's end.")
+CLAMPED_READING = (
+    "Hatched, compute \"not measured\": the sampled syncs took the whole step or more (the writer then clamps "
+    "compute at 0, a value no measurement gave), so the split does not add up: the two sync parts are shown as "
+    "measured, past the step's line, and no compute is made up for them. The syncs are timed on sampled steps "
+    "and carry their own error, which can exceed a participant's compute when that is small beside the syncs")
+
+
+def _split_row(where: str, split: matrix.StepSplit) -> list[str]:
+    compute = "not measured (clamped)" if split.clamped else format_ns(split.parts_ns[0])
+    share = split.syncs_ns / split.step_ns
+    syncs = f"{format_number(100 * share, 0, ' %')}" + (": more than the step" if share > 1.0 else "")
+    return ([where, f"{split.key.get('sync')} + {split.key.get('layout')}", format_ns(split.step_ns), compute]
+            + [format_ns(part) for part in split.parts_ns[1:]]
+            + [syncs, f"{split.clamped_repetitions} of {split.repetitions}"])
+
+
 def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
     """Where an rk4 step's time goes (compute, waiting for the others, release), per primitive at its fastest
-    layout, one figure per placement and thread count, and the medians in a table; None for a file without
-    the split (written before it)."""
+    layout (its median repetition: matrix.StepSplit), one figure per placement and thread count and a table;
+    a split whose syncs took the step or more marked, not made to add up. None for a file without the split
+    (written before it)."""
     groups = [(pin, threads, matrix.step_splits(run_file, pin, threads, run_file.collapsed))
               for pin, threads in matrix.rk4_groups(run_file)]
     if not any(splits for _, _, splits in groups):
         return None
     names = [word for _, word in STEP_SPLIT_COUNTERS]
-    section = Section(f"Where a step's time goes: {run_file.label}", paragraphs=[
-        "Each primitive at its fastest layout, its step split in three (medians over the repetitions, each a "
-        "participant's mean per step): computing the stages, waiting for the others to arrive, and the release "
-        "(from the latest awaited arrival to the departure: the synchronisation itself). The bars are shares of the "
-        "three parts' sum, the step time at each bar's end; the table gives the times. A step late for "
-        "waiting is late because another participant was; a long release is the primitive's own cost."])
+    section = Section(f"Where a step's time goes: {run_file.label}", paragraphs=[SPLIT_READING])
     rows = []
     for pin, threads, splits in groups:
         if not splits:
@@ -297,14 +319,20 @@ def split_section(run_file: RunFile, counter: list[int]) -> Section | None:
         where = f"pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
         section.figures.append(Figure(f"split-{counter[0]}-{pin}-{threads}", where, figures.step_split_bars(
             splits, f"where the step goes, each primitive at its fastest layout, {where}")))
-        rows += [[where, f"{split.key.get('sync')} + {split.key.get('layout')}", format_ns(split.step_ns)]
-                 + [format_ns(part) for part in split.parts_ns] + [format_ns(sum(split.parts_ns))]
-                 for split in splits]
+        rows += [_split_row(where, split) for split in splits]
+    clamped = sum(1 for _, _, splits in groups for split in splits if split.clamped)
+    if clamped:
+        serial = calibration(run_file, SERIAL_CONTEXT)
+        scale = (f": the serial step, all of a step's work on one thread, is {format_ns(serial)} here, and a "
+                 "participant computes its share of it" if serial else "")
+        section.paragraphs.append(f"{CLAMPED_READING}{scale}. {clamped} of the {len(rows)} splits shown are so.")
     section.tables.append(Table(
-        ["group", "sync + layout", "step (median)"] + names + ["the three"], rows,
-        caption="The split's medians. Compute is the step less its four stage syncs, clamped at 0 "
-                "(docs/names-and-counters.md): where it reads 0 the syncs took the whole step, and the three add up "
-                "to more than the step; otherwise they add up to it."))
+        ["group", "sync + layout", "step (the median repetition)"] + names
+        + ["the syncs: share of the step", "repetitions with compute clamped"], rows,
+        caption="The split of each entry's median repetition, as written (docs/names-and-counters.md). Compute "
+                "is the step less the syncs (waiting + release): where it was measured the three add up to the "
+                "step; \"not measured (clamped)\": the syncs took the whole step or more. The last column counts "
+                "the entry's repetitions so clamped."))
     return section
 
 

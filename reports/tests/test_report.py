@@ -514,7 +514,8 @@ class CpuPerStep(Scratch):
         self.assertAlmostEqual(release / step, 0.2, places=2)
         futex = next(row for row in rows if row[0] == "| pin:none, 2 threads" and row[1].startswith("futex_spin"))
         self.assertEqual(futex[5], "-0.5 ns")  # a release just below 0, as the writer may measure it
-        self.assertAlmostEqual(float(first[6].split()[0]), compute + waiting + release, places=1)  # the three
+        self.assertAlmostEqual(compute + waiting + release, step, places=1)  # the three add up to the step
+        self.assertEqual(first[6:], ["50 %", "0 of 5 |"])  # the syncs' share; no repetition clamped
 
     def test_the_split_of_some_repetitions_only_still_reads(self):
         document = self.document()
@@ -566,8 +567,10 @@ class CpuPerStep(Scratch):
             figures.step_split_bars(splits, "title")
         bars = captured[0].axes[0].patches
         widths = [[round(bar.get_width(), 3) for bar in bars[row * 3:row * 3 + 3]] for row in range(len(splits))]
-        self.assertEqual(widths[0], [50.0, 30.0, 20.0])
-        self.assertEqual(widths[2], [50.0, 50.0, 0.0])  # futex_spin's negative release drawn as 0
+        self.assertEqual(widths[0], [50.0, 30.0, 20.0])  # shares of the step
+        futex = splits[2]
+        self.assertEqual(widths[2], [round(100 * futex.parts_ns[0] / futex.step_ns, 3),
+                                     round(100 * futex.parts_ns[1] / futex.step_ns, 3), 0.0])  # release < 0 drawn as 0
 
 
 if __name__ == "__main__":
@@ -778,3 +781,46 @@ class ErroredEntries(Pages):
         self.assertEqual({at[cell] for cell in not_run - cells.errored}, {"n/a"})
         legend = [text.get_text() for text in axes.get_legend().get_texts()]
         self.assertEqual(legend, ["error: the entry ran and failed (no time)", "n/a: not run (not applicable)"])
+
+
+class StepSplitAddsUp(Pages):
+    """Where a step's time goes: each split adds up to its step or is marked clamped (matrix.StepSplit), never a
+    compute of 0 that no measurement gave."""
+
+    def test_every_split_adds_up_or_is_marked(self):
+        for path in (fixture(REAL_SPLIT), XEON, fixture(CPU_SPLIT)):
+            with self.subTest(os.path.basename(path)):
+                run_file = load_run_file(path)
+                splits = [split for pin, threads in matrix.rk4_groups(run_file)
+                          for split in matrix.step_splits(run_file, pin, threads, run_file.collapsed)]
+                self.assertTrue(splits)
+                for split in splits:
+                    if split.clamped:
+                        self.assertGreaterEqual(split.syncs_ns, split.step_ns)
+                    else:
+                        self.assertAlmostEqual(sum(split.parts_ns), split.step_ns, delta=1e-6 * split.step_ns + 2e-3)
+                _, markdown = self.pages(path)
+                section = markdown.split("## Where a step's time goes: ")[1].split("\n## ")[0]
+                rows = [line.split(" | ") for line in section.splitlines() if line.startswith("| pin:")]
+                self.assertEqual(len(rows), len(splits))
+                for row, split in zip(rows, splits):
+                    self.assertNotEqual(row[3], "0.0 ns")
+                    self.assertEqual(row[3] == "not measured (clamped)", split.clamped)
+                    self.assertEqual(row[6].endswith("more than the step"), split.syncs_ns > split.step_ns)
+                clamped = sum(split.clamped for split in splits)
+                self.assertEqual(f"{clamped} of the {len(splits)} splits shown are so." in section, clamped > 0)
+
+    def test_the_real_runs_have_clamped_splits(self):
+        # run_quick_split.json's futex_spin and the Xeon run's 4-thread entries: the writer's compute read 0
+        for path in (fixture(REAL_SPLIT), XEON):
+            run_file = load_run_file(path)
+            self.assertTrue(any(split.clamped for pin, threads in matrix.rk4_groups(run_file)
+                                for split in matrix.step_splits(run_file, pin, threads, run_file.collapsed)))
+
+    def test_the_split_is_its_median_repetitions(self):
+        run_file = load_run_file(XEON)
+        split = matrix.step_splits(run_file, "compact", 2, run_file.collapsed)[0]
+        run = run_file.runs[split.key]
+        steps = sorted(repetition.real_ns for repetition in run.repetitions)
+        self.assertEqual(split.step_ns, steps[len(steps) // 2])  # 5 repetitions: the median
+        self.assertEqual(split.step_ns, run_median(run_file, split.key))
