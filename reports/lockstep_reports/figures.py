@@ -461,13 +461,33 @@ def ratio_text(value: float) -> str:
     return f"{value:g}x"
 
 
-def _ratio_axis(axes, values, noise: float | None, margin: float = 0.06) -> None:
-    """A logarithmic ratio axis that covers every value given (bars and whiskers) and always shows 1 and the
-    noise band, shaded; its ticks never crowd (ratio_ticks). margin: room on each side, a share of the span."""
-    axes.set_xscale("log")
+# How far an interval's whisker may reach beyond the span of the medians (with 1 and the noise band) before the
+# axis clips it: a factor on each side. One degenerate interval (3 pairs, [0.0005, 1.01]) would otherwise stretch
+# the axis over decades and leave every other bar a sliver; a clipped whisker ends in an arrow at the bound.
+WHISKER_ROOM = 2.0
+
+
+def finite_positive(values) -> list[float]:
+    return [v for v in values if v is not None and v > 0 and math.isfinite(v)]
+
+
+def ratio_axis_range(ratios, intervals, noise: float | None) -> tuple[float, float]:
+    """(low, high) of a ratio axis: every ratio, 1 and the noise band (±25 % when there is none), and the
+    intervals' ends, each clipped to WHISKER_ROOM beyond the span of the rest. intervals: (low, high) pairs
+    (None where a ratio has none)."""
     band = 1.0 + (noise or 0.25)
-    finite = [v for v in values if v and v > 0 and math.isfinite(v)]
-    low, high = min(finite + [1.0 / band]), max(finite + [band])
+    medians = finite_positive(ratios)
+    low, high = min(medians + [1.0 / band]), max(medians + [band])
+    ends = [(lo, hi) for lo, hi in intervals if lo is not None and hi is not None]
+    lows, highs = finite_positive(lo for lo, _ in ends), finite_positive(hi for _, hi in ends)
+    return (max(low / WHISKER_ROOM, min(lows + [low])), min(high * WHISKER_ROOM, max(highs + [high])))
+
+
+def _ratio_axis(axes, span: tuple[float, float], noise: float | None, margin: float = 0.06) -> None:
+    """A logarithmic ratio axis over span (ratio_axis_range) and a margin on each side (a share of the span),
+    showing 1 and the noise band, shaded; its ticks never crowd (ratio_ticks)."""
+    axes.set_xscale("log")
+    low, high = span
     room = (high / low) ** margin
     low, high = low / room, high * room
     axes.set_xlim(low, high)
@@ -482,36 +502,53 @@ def _ratio_axis(axes, values, noise: float | None, margin: float = 0.06) -> None
     axes.set_axisbelow(True)
 
 
-def _ratio_bars(axes, rows: list[PenaltyRow], noise: float | None) -> None:
+def _ratio_bars(axes, rows: list[PenaltyRow], noise: float | None) -> int:
     """One horizontal bar per row from 1 to its ratio, top to bottom in the order given, named on the y axis,
-    coloured by its verdict (hatched when within noise or unsure), its interval as a whisker."""
-    _ratio_axis(axes, [row.ratio for row in rows] + [v for row in rows for v in (row.ci_low, row.ci_high) if v], noise,
-                margin=0.16)
+    coloured by its verdict (hatched when within noise or unsure), its interval as a whisker; a whisker that
+    reaches past the axis's span (ratio_axis_range) ends there in an arrow. Returns how many were clipped."""
+    span = ratio_axis_range([row.ratio for row in rows], [(row.ci_low, row.ci_high) for row in rows], noise)
+    _ratio_axis(axes, span, noise, margin=0.16)
+    clipped = 0
     for y, row in enumerate(rows):
         style = VERDICT_STYLE.get(row.verdict, VERDICT_STYLE["penalty"])
         color = VERDICT_COLOR.get(row.verdict, MEDIANS_COLOR)
         axes.barh(y, row.ratio - 1.0, 0.7, left=1.0, color=color, alpha=style["alpha"], hatch=style["hatch"],
                   edgecolor=color if style["hatch"] else None, lw=0.0)
         reach = [row.ratio]
+        low_clipped = False
         if row.ci_low is not None and row.ci_high is not None:
-            axes.errorbar(row.ratio, y, xerr=[[row.ratio - row.ci_low], [row.ci_high - row.ratio]], color="black",
-                          capsize=2, lw=0.8)
-            reach += [row.ci_low, row.ci_high]
-        # The ratio written beyond the bar's end (and its whisker's), on the side it points to.
-        if row.ratio >= 1.0:
-            axes.annotate(f"{row.ratio:.2f}x", (max(reach), y), xytext=(3, 0), textcoords="offset points",
+            low, high = max(row.ci_low, span[0]), min(row.ci_high, span[1])
+            axes.errorbar(row.ratio, y, xerr=[[max(row.ratio - low, 0.0)], [max(high - row.ratio, 0.0)]],
+                          color="black", capsize=2, lw=0.8)
+            for end, bound, marker in ((row.ci_low, span[0], "<"), (row.ci_high, span[1], ">")):
+                if (end < bound) if marker == "<" else (end > bound):
+                    axes.plot([bound], [y], marker=marker, color="black", ms=5, ls="none")
+                    clipped += 1
+                    low_clipped = low_clipped or marker == "<"
+            reach += [low, high]
+        # The ratio written beyond the bar's end (and its whisker's), on the side it points to; on the right
+        # when its whisker was clipped on the left, where the names are.
+        if row.ratio >= 1.0 or low_clipped:
+            axes.annotate(f"{row.ratio:.2f}x", (max(reach), y), xytext=(5, 0), textcoords="offset points",
                           ha="left", va="center", fontsize=6, color="#333333")
         else:
-            axes.annotate(f"{row.ratio:.2f}x", (min(reach), y), xytext=(-3, 0), textcoords="offset points",
+            axes.annotate(f"{row.ratio:.2f}x", (min(reach), y), xytext=(-5, 0), textcoords="offset points",
                           ha="right", va="center", fontsize=6, color="#333333")
     axes.set_yticks(range(len(rows)), [row.shown_label for row in rows], fontsize=7)
     axes.set_ylim(len(rows) - 0.5, -0.5)
+    return clipped
 
 
-def _verdict_legend(axes, rows: list[PenaltyRow], noise: float | None, note: str = "") -> None:
+CLIPPED_NOTE = "interval past the axis (its ends: the table)"
+
+
+def _verdict_legend(axes, rows: list[PenaltyRow], noise: float | None, note: str = "", clipped: int = 0) -> None:
     handles = [matplotlib.patches.Patch(facecolor=color, alpha=VERDICT_STYLE[verdict]["alpha"],
                                         hatch=VERDICT_STYLE[verdict]["hatch"], edgecolor=color, label=verdict)
                for verdict, color in VERDICT_COLOR.items() if any(row.verdict == verdict for row in rows)]
+    if clipped:
+        handles.append(matplotlib.lines.Line2D([], [], marker=">", color="black", ls="none", ms=5,
+                                               label=CLIPPED_NOTE))
     if any(row.verdict not in VERDICT_COLOR for row in rows):
         handles.append(matplotlib.patches.Patch(color=MEDIANS_COLOR, label="ratio of medians (no interval)"))
     if noise:
@@ -534,13 +571,14 @@ def penalties(rows: list[PenaltyRow], noise: float | None = None) -> str:
     by_kind = [sorted((row for row in rows if row.kind == kind), key=lambda row: (row.threads, row.pin, row.sync))
                for kind in kinds]
     heights = [_bars_height(len(members)) for members in by_kind]
-    figure, axes_list = plt.subplots(len(kinds), 1, figsize=(7.6, sum(heights) + 0.5), squeeze=False,
+    figure, axes_list = plt.subplots(len(kinds), 1, figsize=(9.0, sum(heights) + 0.5), squeeze=False,
                                      gridspec_kw={"height_ratios": heights})
+    clipped = 0
     for axes, kind, members in zip(axes_list[:, 0], kinds, by_kind):
-        _ratio_bars(axes, members, noise)
+        clipped += _ratio_bars(axes, members, noise)
         axes.set_title(kind, fontsize=9)
     axes_list[-1, 0].set_xlabel("time ratio (log; > 1: penalty, < 1: gain)")
-    _verdict_legend(axes_list[0, 0], rows, noise)
+    _verdict_legend(axes_list[0, 0], rows, noise, clipped=clipped)
     figure.tight_layout()
     return to_svg(figure)
 
@@ -550,9 +588,9 @@ def paired_ratios(rows: list[PenaltyRow], title: str, noise: float | None = None
     bar in the order given: the median per adjacent pair, the whisker its confidence interval, the noise band
     shaded, a bar within noise or unsure hatched and pale. note: a line added to the legend."""
     figure, axes = plt.subplots(figsize=(7.6, _bars_height(len(rows)) + 0.4))
-    _ratio_bars(axes, rows, noise)
+    clipped = _ratio_bars(axes, rows, noise)
     axes.set_xlabel("paired time ratio a / b (log; median per adjacent pair, whisker: confidence interval)")
-    _verdict_legend(axes, rows, noise, note)
+    _verdict_legend(axes, rows, noise, note, clipped)
     axes.set_title(title, fontsize=9)
     return to_svg(figure)
 

@@ -824,3 +824,47 @@ class StepSplitAddsUp(Pages):
         steps = sorted(repetition.real_ns for repetition in run.repetitions)
         self.assertEqual(split.step_ns, steps[len(steps) // 2])  # 5 repetitions: the median
         self.assertEqual(split.step_ns, run_median(run_file, split.key))
+
+
+class RatioAxis(unittest.TestCase):
+    """A ratio figure's axis holds every bar readably when one interval is degenerate: it spans the medians (with
+    1 and the noise band) and clips a whisker that reaches beyond figures.WHISKER_ROOM of them, marking it."""
+
+    def test_a_degenerate_interval_does_not_stretch_the_axis(self):
+        ratios = [0.95, 1.01, 0.88, 1.14]
+        intervals = [(0.91, 0.99), (0.97, 1.05), (0.000478, 1.005), (1.01, 1.25)]
+        low, high = figures.ratio_axis_range(ratios, intervals, 0.05)
+        self.assertAlmostEqual(low, 0.88 / figures.WHISKER_ROOM)
+        self.assertEqual(high, 1.25)
+        self.assertEqual(figures.ratio_axis_range(ratios[:2], intervals[:2], 0.05), (0.91, 1.05))  # whiskers, band
+
+    def test_the_real_runs_false_sharing_figure_clips_and_marks(self):
+        run_file = load_run_file(XEON)
+        rows = [row for row in report.paired_penalty_rows(run_file) if row.kind.startswith("false sharing")]
+        wide = [row for row in rows if row.ci_high / row.ci_low > 4]  # std_barrier's [0.15, 2.21] and [0.41, 7.44]
+        self.assertEqual(len(wide), 2)
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            figures.penalties(rows, 0.05)
+        axes = captured[0].axes[0]
+        low, high = axes.get_xlim()
+        self.assertLess(high / low, 10.0)  # about one decade, not 0.15x..7.4x
+        self.assertTrue(all(low < row.ratio < high for row in rows))
+        arrows = [line for line in axes.lines if line.get_marker() in ("<", ">")]
+        bound_low, bound_high = figures.ratio_axis_range([row.ratio for row in rows],
+                                                         [(row.ci_low, row.ci_high) for row in rows], 0.05)
+        clipped_ends = sum((row.ci_low < bound_low) + (row.ci_high > bound_high) for row in rows)
+        self.assertEqual(len(arrows), clipped_ends)
+        self.assertGreaterEqual(clipped_ends, 2)
+        legend = [text.get_text() for text in axes.get_legend().get_texts()]
+        self.assertIn(figures.CLIPPED_NOTE, legend)
+
+    def test_without_a_degenerate_interval_nothing_is_clipped(self):
+        rows = [matrix.PenaltyRow("false sharing", "a", 2, 1.3, 1.2, 1.4, "penalty", pin="compact"),
+                matrix.PenaltyRow("false sharing", "b", 2, 0.97, 0.9, 1.02, "unsure", pin="compact")]
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            figures.penalties(rows, 0.05)
+        axes = captured[0].axes[0]
+        self.assertFalse([line for line in axes.lines if line.get_marker() in ("<", ">")])
+        self.assertNotIn(figures.CLIPPED_NOTE, [text.get_text() for text in axes.get_legend().get_texts()])
