@@ -34,7 +34,7 @@ def line_index(text: str, start: str) -> int:
 
 class AnswerFirst(unittest.TestCase):
     def test_a_debug_quick_run_against_a_release_default_run(self):
-        # The case: the AMD guest's Debug --quick fixture against the Intel guest's Release default run.
+        # The AMD guest's Debug --quick run against the Intel guest's Release default run, as a new user tried it.
         out = compared(AMD_DEBUG_QUICK, XEON)
         lines = out.splitlines()
         first = " ".join(" ".join(lines[:12]).split())
