@@ -1,21 +1,26 @@
-"""compare's text: the summary (render_summary, about 40 lines) and everything (render_text, --all), from the
-comparisons compare.compare_pair made and the tables across machines (normalisation.py)."""
+"""compare's text: the summary (render_summary, about 40 lines within text_layout.WIDTH columns: what makes the
+files incomparable first, and across machines each machine's answer side by side) and everything (render_text,
+--all), from the comparisons compare.compare_pair made, the findings of comparability.py, the answers of
+machine_answers.py and the tables across machines (normalisation.py)."""
 from __future__ import annotations
 
 import math
 
 from . import statistics
+from .comparability import build_difference, findings, unoptimised, withheld_text
 from .comparison import (COLLAPSED, DEFAULT_NOISE_PERCENT, MIN_AGGREGATE_ENTRIES, NOISE_RATIONALE, VERDICTS,
                          Aggregate, Comparison, PaceAware, Row)
 from .fields import C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS, UNAVAILABLE
 from .formatting import format_ns, format_number
 from .mpi_context import mpi_difference_lines
 from .names import BenchmarkKey
-from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys
+from .machine_answers import answer_lines, difference_lines
+from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
 from .run_analysis import sharing_layout
 from .run_file import RunFile
+from .text_layout import WIDTH, table, wrapped
 
 def mode_text(mode) -> str:
     value = f"c2c {mode.c2c_ns:.0f} ns" if mode.c2c_ns is not None else f"serial {mode.serial_ns:.1f} ns"
@@ -64,17 +69,9 @@ def _p(value: float | None) -> str:
     return f"{value:.2g}" if value >= 1e-4 else "<1e-4"
 
 
-def _table(headings: list[str], rows: list[list[str]], right: set[int] | None = None) -> list[str]:
-    right = right or set()
-    widths = [len(h) for h in headings]
-    for row in rows:
-        widths = [max(w, len(cell)) for w, cell in zip(widths, row)]
-
-    def line(cells):
-        return "  ".join(cell.rjust(w) if i in right else cell.ljust(w)
-                         for i, (cell, w) in enumerate(zip(cells, widths))).rstrip()
-
-    return [line(headings), line(["-" * w for w in widths])] + [line(row) for row in rows]
+def _table(headings: list[str], rows: list[list[str]], right: set[int] | None = None,
+           width: int | None = None) -> list[str]:
+    return table(headings, rows, right, width)
 
 
 def fingerprint_lines(run_files: list[RunFile]) -> list[str]:
@@ -109,10 +106,22 @@ def calibration_move_line(comparison: Comparison, letter: str) -> str:
     if not moves:
         return line + ": the machine's movement between the runs is unknown."
     if beyond:
-        return (line + f". {' and '.join(beyond)} moved beyond the ±{noise:g} % noise threshold: the machine "
-                "itself changed between the runs (or they are different machines), so shifts of that size below "
-                "may be the machine, not the code.")
+        return line + f". {' and '.join(beyond)} moved beyond the ±{noise:g} % noise threshold: " + _moved_why(
+            comparison, letter)
     return line + f": inside the ±{noise:g} % noise threshold."
+
+
+def _moved_why(comparison: Comparison, letter: str) -> str:
+    """Why the calibrations moved, named where the files say: the builds differ (never "the machine changed"
+    when the build did), or the files come from different machines; else the machine itself changed."""
+    builds = build_difference([comparison.baseline, comparison.contender], ["[A]", f"[{letter}]"])
+    if builds:
+        return (f"the builds differ ({builds}), so these calibrations and the shifts below measure the build as "
+                f"much as the machine.")
+    if not same_machine(comparison.baseline, comparison.contender):
+        return "these are different machines, so shifts of that size below may be the machine, not the code."
+    return ("the machine itself changed between the runs (or they are different machines), so shifts of that size "
+            "below may be the machine, not the code.")
 
 
 def _interval(interval) -> str:
@@ -163,6 +172,10 @@ def aggregate_line(comparison: Comparison, letter: str) -> str:
     apart = "calibrations" + (f" and {collapsed} collapsed" if collapsed else "") + " apart"
     head = (f"geometric mean of {letter}/A over the {len(comparison.combinations)} matched pairs (combinations "
             f"only, {apart}")
+    if comparison.withheld:
+        return head + "): withheld: " + withheld_text(
+            [("A" if run_file is comparison.baseline else letter, reason)
+             for run_file, reason in comparison.unoptimised_sides()])
     if overall is None:
         return head + f"): {UNAVAILABLE}"
     line = head + ("; beyond the pace" if comparison.paced else "") + "): " + aggregate_text(comparison, overall)
@@ -350,11 +363,7 @@ def _calibration_lines(comparison: Comparison, b: str) -> list[str]:
 
 def _listing_lines(comparison: Comparison, b: str) -> list[str]:
     """Every entry only one file has, every errored one, and the comparison's warnings."""
-    out = []
-    for title, keys in ((f"only in A ({comparison.baseline.label}): removed", comparison.removed),
-                        (f"only in {b} ({comparison.contender.label}): added", comparison.added)):
-        out.append(f"{title}: {len(keys)}")
-        out += [f"  {key.display}" for key in keys]
+    out = _only_lines(comparison, b, limit=None)
     out.append(f"errored (not compared): {len(comparison.errored)}")
     out += [f"  {key.display} in {where}: {message}" for key, where, message in comparison.errored]
     return out + [f"warning: {warning}" for warning in comparison.warnings]
@@ -385,6 +394,9 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
     out.append("x serial: step time / that run's serial RK4 step of the entry's model (context serial_step_ns; "
                "a chain's: its rk4/model:chainS/serial entry); "
                "x c2c: stage sync time / that run's one-way core-to-core latency (context c2c_one_way_ns).")
+    out += [f"[{letter}] {run_file.label} is {reason}: its x serial, x c2c and ranks are the unoptimised code's, not "
+            f"its machine's." for letter, run_file in zip(letters, run_files)
+            for reason in (unoptimised(run_file),) if reason]
     rows = []
     for key in rk4_keys(run_files):
         cells = [key.display]
@@ -424,8 +436,8 @@ def across_machines_lines(run_files: list[RunFile], time_kind: str = "real") -> 
 
 # The default output (render_text without everything) lists at most this many changed entries each way.
 SHOWN_CHANGES = 6
-ALL_HINT = ("(lockstep compare --all prints every entry with its interval, q and counters, the calibrations, the "
-            "whole context and the across-machines tables)")
+ALL_HINT = ("(lockstep compare --all prints every entry with its interval and counters, the calibrations, the whole "
+            "context and more)")
 
 
 def differing_context_lines(files) -> list[str]:
@@ -454,6 +466,62 @@ def _listed(keys, limit: int = 5) -> list[str]:
     return shown + ([f"  ... and {len(keys) - limit} more"] if len(keys) > limit else [])
 
 
+# How a pace-aware figure was made, in the summary's words (--all gives pace_how's exact figure).
+PACE_WORDS = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
+              PACE_NORMALISED: "pace-scaled"}
+PACE_WORD_MEANINGS = {
+    "one mode": "every repetition of both runs in one pace mode",
+    "matching modes": "only the repetitions in pace modes the two runs share",
+    "one c2c state": "only the repetitions at one core-to-core latency",
+    "pace-scaled": "each time divided by the core-to-core latency read around it (the serial step on a machine of "
+                   "one CPU), as far as its primitive's times follow it (--all gives the power)",
+    "raw": "the plain times (no pace read around them)",
+}
+
+
+def _pace_word(row: Row) -> str:
+    return PACE_WORDS[row.pace.method] if row.pace else "raw"
+
+
+def _changed_lines(comparison: Comparison, b: str, what: str) -> list[str]:
+    """The entries that changed beyond the pace, slower (largest first) and faster (largest gain first), at most
+    SHOWN_CHANGES each, and what the "how" words shown mean."""
+    out, words = [], set()
+    for verdict, order in (("slower", True), ("faster", False)):
+        changed = sorted((row for row in comparison.rows if comparison.beyond_pace(row) == verdict),
+                         key=lambda row: (row.beyond_pace_ratio(), row.key.sort_key()), reverse=order)
+        if not changed:
+            continue
+        out.append(f"{verdict} {what if comparison.paced else ''}".rstrip()
+                   + f" ({len(changed)}, {'largest first' if order else 'largest gain first'}):")
+        rows = []
+        for row in changed[:SHOWN_CHANGES]:
+            shown = row.pace if row.pace else row
+            words.add(_pace_word(row))
+            rows.append([row.key.display + _collapsed_mark(comparison, row.key), format_ns(row.median_a),
+                         format_ns(row.median_b), f"{shown.ratio:.3f}", _interval(shown.interval), _pace_word(row)])
+        out += ["  " + line for line in _table(["benchmark", "A median", f"{b} median", f"{b}/A", "95% interval",
+                                                "how"], rows, right={1, 2, 3}, width=WIDTH - 2)]
+        if len(changed) > SHOWN_CHANGES:
+            out.append(f"  ... and {len(changed) - SHOWN_CHANGES} more {verdict} (--all lists every entry)")
+    if words:
+        out.append("  how: " + "; ".join(f"{word} = {meaning}" for word, meaning in PACE_WORD_MEANINGS.items()
+                                         if word in words))
+    return out
+
+
+def _only_lines(comparison: Comparison, b: str, limit: int | None = 5) -> list[str]:
+    """The entries only one file has: "only on A" across machines, "removed" / "added" between runs of one."""
+    across = not same_machine(comparison.baseline, comparison.contender)
+    out = []
+    for name, run_file, keys, change in (("A", comparison.baseline, comparison.removed, "removed"),
+                                         (b, comparison.contender, comparison.added, "added")):
+        out.append(f"only on {name} ({run_file.label}): {len(keys)}" if across
+                   else f"only in {name} ({run_file.label}): {change}: {len(keys)}")
+        out += _listed(keys, limit) if limit else [f"  {key.display}" for key in keys]
+    return out
+
+
 def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     """One comparison in a few lines: how far the machine moved, the pace, the verdict counts, the geometric
     mean, the entries that changed beyond the pace (largest first), what was added, removed or errored."""
@@ -468,52 +536,56 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     out.append(calibration_move_line(comparison, b))
     out += pace_note(comparison.baseline, comparison.contender, b)
     counts = comparison.pace_verdict_counts()
-    called, discovered = comparison.discoveries(comparison.beyond_pace)
     what = "beyond the pace" if comparison.paced else f"(raw verdicts: pace {UNAVAILABLE})"
     out.append(f"changed {what}: {counts['slower'] + counts['faster']} of {len(comparison.rows)} "
-               f"({counts['slower']} slower, {counts['faster']} faster; {discovered} of them with Benjamini-Hochberg "
-               f"q < alpha {comparison.alpha:g}); {counts['unsure']} unsure, {counts['within noise']} within noise, "
-               f"{counts['untested']} untested"
+               f"({counts['slower']} slower, {counts['faster']} faster); {counts['unsure']} unsure, "
+               f"{counts['within noise']} within noise, {counts['untested']} untested"
                + (f", {counts[COLLAPSED]} {COLLAPSED} (in a file's headline: oversubscribed, one repetition)"
                   if counts[COLLAPSED] else "")
                + f" (verdict: the 95% interval of {b}/A against the {noise:g} % noise band)")
     unsure = detectable_line(comparison)
     if unsure:
         out.append(unsure)
-    for verdict, order in (("slower", True), ("faster", False)):
-        changed = sorted((row for row in comparison.rows if comparison.beyond_pace(row) == verdict),
-                         key=lambda row: (row.beyond_pace_ratio(), row.key.sort_key()), reverse=order)
-        if not changed:
-            continue
-        out.append(f"{verdict} {what if comparison.paced else ''}".rstrip()
-                   + f" ({len(changed)}, {'largest first' if order else 'largest gain first'}):")
-        rows = []
-        for row in changed[:SHOWN_CHANGES]:
-            shown = row.pace if row.pace else row
-            how = pace_how(row.pace) if row.pace \
-                else "raw"
-            rows.append([row.key.display + _collapsed_mark(comparison, row.key), format_ns(row.median_a),
-                         format_ns(row.median_b), f"{shown.ratio:.3f}", _interval(shown.interval), how])
-        out += ["  " + line for line in _table(["benchmark", "A median", f"{b} median", f"{b}/A", "95% interval",
-                                                "how"], rows, right={1, 2, 3})]
-        if len(changed) > SHOWN_CHANGES:
-            out.append(f"  ... and {len(changed) - SHOWN_CHANGES} more {verdict} (--all lists every entry)")
+    out += _changed_lines(comparison, b, what)
     if comparison.calibrations:
         verdicts = [comparison.verdict(row) for row in comparison.calibrations]
         moved = [row.key.display for row in comparison.calibrations if comparison.verdict(row) in ("slower", "faster")]
         out.append(f"calibrations, compared apart ({len(verdicts)}): "
                    + ", ".join(f"{verdicts.count(name)} {name}" for name in VERDICTS if verdicts.count(name))
                    + (f" (moved: {', '.join(moved)})" if moved else ""))
-    for title, keys in ((f"only in A ({comparison.baseline.label}): removed", comparison.removed),
-                        (f"only in {b} ({comparison.contender.label}): added", comparison.added)):
-        out.append(f"{title}: {len(keys)}")
-        out += _listed(keys)
+    out += _only_lines(comparison, b)
     out.append(f"errored (not compared): {len(comparison.errored)}")
     errored = [f"  {key.display} in {where}: {message}" for key, where, message in comparison.errored]
     out += errored[:5] + ([f"  ... and {len(errored) - 5} more"] if len(errored) > 5 else [])
     for warning in comparison.warnings:
         out.append(f"warning: {warning}")
     return out
+
+
+def across_machines(run_files: list[RunFile]) -> bool:
+    """The run files come from more than one machine (fingerprint's MACHINE_KEYS) and some of them are `lockstep
+    run` files, whose answers can be set side by side: compare then opens with them."""
+    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in run_files}
+    return len(machines) > 1 and not all(run_file.mpi for run_file in run_files)
+
+
+def findings_lines(run_files: list[RunFile]) -> list[str]:
+    """What makes the files incomparable as they stand (comparability.findings), first and loud; none when
+    nothing does."""
+    found = findings(list(run_files))
+    if not found:
+        return []
+    return ["Read first: what makes these files incomparable as they stand:"] + [f"- {line}" for line in found]
+
+
+def _machines_line(all_files) -> str:
+    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
+    return f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})"
+
+
+def _answers_first(run_files: list[RunFile]) -> list[str]:
+    """Across machines: each machine's answer side by side, then what differs between the machines."""
+    return [""] + answer_lines(run_files) + [""] + difference_lines(run_files)
 
 
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real",
@@ -531,10 +603,12 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
             out.append(f"noise threshold: {noise:g} % (the default, --noise PCT to change it: {NOISE_RATIONALE})")
         else:
             out.append(f"noise threshold: {noise:g} % (--noise; the default is {DEFAULT_NOISE_PERCENT:g} %)")
+    out += wrapped(findings_lines(run_files))
+    if across_machines(run_files):
+        out += wrapped(_answers_first(run_files))
     out.append("")
     out += fingerprint_lines(all_files)
-    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
-    out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")
+    out.append(_machines_line(all_files))
     if context_files:
         out.append("fingerprint only (not benchmark results): " +
                    ", ".join(f"{f.label} (lockstep {f.kind})" for f in context_files))
@@ -551,27 +625,56 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
     return "\n".join(out) + "\n"
 
 
+def across_lines(comparison: Comparison, letter: str) -> list[str]:
+    """One comparison between two machines in a few lines: the geometric mean (or why there is none), what was
+    compared and what only one machine ran; --all has every entry."""
+    b = letter
+    out = [f"== {b} ({comparison.contender.label}) against A ({comparison.baseline.label}), two machines",
+           aggregate_line(comparison, b)]
+    calibrations = f" and {len(comparison.calibrations)} calibrations" if comparison.calibrations else ""
+    out.append(f"compared: {len(comparison.rows)} combinations{calibrations} both ran; only on A: "
+               f"{len(comparison.removed)}, only on {b}: {len(comparison.added)}; errored: {len(comparison.errored)}")
+    return out + [f"warning: {warning}" for warning in comparison.warnings]
+
+
+ACROSS_HINT = "(lockstep compare --all adds every entry compared, the calibrations, the pace and the whole context)"
+
+
+def _title(files) -> list[str]:
+    """The files by letter: on the first line, or one a line where they do not fit on it."""
+    named = [f"[{file_letter(i)}] {f.label}" for i, f in enumerate(files)]
+    line = "lockstep compare: " + "  ".join(named)
+    return [line] if len(line) <= WIDTH else ["lockstep compare:"] + [f"  {name}" for name in named]
+
+
 def render_summary(run_files: list[RunFile], comparisons: list[Comparison], context_files=()) -> str:
+    """The default text, at most text_layout.WIDTH columns: what makes the files incomparable first; across
+    machines each machine's answer and what differs, then a few lines per comparison; between runs of one machine
+    the differing context and each comparison's summary (summary_lines)."""
     all_files = list(run_files) + list(context_files)
-    out = ["lockstep compare: " + "  ".join(f"[{file_letter(i)}] {f.label}" for i, f in enumerate(all_files))]
+    across = across_machines(run_files)
+    out = _title(all_files)
     if comparisons:
         noise = comparisons[0].noise_percent
         out.append(f"noise band: {noise:g} % " + ("(the default; --noise PCT changes it, --help says why 5)"
                                                    if noise == DEFAULT_NOISE_PERCENT else
                                                    f"(--noise; the default is {DEFAULT_NOISE_PERCENT:g} %)"))
-    machines = {tuple(fingerprint(f)[key] for key in MACHINE_KEYS) for f in all_files}
-    out.append(f"machines: {len(machines)} distinct (by {', '.join(MACHINE_KEYS)})")
-    out += differing_context_lines(all_files)
+    out.append(_machines_line(all_files) + (": each machine's answer first" if across else ""))
+    if across:
+        out += findings_lines(run_files) + _answers_first(run_files)
+    else:
+        out += differing_context_lines(all_files) + findings_lines(run_files)
     out += mpi_difference_lines(all_files)
     if context_files:
         out.append("fingerprint only (not benchmark results): " +
                    ", ".join(f"{f.label} (lockstep {f.kind})" for f in context_files))
     for index, comparison in enumerate(comparisons, start=1):
         out.append("")
-        out += summary_lines(comparison, file_letter(index))
+        same = same_machine(comparison.baseline, comparison.contender)
+        out += (summary_lines if same or not across else across_lines)(comparison, file_letter(index))
     warnings = [w for f in all_files for w in f.warnings]
     if warnings:
         out.append("")
         out += [f"warning: {w}" for w in warnings]
-    out += ["", ALL_HINT]
-    return "\n".join(out) + "\n"
+    out += ["", ACROSS_HINT if across else ALL_HINT]
+    return "\n".join(wrapped(out)) + "\n"

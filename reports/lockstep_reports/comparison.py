@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass, field
 
 from . import statistics
+from .comparability import unoptimised
 from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .names import BenchmarkKey
 from .run_analysis import calibration, median_ratio
@@ -183,13 +184,28 @@ class Comparison:
         """The matched combinations the aggregates and the gate read: every row but the collapsed ones."""
         return [row for row in self.rows if not row.collapsed]
 
+    def unoptimised_sides(self) -> list[tuple[RunFile, str]]:
+        """The sides whose times are not their machine's (comparability.unoptimised: a Debug build), with why."""
+        return [(run_file, reason) for run_file, reason in ((f, unoptimised(f)) for f in (self.baseline,
+                                                                                          self.contender)) if reason]
+
+    @property
+    def withheld(self) -> bool:
+        """No aggregate verdict: a side's times are the build's, not its machine's (unoptimised_sides)."""
+        return bool(self.unoptimised_sides())
+
     @property
     def geometric_mean(self) -> float | None:
+        if self.withheld:
+            return None
         return statistics.geometric_mean([row.beyond_pace_ratio() for row in self.combinations])
 
     def aggregates(self) -> list[Aggregate]:
         """The geometric mean of B/A with its interval and verdict: over every matched combination ("all"),
-        then per primitive, thread count and placement (AGGREGATE_SEGMENTS), each group in its name's order."""
+        then per primitive, thread count and placement (AGGREGATE_SEGMENTS), each group in its name's order. None
+        when withheld: a Debug build's times would read as its machine's."""
+        if self.withheld:
+            return []
         groups: dict[str, list[Row]] = {"all": self.combinations}
         for segment in AGGREGATE_SEGMENTS:
             values = sorted({row.key.get(segment) for row in self.combinations if row.key.get(segment)},

@@ -13,7 +13,7 @@ def read_context(path: str, label: str, raw: dict) -> tuple[dict, list[str]]:
     """The fingerprint keys of a context the schema has checked. A key of another kind's context (date in a
     c2c file) is read when it holds what it holds in its own kind, else ignored as any unknown key."""
     values = {}
-    for key in fields.FINGERPRINT_KEYS:
+    for key in fields.FINGERPRINT_KEYS + fields.RUN_CONTEXT_KEYS:
         value = raw.get(key)
         if key in fields.CONTEXT_INTEGERS and isinstance(value, (int, float)) and not isinstance(value, bool):
             values[key] = int(value)

@@ -142,6 +142,17 @@ FINGERPRINT_KEYS = (
 )
 # Keys whose difference means "another machine" rather than "another run".
 MACHINE_KEYS = ("cpu_model", "topology", "hypervisor", "kernel", "num_cpus")
+# The build a file's times measure (comparability.py: a Debug build's times are not its machine's).
+BUILD_TYPE_CONTEXT = "build_type"
+CXX_FLAGS_CONTEXT = "cxx_flags"
+REVISION_CONTEXT = "git_revision"
+# git_revision's suffix for a build from a tree with uncommitted changes.
+DIRTY_SUFFIX = "-dirty"
+# How the run measured (bench/run/matrix_run.cpp: "quick" or "default"; `lockstep mpi`: "mpi"): read beside the
+# fingerprint, not shown in it.
+MODE_CONTEXT = "lockstep_mode"
+QUICK_MODE = "quick"
+RUN_CONTEXT_KEYS = (MODE_CONTEXT,)
 # Google Benchmark writes these as whole numbers; every other fingerprint key is text.
 CONTEXT_INTEGERS = ("num_cpus", "mhz_per_cpu")
 # lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).

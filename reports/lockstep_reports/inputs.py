@@ -42,6 +42,10 @@ from .run_reader import run_file_from_document
 from .schemas import json_kind, shown
 from .verify_reader import load_verify_csv
 
+# The prefix of every key lockstep adds to Google Benchmark's JSON (the context's lockstep_schema, lockstep_mode,
+# ...; the top level's lockstep_pace, lockstep_headline, ...).
+LOCKSTEP_PREFIX = "lockstep_"
+
 
 # ---------------------------------------------------------------- files as text
 
@@ -100,10 +104,21 @@ def read_document(path: str, text: str | None = None) -> tuple[str, object]:
             raise InputError(path, f"not Google Benchmark JSON (no {missing}): not a `lockstep {kind}` result file")
         if not benchmarks:
             raise InputError(path, "holds no benchmark entries (did the filter match nothing?)")
+        if kind == "run" and not written_by_lockstep(document):
+            raise InputError(path, "is Google Benchmark JSON that lockstep did not write (no lockstep_ key in it): "
+                                   "compare and report read the files of `lockstep run`")
     problem = schemas.problem(document, kind)
     if problem is not None:
         raise InputError(path, problem)
     return kind, document
+
+
+def written_by_lockstep(document: dict) -> bool:
+    """A Google Benchmark document that `lockstep run` wrote: its context names lockstep's keys (lockstep_schema,
+    lockstep_mode, ...: bench/results/machine_context.hpp) or it carries a lockstep section (lockstep_pace,
+    lockstep_headline, ...). A plain Google Benchmark file has neither: the tools would read its times but none of
+    what they show beside them (the machine, the calibrations, the answer), so it is refused, not half read."""
+    return any(str(key).startswith(LOCKSTEP_PREFIX) for key in list(document["context"]) + list(document))
 
 
 def load_run_file(path: str, label: str | None = None) -> RunFile:

@@ -11,6 +11,7 @@ import math
 import os
 import sys
 
+from .comparability import withheld_text
 from .inputs import InputError, load_for_compare, unique_labels
 from .run_file import RunFile
 from .output import OutputError, check_directory_target, check_file_target, write_file
@@ -301,7 +302,9 @@ def comparison_json(comparisons) -> str:
             "removed": [key.display for key in comparison.removed],
             "errored": [{"name": key.display, "in": where, "message": message}
                         for key, where, message in comparison.errored],
-            "warnings": comparison.warnings,
+            "warnings": comparison.warnings + (["no aggregate verdict: " + withheld_text(
+                [(run_file.label, reason) for run_file, reason in comparison.unoptimised_sides()])]
+                if comparison.withheld else []),
         })
     # allow_nan=False: the readers let no NaN or infinity through to a figure; one here is a bug, not JSON.
     return json.dumps(document, indent=2, sort_keys=True, allow_nan=False) + "\n"

@@ -11,6 +11,7 @@ from . import fields, statistics
 from .names import BenchmarkKey
 
 if TYPE_CHECKING:
+    from .answer_reader import RunAnswer
     from .mpi_reader import MpiDetails
 
 
@@ -252,6 +253,9 @@ class RunFile:
     mode_medians: dict[BenchmarkKey, ModeMedians] | None = None
     rankings: tuple[Ranking, ...] | None = None
     model: ModelConstants | None = None
+    # The answer's parts compare sets side by side across machines (answer_reader.py): the recommendations'
+    # baselines, the probes, false sharing per pattern, the crossover; None: a file without lockstep_headline.
+    answer: "RunAnswer | None" = None
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""

@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import math
 
-from . import derived_reader, fields, schemas
+from . import answer_reader, derived_reader, fields, schemas
 from .checks import CheckedObject, InputError, checked_number, fail
 from .context_reader import read_context
 from .mpi_reader import read_mpi
@@ -424,7 +424,8 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
                    planned=derived_reader.read_planned(path, document),
                    mode_medians=derived_reader.read_mode_medians(path, document, pace),
                    rankings=derived_reader.read_rankings(path, document),
-                   model=derived_reader.read_model(path, document))
+                   model=derived_reader.read_model(path, document),
+                   answer=answer_reader.read_answer(path, document))
 
 
 def step_split(raw: dict) -> tuple[float, ...] | None:

@@ -28,6 +28,20 @@ def run_tool(*argv: str):
     return status, out.getvalue(), err.getvalue()
 
 
+def logical_line(text: str, start: str) -> str:
+    """The first line of `text` that starts with `start`, with the lines compare wrapped it onto (indented two more
+    than it: lockstep_reports.text_layout.wrap) joined back by single spaces."""
+    lines = text.splitlines()
+    index = next(index for index, line in enumerate(lines) if line.startswith(start))
+    indent = " " * (len(lines[index]) - len(lines[index].lstrip()) + 2)
+    parts = [lines[index]]
+    for line in lines[index + 1:]:
+        if not line.startswith(indent) or line[len(indent):len(indent) + 1] in ("", " "):
+            break
+        parts.append(line.strip())
+    return " ".join(parts)
+
+
 # A `lockstep run` file with the run's answer (lockstep_headline): reports/tests/fixtures/make_fixtures.py.
 HEADLINE = "headline.json"
 

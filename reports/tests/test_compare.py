@@ -9,7 +9,7 @@ import tempfile
 import unittest
 
 import synthetic_runs
-from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, run_tool
+from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, logical_line, run_tool
 
 from lockstep_reports import compare_text, pace_statistics, statistics
 from lockstep_reports.compare import compare_pair
@@ -187,13 +187,22 @@ class FailAbove(unittest.TestCase):
 
 
 class AcrossMachines(unittest.TestCase):
-    def test_fingerprints_are_shown_and_differences_marked(self):
+    def test_the_machines_and_their_differences_come_first(self):
         status, out, _ = run_tool("compare", fixture("machine_a.json"), fixture("machine_b.json"))
         self.assertEqual(status, 0)
-        self.assertIn("cpu_model*", out)
-        self.assertIn("AMD EPYC 7232P", out)
         self.assertIn("machines: 2 distinct", out)
-        self.assertIn("Benjamini-Hochberg", out)
+        lines = out.splitlines()
+        answers, differs, comparison = (next(index for index, line in enumerate(lines) if line.startswith(start))
+                                        for start in ("Each machine's answer", "What differs between the machines",
+                                                      "== B"))
+        self.assertLess(answers, differs)
+        self.assertLess(differs, comparison)
+        self.assertIn("AMD EPYC 7232P", "\n".join(lines[answers:differs]))
+        for key in ("topology", "hypervisor", "kernel", "num_cpus"):  # these machines differ in each
+            self.assertIn(key, "\n".join(lines[differs:comparison]))
+        self.assertNotIn("Benjamini-Hochberg", out)  # terms a person reads: the q-values are --all's
+        self.assertIn("cpu_model*", run_tool("compare", fixture("machine_a.json"), fixture("machine_b.json"),
+                                             "--all")[1])
 
     def test_normalisation_uses_each_machines_own_calibration(self):
         # The entry's own vs_serial / vs_c2c counters, as lockstep run derived them against its machine's in-run
@@ -413,7 +422,7 @@ class NoiseThreshold(ScratchFiles):
         a, b = self.pair(560.0, c2c_b="27.0", serial_b="20.10")
         status, out, _ = run_tool("compare", a, b)
         self.assertEqual(status, 0)
-        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        line = logical_line(out, "calibrations moved")
         self.assertIn("c2c one-way 25.0 -> 27.0 ns (+8.0 %)", line)
         self.assertIn("serial step 20.00 -> 20.10 ns (+0.5 %)", line)
         self.assertIn("c2c one-way moved beyond the ±5 % noise threshold", line)
@@ -424,7 +433,7 @@ class NoiseThreshold(ScratchFiles):
     def test_a_calibration_line_inside_the_threshold_says_so(self):
         a, b = self.pair(560.0, c2c_b="25.5", serial_b="19.90")
         _, out, _ = run_tool("compare", a, b)
-        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        line = logical_line(out, "calibrations moved")
         self.assertIn("(+2.0 %)", line)
         self.assertIn("(-0.5 %)", line)
         self.assertIn("inside the ±5 % noise threshold", line)
@@ -433,7 +442,7 @@ class NoiseThreshold(ScratchFiles):
         a = self.write("a.json", run_document(None, None, 560.0))
         b = self.write("b.json", run_document("unavailable", None, 560.0, c2c_counter=26.0))
         _, out, _ = run_tool("compare", a, b)
-        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        line = logical_line(out, "calibrations moved")
         self.assertIn("c2c one-way 25.0 -> 26.0 ns (+4.0 %)", line)  # one_way_ns counters, not iteration times
         self.assertRegex(line, r"serial step 20\.0\d -> 20\.0\d ns \(\+0\.0 %\)")
         without_c2c = run_document(None, "20.00", 560.0)
@@ -441,7 +450,7 @@ class NoiseThreshold(ScratchFiles):
         c = self.write("c.json", without_c2c)
         status, out, _ = run_tool("compare", a, c)
         self.assertEqual(status, 0)
-        line = next(line for line in out.splitlines() if line.startswith("calibrations moved"))
+        line = logical_line(out, "calibrations moved")
         self.assertIn("c2c one-way unavailable", line)
 
     def test_c2c_is_compared_by_its_one_way_counter_and_kept_apart(self):
@@ -472,7 +481,7 @@ class NoiseThreshold(ScratchFiles):
         second["context"]["lockstep_order"] = "random interleaving: the repetitions of every entry shuffled"
         a, b = self.write("a.json", first), self.write("b.json", second)
         _, out, _ = run_tool("compare", a, b)
-        warning = next(line for line in out.splitlines() if "back to back (context lockstep_order)" in line)
+        warning = logical_line(out, "warning: a.json measured every entry's repetitions back to back")
         self.assertIn("a.json measured", warning)
         self.assertNotIn("b.json", warning)
         self.assertIn("--no-interleave", warning)
@@ -541,7 +550,8 @@ class PowerAndPace(ScratchFiles):
         self.assertEqual([row.key.display for row in others if comparison.verdict(row) in ("slower", "faster")], [])
         status, out, _ = run_tool("compare", a, b)
         self.assertEqual(status, 0)
-        self.assertIn("Benjamini-Hochberg", out)
+        self.assertNotIn("Benjamini-Hochberg", out)  # the summary's words; --all gives the q-values
+        self.assertIn("Benjamini-Hochberg", run_tool("compare", a, b, "--all")[1])
         self.assertIn(f"changed (raw verdicts: pace unavailable): {len([r for r in comparison.rows if comparison.verdict(r) in ('slower', 'faster')])} of {len(comparison.rows)}", out)
 
     def test_a_pace_change_alone_is_slower_raw_and_within_noise_beyond_the_pace(self):
@@ -772,8 +782,9 @@ class CompareSummary(Scratch):
         for text in ("== Across machines", "Rank per machine", "raw verdicts at the 5 % noise band",
                      "noise threshold: 5 % (the default"):
             self.assertIn(text, everything)
-        # the machines' differences are in both; the summary lists only the keys that differ
-        self.assertIn("cpu_model*", summary)
+        # the machines' differences are in both; the summary lists only the machine's keys that differ
+        self.assertIn("What differs between the machines", summary)
+        self.assertIn("What differs between the machines", everything)
         self.assertNotIn("compiler ", summary)
         self.assertIn("compiler ", everything)
 
@@ -792,7 +803,7 @@ class CompareSummary(Scratch):
         self.assertRegex(out, r"\n  \.\.\. and [0-9]+ more slower \(--all lists every entry\)\n")
         self.assertLessEqual(len(out.splitlines()), 45)
         # a collapsed entry is said to be one: counted as collapsed, never listed as slower, nor untested
-        self.assertIn(f"{len(collapsed)} collapsed (in a file's headline", out)
+        self.assertIn(f"{len(collapsed)} collapsed (in a file's headline", " ".join(out.split()))
         self.assertFalse(any(line.split()[0] in collapsed for line in shown))
         self.assertIn("0 untested", out)
 
@@ -909,7 +920,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         lines = out.splitlines()
         title = next(index for index, line in enumerate(lines) if line.startswith("== B"))
         self.assertTrue(lines[title + 1].startswith("geometric mean of B/A over the 88 matched pairs"), lines[title + 1])
-        self.assertTrue(lines[title + 1].endswith(": slower"), lines[title + 1])
+        self.assertRegex(logical_line(out, "geometric mean of B/A"), r"\]: slower( \(one run a side|$)")
         # --fail-above names the groups that failed, even where no single entry is called slower beyond 10 %
         status, out, err = run_tool("compare", a, b, "--fail-above", "10")
         self.assertEqual(status, 1, err)
@@ -1060,7 +1071,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertEqual(comparison.pace_verdict_counts()["untested"], 0)
         self.assertFalse(any("untested" in warning for warning in comparison.warnings), comparison.warnings)
         status, out, err = run_tool("compare", a, b, "--out", os.path.join(self.directory.name, "c.json"))
-        self.assertIn("8 collapsed (in a file's headline", out)
+        self.assertIn("8 collapsed (in a file's headline", " ".join(out.split()))
         self.assertNotIn("--repetitions 10` or more", out)
         with open(os.path.join(self.directory.name, "c.json"), encoding="utf-8") as stream:
             document = json.load(stream)

@@ -457,10 +457,15 @@ MARKERS = re.compile(r"unavailable|left out")
 LEFT_OUT = re.compile(r".*left out as unavailable.*")  # the warning that names what was NaN or infinite
 
 
+# A line compare's summary wrapped (lockstep_reports.text_layout.wrap: the next lines indented two more), joined
+# back here so that the warning that names what was NaN reads as one line.
+WRAPPED = re.compile(r"\n  (?=\S)")
+
+
 def unsafe_numbers(text):
     """What in an accepted file's output is not a number where a number belongs (the warning that says a
     value was NaN and left out aside)."""
-    return sorted({match.group(0) for match in UNSAFE.finditer(LEFT_OUT.sub("", text))})
+    return sorted({match.group(0) for match in UNSAFE.finditer(LEFT_OUT.sub("", WRAPPED.sub(" ", text)))})
 
 
 class Result:
@@ -586,7 +591,8 @@ def judge(result, leftovers, wrote, unmutated, mutation, path):
         expected = unmutated()
         if result.key(path) == expected.key(path):
             outcome = "same"
-        elif len(MARKERS.findall(result.shown_text)) > len(MARKERS.findall(expected.shown_text)):
+        elif len(MARKERS.findall(WRAPPED.sub(" ", result.shown_text))) > len(
+                MARKERS.findall(WRAPPED.sub(" ", expected.shown_text))):
             outcome = "reported"
         elif mutation.other_value_allowed:
             outcome = "other value"

@@ -199,6 +199,63 @@ class UnusableFiles(unittest.TestCase):
             self.assertIn(path, str(caught.exception))
 
 
+
+# What Google Benchmark 1.8 writes for a program of its own (no lockstep key anywhere): the context it fills in
+# and one benchmark's repetitions and median.
+PLAIN_GOOGLE_BENCHMARK = {
+    "context": {"date": "2026-11-26T10:00:00+00:00", "host_name": "box", "executable": "./bench_sort",
+                "num_cpus": 8, "mhz_per_cpu": 3000, "cpu_scaling_enabled": False,
+                "caches": [{"type": "Data", "level": 1, "size": 32768, "num_sharing": 1}],
+                "load_avg": [0.5, 0.4, 0.3], "library_version": "v1.8.3", "library_build_type": "release",
+                "json_schema_version": 1},
+    "benchmarks": [
+        {"name": "BM_Sort/1024", "family_index": 0, "per_family_instance_index": 0, "run_name": "BM_Sort/1024",
+         "run_type": "iteration", "repetitions": 2, "repetition_index": index, "threads": 1,
+         "iterations": 100000, "real_time": 5000.0 + index, "cpu_time": 4990.0 + index, "time_unit": "ns"}
+        for index in range(2)] + [
+        {"name": "BM_Sort/1024_median", "family_index": 0, "per_family_instance_index": 0,
+         "run_name": "BM_Sort/1024", "run_type": "aggregate", "repetitions": 2, "threads": 1,
+         "aggregate_name": "median", "aggregate_unit": "time", "iterations": 2, "real_time": 5000.5,
+         "cpu_time": 4990.5, "time_unit": "ns"}],
+}
+
+
+class NotWrittenByLockstep(Scratch):
+    """A Google Benchmark file lockstep did not write: refused by compare and by report, one line, exit 2,
+    before anything is compared or written."""
+
+    def assert_refused(self, tool: str, *argv: str):
+        status, out, err = run_tool(tool, *argv)
+        self.assertEqual((status, out), (2, ""), err)
+        self.assertEqual(err.count("\n"), 1, err)
+        self.assertIn(self.plain, err)
+        self.assertIn("Google Benchmark JSON that lockstep did not write", err)
+
+    def setUp(self):
+        super().setUp()
+        self.plain = self.write("plain.json", PLAIN_GOOGLE_BENCHMARK)
+
+    def test_compare_refuses_it_either_side(self):
+        self.assert_refused("compare", self.plain, fixture("machine_a.json"))
+        self.assert_refused("compare", fixture("machine_a.json"), self.plain)
+        self.assert_refused("compare", self.plain, self.plain)  # read and checked before the same bytes are
+
+    def test_report_refuses_it_and_writes_nothing(self):
+        out = os.path.join(self.directory.name, "report")
+        self.assert_refused("report", self.plain, "--out", out)
+        self.assertFalse(os.path.exists(out))
+
+    def test_one_lockstep_key_is_enough(self):
+        # The context's lockstep_schema (every lockstep file's), or a section of lockstep's at the top level.
+        for where in ("context", "top"):
+            document = json.loads(json.dumps(PLAIN_GOOGLE_BENCHMARK))
+            if where == "context":
+                document["context"]["lockstep_schema"] = "2"
+            else:
+                document["lockstep_pairs"] = []
+            status, _, err = run_tool("compare", self.write(f"{where}.json", document), fixture("machine_a.json"))
+            self.assertEqual(status, 0, err)
+
 class PaceTraceAndPairs(unittest.TestCase):
     """The pace keys (docs/pace.md): lockstep_pace, lockstep_pairs and the per-repetition pace."""
 
