@@ -28,18 +28,32 @@ std::string short_list(const std::vector<std::string>& names, std::size_t shown 
   return text;
 }
 
-// A line cut to the headline's width at a word, marked; the whole text
-// stays where it came from (lockstep run --verbose, the report's tables).
+// The terminal's width for the answer: headline_text wraps longer lines at
+// a word (a line in the result file and the report stays whole).
 constexpr std::size_t kLineWidth = 120;
-std::string fitted(std::string line) {
-  if (line.size() <= kLineWidth) return line;
-  const std::size_t cut = line.rfind(' ', kLineWidth - 4);
-  line.resize(cut == std::string::npos ? kLineWidth - 4 : cut);
-  return line + " ...";
-}
 
 std::string ratio_text(const ratio_estimate& estimate, ratio_verdict verdict) {
   return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {}", estimate.median, estimate.low, estimate.high, to_string(verdict));
+}
+
+// The verdict of a rival's step over the choice's, in words about the rival.
+std::string rival_verdict_words(ratio_verdict verdict) {
+  switch (verdict) {
+    case ratio_verdict::penalty: return "slower";
+    case ratio_verdict::gain: return "faster";
+    case ratio_verdict::within_noise: return "within noise: a tie";
+    case ratio_verdict::unsure: break;
+  }
+  return "unsure: the pairs cannot tell them apart";
+}
+
+// A rival against the choice, saying what the ratio divides: "seqlock: its
+// step is 1.17x this one [1.07, 1.25], slower" (`spelled_out`), or, after
+// one that was, "std_barrier: 11.45x [5.98, 25.34], slower".
+std::string rival_text(const headline_rival& rival, bool spelled_out) {
+  return fmt::format("{}: {}{:.2f}x {}[{:.2f}, {:.2f}], {}", rival.sync, spelled_out ? "its step is " : "",
+                     rival.estimate.median, spelled_out ? "this one " : "", rival.estimate.low, rival.estimate.high,
+                     rival_verdict_words(rival.verdict));
 }
 
 std::string model_words(const std::string& model) { return model.empty() ? std::string() : "model:" + model + " "; }
@@ -52,7 +66,7 @@ std::string step_group(const std::string& pin, unsigned threads) {
 std::optional<headline_rival> rival_from(const best_other_view& view, const run_book& book) {
   const captured_entry* other = book.find(view.entry);
   if (other == nullptr) return std::nullopt;
-  return headline_rival{view.entry, other->field("sync"), view.estimate, view.verdict};
+  return headline_rival{view.entry, other->field("sync"), other->field("layout"), view.estimate, view.verdict};
 }
 
 std::vector<headline_choice> choose(const run_book& book) {
@@ -83,18 +97,24 @@ std::vector<headline_choice> choose(const run_book& book) {
       if (view.entry == chosen->name) leader_view = &view;
     if (leader_view != nullptr) {
       choice.basis = "paired";
-      if (leader_view->verdict == ratio_verdict::penalty) {
-        // The runner-up is faster, side by side: it goes first, and the
-        // median leader becomes its rival (leader / runner-up).
-        chosen = book.find(leader_view->other);
-        choice.runner_up = headline_rival{leader_view->entry, book.find(leader_view->entry)->field("sync"),
+      // leader_view->estimate is the median leader's step over the
+      // runner-up's, side by side. The pair's side goes first: the runner-up
+      // when the whole interval lies above 1 (it was faster in the pairs,
+      // however the medians fell), else the leader. The other is the rival,
+      // its ratio its step over the choice's.
+      const captured_entry* other = book.find(leader_view->other);
+      if (leader_view->estimate.low > 1.0 && other != nullptr) {
+        chosen = other;
+        const captured_entry* leader = book.find(leader_view->entry);
+        choice.runner_up = headline_rival{leader_view->entry, leader->field("sync"), leader->field("layout"),
                                           leader_view->estimate, leader_view->verdict};
-      } else {
-        const captured_entry* other = book.find(leader_view->other);
-        if (other != nullptr)
-          choice.runner_up = headline_rival{leader_view->other, other->field("sync"), inverse(leader_view->estimate),
-                                            inverse(leader_view->verdict)};
+      } else if (other != nullptr) {
+        choice.runner_up = headline_rival{leader_view->other, other->field("sync"), other->field("layout"),
+                                          inverse(leader_view->estimate), inverse(leader_view->verdict)};
       }
+      // Only a rival slower beyond the noise band leaves one winner; within
+      // noise or unsure, the pair cannot tell them apart.
+      choice.tied = choice.runner_up && choice.runner_up->verdict != ratio_verdict::penalty;
     }
     choice.entry = chosen->name;
     choice.sync = chosen->field("sync");
@@ -127,46 +147,68 @@ std::vector<headline_choice> choose(const run_book& book) {
 
 // "+-4.2 %", and where the spread comes from when the machine changed pace
 // under the repetitions (lockstep run --verbose splits them: "Median per pace
-// mode").
+// mode"): then the figure itself is uncertain, and the line says so.
 std::string spread_words(const headline_choice& choice) {
   std::string words = fmt::format("+-{:.1f} %", choice.spread_pct);
-  if (choice.paces >= 2) return words + fmt::format(" over {} paces", choice.paces);
+  if (choice.paces >= 2) return words + fmt::format(" over {} paces of the machine: uncertain", choice.paces);
   if (choice.straddles_pace_change) return words + ", straddles a pace change";
   return words;
 }
 
 void choice_lines(std::vector<std::string>& lines, const headline_choice& choice, unsigned cpus) {
-  std::string first = fmt::format("  {}threads:{} pin:{:<8} {} + {}: {} a step ({})", model_words(choice.model),
-                                  choice.threads, choice.pin, choice.sync, choice.layout, format_ns(choice.ns_per_step),
+  const std::string chosen = choice.sync + " + " + choice.layout;
+  std::string named = chosen;
+  if (choice.tied && choice.runner_up) {
+    named = fmt::format("{} or {} + {} (tied)", chosen, choice.runner_up->sync, choice.runner_up->layout);
+  }
+  std::string first = fmt::format("  {}threads:{} pin:{:<8} {}: {} a step ({})", model_words(choice.model),
+                                  choice.threads, choice.pin, named, format_ns(choice.ns_per_step),
                                   spread_words(choice));
   if (choice.cpus_busy) first += fmt::format(", {:.1f} CPUs busy", *choice.cpus_busy);
   if (choice.oversubscribed) first += fmt::format(" ({} threads on {} CPUs)", choice.threads, cpus);
   lines.push_back(first);
-  // The details, packed into lines of the headline's width at their seams.
   std::vector<std::string> details;
-  if (choice.vs_c2c) details.push_back(fmt::format("sync {:.2f} c2c transfers a stage", *choice.vs_c2c));
   if (choice.runner_up) {
     const bool overturned = choice.median_leader != choice.entry;
-    details.push_back(overturned ? fmt::format("first by median {} takes {} side by side", choice.runner_up->sync,
-                                               ratio_text(choice.runner_up->estimate, choice.runner_up->verdict))
-                                 : fmt::format("next {} takes {}", choice.runner_up->sync,
-                                               ratio_text(choice.runner_up->estimate, choice.runner_up->verdict)));
+    details.push_back((overturned && !choice.tied ? "first by median, slower side by side, " : "next ") +
+                      rival_text(*choice.runner_up, true));
   } else if (choice.basis == "medians") {
     details.push_back("no paired comparison (--pairs 0): ranked by medians only");
   }
-  if (choice.baseline)
-    details.push_back(
-        fmt::format("{} takes {}", choice.baseline->sync, ratio_text(choice.baseline->estimate, choice.baseline->verdict)));
-  const std::string indent = "      ";
+  if (choice.baseline && !(choice.runner_up && choice.runner_up->entry == choice.baseline->entry))
+    details.push_back("the C++20 baseline " + rival_text(*choice.baseline, !choice.runner_up));
+  if (choice.vs_c2c) details.push_back(fmt::format("stage sync {:.2f} core-to-core transfers", *choice.vs_c2c));
   std::string line;
-  for (const auto& detail : details) {
-    if (!line.empty() && line.size() + 2 + detail.size() > kLineWidth) {
-      lines.push_back(line);
-      line.clear();
-    }
-    line += line.empty() ? indent + detail : "; " + detail;
-  }
+  for (const auto& detail : details) line += (line.empty() ? "      " : "; ") + detail;
   if (!line.empty()) lines.push_back(line);
+}
+
+// The answer first: the run's fastest choice, and the parallel step against
+// the serial step of the same model.
+std::optional<headline_answer> answer_of(const run_book& book, const std::vector<headline_choice>& choices) {
+  const headline_choice* best = nullptr;
+  for (const auto& choice : choices) {
+    if (best != nullptr && choice.model != best->model) continue;  // the first model (the paper's sorts first)
+    if (best == nullptr || choice.ns_per_step < best->ns_per_step) best = &choice;
+  }
+  if (best == nullptr) return std::nullopt;
+  headline_answer answer{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}};
+  answer.serial_ns_per_step = book.serial_step_ns(best->model);
+  if (const captured_entry* entry = book.find(best->entry)) answer.vs_serial = entry->median("vs_serial");
+  return answer;
+}
+
+std::string answer_line(const headline_answer& answer) {
+  std::string line = fmt::format("Best here: {}threads:{} pin:{}, {} a step", model_words(answer.model),
+                                 answer.threads, answer.pin, format_ns(answer.ns_per_step));
+  if (!answer.serial_ns_per_step || !answer.vs_serial) return line + "; the serial step was not measured";
+  line += fmt::format("; the serial step of the same model takes {}", format_ns(*answer.serial_ns_per_step));
+  const double ratio = *answer.vs_serial;
+  if (ratio >= 1.0)
+    return line + fmt::format(": the parallel step costs {:.1f}x the serial one (medians), so synchronisation "
+                              "dominates this model here: step it serially",
+                              ratio);
+  return line + fmt::format(": the parallel step is {:.2f}x faster than the serial one (medians)", 1.0 / ratio);
 }
 
 void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& probes) {
@@ -238,6 +280,15 @@ void migration_lines(std::vector<std::string>& lines, const run_book& book, cons
   }
 }
 
+std::vector<headline_stopped> stopped_entries(const run_book& book) {
+  std::vector<headline_stopped> stopped;
+  for (const auto& entry : book.entries())
+    if (entry.stopped_repetitions > 0)
+      stopped.push_back({entry.name, entry.stopped_repetitions, entry.stopped_repetitions + entry.repetitions.size(),
+                         entry.stop_reason});
+  return stopped;
+}
+
 void left_out_lines(std::vector<std::string>& lines, const run_book& book) {
   if (!book.collapsed.empty()) {
     std::vector<std::string> syncs;
@@ -255,25 +306,57 @@ void left_out_lines(std::vector<std::string>& lines, const run_book& book) {
       slowest = std::max(slowest, *time);
     }
     std::vector<std::string> thread_list(threads.begin(), threads.end());
-    lines.push_back(fitted(fmt::format("Collapsed when threads outnumber CPUs ({} entries at {}, {}..{} a step or "
-                                       "episode, left out of rankings): {}",
-                                       book.collapsed.size(), short_list(thread_list), format_ns(fastest),
-                                       format_ns(slowest), short_list(syncs, 5))));
+    lines.push_back(fmt::format("Collapsed when threads outnumber CPUs ({} entries at {}, {}..{} a step or "
+                                "episode, left out of rankings): {}",
+                                book.collapsed.size(), short_list(thread_list), format_ns(fastest), format_ns(slowest),
+                                short_list(syncs, 5)));
   }
   std::map<std::string, std::size_t> reasons;
   for (const auto& skipped : book.not_applicable) ++reasons[skipped.reason];
-  for (const auto& [reason, count] : reasons) lines.push_back(fitted(fmt::format("Not applicable ({}): {}", count, reason)));
+  for (const auto& [reason, count] : reasons) lines.push_back(fmt::format("Not applicable ({}): {}", count, reason));
   std::size_t stalled = 0;
   for (const auto& entry : book.entries()) stalled += entry.error.empty() ? 0 : 1;
   if (stalled > 0) lines.push_back(fmt::format("Stalled or skipped: {} entries (lockstep run --verbose lists them)", stalled));
+  for (const auto& entry : stopped_entries(book))
+    lines.push_back(fmt::format("Stopped: {} of {} repetitions of {} ({}); its figures are the other repetitions'",
+                                entry.repetitions_stopped, entry.repetitions, entry.entry, entry.reason));
 }
 
 }  // namespace
+
+std::string wrapped(const std::string& line, std::size_t width) {
+  const std::size_t indent = std::min(line.find_first_not_of(' '), line.size());
+  const std::string continuation(indent + 4, ' ');
+  // Where the line may break: a space outside brackets and past the indent
+  // (an interval "[1.07, 1.25]" stays on one line).
+  std::vector<std::size_t> breaks;
+  int depth = 0;
+  for (std::size_t index = indent; index < line.size(); ++index) {
+    if (line[index] == '[' || line[index] == '(') ++depth;
+    if ((line[index] == ']' || line[index] == ')') && depth > 0) --depth;
+    if (line[index] == ' ' && depth == 0) breaks.push_back(index);
+  }
+  std::string text;
+  std::size_t start = 0;
+  std::string_view prefix;  // none on the first piece, the continuation after
+  for (auto next = breaks.begin(); line.size() - start + prefix.size() > width && next != breaks.end();) {
+    // The last break that fits, or the first one when none does (a long word stays whole).
+    auto fits = next;
+    while (fits + 1 != breaks.end() && *(fits + 1) - start + prefix.size() <= width) ++fits;
+    text.append(prefix).append(line, start, *fits - start).append("\n");
+    start = *fits + 1;
+    prefix = continuation;
+    next = fits + 1;
+  }
+  return text.append(prefix).append(line, start).append("\n");
+}
 
 run_headline make_headline(const run_book& book, const known_answers& probes, unsigned cpus,
                            const std::string& result_path) {
   run_headline headline;
   headline.choices = choose(book);
+  headline.answer = answer_of(book, headline.choices);
+  headline.stopped = stopped_entries(book);
   headline.collapsed.assign(book.collapsed.begin(), book.collapsed.end());
   headline.probes = probes;
   std::vector<std::string> choices;
@@ -291,7 +374,7 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
                              result_path, stem, result_path));
   // A matrix of many thread counts keeps its first choices within the
   // headline's lines and leaves the others to the report.
-  const std::size_t room = kHeadlineLines - 1 - std::min(rest.size(), kHeadlineLines - 3);
+  const std::size_t room = kHeadlineLines - 2 - std::min(rest.size(), kHeadlineLines - 4);
   if (choices.size() > room) {
     const std::size_t left = choices.size() - (room - 1);
     choices.resize(room - 1);
@@ -301,6 +384,7 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
   lines.push_back(fmt::format("The answer on this machine (ratios paired side by side: median [95 % interval], "
                               "noise band {:.0f} %):",
                               100.0 * book.noise));
+  if (headline.answer) lines.push_back(answer_line(*headline.answer));
   lines.insert(lines.end(), choices.begin(), choices.end());
   lines.insert(lines.end(), rest.begin(), rest.end());
   if (lines.size() > kHeadlineLines) lines.resize(kHeadlineLines);
@@ -309,7 +393,7 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
 
 std::string headline_text(const run_headline& headline) {
   std::string text;
-  for (const auto& line : headline.lines) text += line + "\n";
+  for (const auto& line : headline.lines) text += wrapped(line, kLineWidth);
   return text;
 }
 
@@ -325,6 +409,7 @@ nlohmann::json headline_json(const run_headline& headline) {
     nlohmann::json json = estimate_json(rival->estimate, rival->verdict);
     json["entry"] = rival->entry;
     json["sync"] = rival->sync;
+    json["layout"] = rival->layout;
     return json;
   };
   nlohmann::json recommendations = nlohmann::json::array();
@@ -344,6 +429,7 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"oversubscribed", choice.oversubscribed},
                                {"basis", choice.basis},
                                {"median_leader", choice.median_leader},
+                               {"tied", choice.tied},
                                {"runner_up", rival_json(choice.runner_up)},
                                {"baseline", rival_json(choice.baseline)}});
   }
@@ -363,7 +449,27 @@ nlohmann::json headline_json(const run_headline& headline) {
                  {"move_p50_ns", probe->move.p50},
                  {"refill_p50_ns", probe->refill.p50}};
   }
+  const auto optional_json = [](const std::optional<double>& value) {
+    return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+  };
+  nlohmann::json answer = nullptr;
+  if (const auto& best = headline.answer)
+    answer = {{"model", best->model},
+              {"threads", best->threads},
+              {"pin", best->pin},
+              {"entry", best->entry},
+              {"ns_per_step", best->ns_per_step},
+              {"serial_ns_per_step", optional_json(best->serial_ns_per_step)},
+              {"vs_serial", optional_json(best->vs_serial)}};
+  nlohmann::json stopped = nlohmann::json::array();
+  for (const auto& entry : headline.stopped)
+    stopped.push_back({{"entry", entry.entry},
+                       {"repetitions_stopped", entry.repetitions_stopped},
+                       {"repetitions", entry.repetitions},
+                       {"reason", entry.reason}});
   return {{"lines", headline.lines},
+          {"answer", answer},
+          {"stopped", stopped},
           {"recommendations", recommendations},
           {"collapsed", headline.collapsed},
           {"false_sharing_probe", false_sharing},

@@ -3,7 +3,10 @@
 // the report prints first (reports/ reads it from the result file's
 // "lockstep_headline"), derived once, here, from the run book.
 //
-// What it says (at most kHeadlineLines lines of at most about 120 characters):
+// What it says (at most kHeadlineLines lines, each whole: the terminal wraps
+// them at 120 columns, the result file and the report keep them as they are):
+//   * first, the best combination of the run and its step against the serial
+//     step of the same model (headline_answer);
 //   * for each model, thread count and placement measured, the combination
 //     to use: the primitive and layout whose step the paired comparisons put
 //     first, its step time with its spread over repetitions, its stage
@@ -21,10 +24,17 @@
 //     applicable combinations, stalls) one line each, and where the results
 //     are and how to read and compare them.
 //
-// Which combination is first: the leader by median unless its paired
-// comparison with the runner-up calls the runner-up faster ("gain"): pairs
-// are measured side by side, medians a minute apart on a machine that
-// changes pace. A pair within noise or unsure keeps the leader and says so.
+// Which combination is first: the one its pair with the runner-up puts first
+// (the median leader, unless the pair's whole interval says the runner-up
+// was faster side by side): pairs are measured side by side, medians a
+// minute apart on a machine that changes pace. So the choice is never one
+// its own pair calls slower. A pair that cannot tell the two apart (within
+// noise, or unsure: the interval straddles an edge of the band) is a tie,
+// and the line names both.
+//
+// Before the per-group lines, one line answers first: the fastest choice of
+// the run (which thread count and placement) and its step against the serial
+// step of the same model (headline_answer).
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -41,10 +51,12 @@ class run_book;
 
 inline constexpr std::size_t kHeadlineLines = 25;
 
-// One other primitive set against the chosen one: other / chosen, paired.
+// One other primitive set against the chosen one: the other's step over the
+// chosen one's, paired (above 1: the other is slower).
 struct headline_rival {
   std::string entry;
   std::string sync;
+  std::string layout;
   ratio_estimate estimate;  // the other's step over the chosen one's
   ratio_verdict verdict = ratio_verdict::unsure;
 };
@@ -72,6 +84,9 @@ struct headline_choice {
   // the runner-up first; "medians": no pair was measured (--pairs 0).
   std::string basis;
   std::string median_leader;        // the entry first by median (differs from `entry` when the pair overturned it)
+  // The pair with the runner-up could not tell the two apart (within noise
+  // or unsure): both are named, the pair's side first.
+  bool tied = false;
   std::optional<headline_rival> runner_up;
   std::optional<headline_rival> baseline;  // kBaselinePrimitive against the choice
 };
@@ -99,8 +114,32 @@ struct known_answers {
   std::string migration_unavailable;
 };
 
+// The run's best choice against the serial step of its model (medians of
+// the two entries; vs_serial is the one derived figure, derived_figures.hpp).
+struct headline_answer {
+  std::string model;
+  unsigned threads = 0;
+  std::string pin;
+  std::string entry;
+  double ns_per_step = 0.0;
+  std::optional<double> serial_ns_per_step;
+  std::optional<double> vs_serial;  // the choice's step / the serial step
+};
+
+// An entry that lost repetitions to a stop (a stall, a lost wake-up, the
+// call's budget): measured from the rest, named in the answer.
+struct headline_stopped {
+  std::string entry;
+  std::size_t repetitions_stopped = 0;
+  std::size_t repetitions = 0;  // measured and stopped
+  std::string reason;
+};
+
 struct run_headline {
+  // The fastest choice of the run's first model (the paper's two-mass system when measured).
+  std::optional<headline_answer> answer;
   std::vector<headline_choice> choices;
+  std::vector<headline_stopped> stopped;
   std::vector<std::string> collapsed;  // entry names
   known_answers probes;
   std::vector<std::string> lines;      // the text, at most kHeadlineLines lines
@@ -110,8 +149,14 @@ struct run_headline {
 run_headline make_headline(const run_book& book, const known_answers& probes, unsigned cpus,
                            const std::string& result_path);
 
-// The lines, each ending in a newline.
+// The lines for a terminal, each wrapped (below) at 120 columns; the result
+// file and the report keep every line whole.
 std::string headline_text(const run_headline& headline);
+
+// A line wrapped at a word to `width` columns, ending in a newline;
+// continuation lines are indented 4 past the line's own indent, and a word
+// longer than the width stays whole (nothing is ever cut).
+std::string wrapped(const std::string& line, std::size_t width);
 
 // The result file's "lockstep_headline" (docs/schemas/run.schema.json).
 nlohmann::json headline_json(const run_headline& headline);

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench/run/barrier_entries.hpp"
+#include "bench/run/derived_sections.hpp"
 #include "bench/results/derived_figures.hpp"
 #include "bench/run/headline.hpp"
 #include "bench/run/known_answers.hpp"
@@ -272,7 +273,8 @@ void measure_entries(prepared_matrix& run, const std::string& destination) {
 
 // The paired comparisons, after the matrix: the plan needs its medians.
 void measure_comparisons(prepared_matrix& run) {
-  const std::vector<comparison> plan = plan_comparisons(run.book);
+  run.book.planned = plan_comparisons(run.book);
+  const std::vector<comparison>& plan = run.book.planned;
   const double planned_pairs_s = estimate_run(0, plan.size(), run.cost).pairs_s;
   if (run.pairing.pairs > 0 && !plan.empty()) {
     fmt::print(stderr, "lockstep run: {} paired comparisons, {} rounds of a pair of blocks of about {} each, about {}\n",
@@ -326,6 +328,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
   derive_ratios(document, run.book);
   write_pace_and_pairs(document, run.book, &run.pace, modes);
+  write_derived_sections(document, run.book);
   document["lockstep_headline"] = headline_json(run.book.headline);
   if (request.scaling) document["lockstep_scaling"] = scaling_json(scaling_of(run.book), run.book.c2c_one_way_ns());
   // The machine's fingerprint from the one producer (replacing Google

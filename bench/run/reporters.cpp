@@ -159,7 +159,8 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
     if (run.run_type != Run::RT_Iteration) continue;
     entry.name = plain_name(run);
     if (run.error_occurred) {
-      entry.error = run.error_message;
+      if (entry.error.empty()) entry.error = run.error_message;
+      ++entry.stopped_repetitions;
       continue;
     }
     std::map<std::string, double> counters;
@@ -168,10 +169,13 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
   }
   entry.fields = parse_entry_name(entry.name);
   // Some repetitions measured, some stopped: the entry counts as measured
-  // (its medians come from the measured ones) and the stop becomes a note.
+  // (its medians come from the measured ones), with its stopped repetitions
+  // counted and their reason kept (the summary and the answer name it).
   if (!entry.error.empty() && !entry.repetitions.empty()) {
-    book_.notes.push_back(entry.name + ": some repetitions were flagged and left out: " + entry.error);
+    entry.stop_reason = std::move(entry.error);
     entry.error.clear();
+  } else {
+    entry.stopped_repetitions = 0;  // every repetition stopped: the entry is skipped, with its error
   }
   ++finished_;
   line(finished_ >= expected_);

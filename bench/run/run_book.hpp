@@ -117,6 +117,10 @@ struct captured_entry {
   std::map<std::string, std::string> fields;  // "kind" plus every key:value segment
   std::vector<std::map<std::string, double>> repetitions;
   std::string error;  // non-empty: skipped, with the reason
+  // Repetitions that stopped (stalled, lost wake-ups, out of budget) while
+  // others were measured: the entry's figures come from the measured ones.
+  std::size_t stopped_repetitions = 0;
+  std::string stop_reason;  // the first stopped repetition's
 
   // The median over repetitions of one counter, or empty if no repetition has it.
   std::optional<double> median(const std::string& counter) const;
@@ -173,7 +177,9 @@ class run_book {
   std::vector<skipped_combination> not_applicable;
   std::vector<std::string> notes;  // one line each, for the summary and the context
   bool scaling = false;            // --scaling: the summary shows the curve (scaling.hpp)
-  // The paired comparisons measured after the matrix (paired_blocks.hpp), in plan order.
+  // The comparisons planned after the matrix (paired_blocks.hpp:
+  // plan_comparisons), measured or not, and those measured, in plan order.
+  std::vector<comparison> planned;
   std::vector<paired_result> pairs;
   double noise = kDefaultNoise;    // the band their verdicts use
   // The pace modes of the run (pace.hpp), once the trace is analysed; a

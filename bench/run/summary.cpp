@@ -2,6 +2,8 @@
 #include "bench/run/scaling.hpp"
 #include "bench/run/summary.hpp"
 
+#include "bench/run/derived_sections.hpp"
+
 #include "bench/results/derived_figures.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "platform/statistics.hpp"
@@ -61,33 +63,23 @@ std::string entry_flags(const captured_entry& entry) {
 
 // Entries whose repetitions ran in more than one pace mode: their median in each.
 void per_mode_medians(std::string& out, const run_book& book) {
-  if (!book.pace || book.pace->modes.size() < 2) return;
+  const std::vector<mode_medians> several = entries_in_several_modes(book);
+  if (several.empty()) return;
   std::string lines;
-  std::size_t count = 0;
-  for (const auto& entry : book.entries()) {
-    if (!entry.error.empty()) continue;
-    const std::string kind = entry.field("kind");
-    if (kind != "rk4" && kind != "barrier") continue;
-    const std::string counter = kind == "barrier" ? "ns_per_episode" : "ns_per_step";
-    const auto modes = entry.by_pace_mode(counter);
-    std::size_t moded = 0;
-    for (const auto& [mode, values] : modes) moded += mode >= 0 ? 1 : 0;
-    if (moded < 2) continue;
-    ++count;
+  for (const mode_medians& entry : several) {
     std::string cells;
-    for (const auto& [mode, values] : modes) {
+    for (const auto& [mode, values] : entry.by_mode) {
       if (mode < 0) continue;
       const pace_mode& pace = book.pace->modes[static_cast<std::size_t>(mode)];
       cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", book.pace->has_c2c ? "c2c" : "serial",
                            format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(platform::median(values)),
                            values.size());
     }
-    lines += fmt::format("  {:<62} {}\n", entry.name, cells);
+    lines += fmt::format("  {:<62} {}\n", entry.entry->name, cells);
   }
-  if (count == 0) return;
   out += fmt::format("\nMedian per pace mode ({} entries ran in more than one mode; repetitions that straddle a "
                      "change left out):\n",
-                     count);
+                     several.size());
   out += lines;
 }
 
@@ -218,8 +210,13 @@ namespace {
 
 // The first lines: what was measured, the in-run calibrations and the pace.
 void calibration_lines(std::string& out, const run_book& book, const std::string& result_path, std::size_t skipped) {
-  out += fmt::format("lockstep run: {} entries measured, {} skipped, {} not applicable; results in {}\n",
-                     book.entries().size() - skipped, skipped, book.not_applicable.size(), result_path);
+  std::size_t partly_stopped = 0;
+  for (const auto& entry : book.entries()) partly_stopped += entry.stopped_repetitions > 0 ? 1 : 0;
+  out += fmt::format("lockstep run: {} entries measured{}, {} skipped, {} not applicable; results in {}\n",
+                     book.entries().size() - skipped,
+                     partly_stopped == 0 ? std::string()
+                                         : fmt::format(" ({} of them lost repetitions to a stop)", partly_stopped),
+                     skipped, book.not_applicable.size(), result_path);
   out += "\nIn-run calibration: ";
   out += book.c2c_one_way_ns() ? "core-to-core one-way " + format_ns(*book.c2c_one_way_ns()) : "c2c unavailable";
   if (const captured_entry* c2c = book.find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
@@ -369,6 +366,14 @@ void left_out_lines(std::string& out, const run_book& book, std::size_t skipped)
     out += fmt::format("\nStalled or skipped ({}):\n", skipped);
     for (const auto& entry : book.entries())
       if (!entry.error.empty()) out += "  " + entry.name + ": " + entry.error + "\n";
+  }
+  bool header = false;
+  for (const auto& entry : book.entries()) {
+    if (entry.stopped_repetitions == 0) continue;
+    if (!header) out += "\nRepetitions stopped (the entries' figures are the other repetitions'):\n";
+    header = true;
+    out += fmt::format("  {}: {} of {}: {}\n", entry.name, entry.stopped_repetitions,
+                       entry.stopped_repetitions + entry.repetitions.size(), entry.stop_reason);
   }
   for (const auto& note : book.notes) out += "\nNote: " + note + "\n";
 }

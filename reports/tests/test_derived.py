@@ -91,10 +91,11 @@ class ModeMedians(Scratch):
     def test_a_mode_the_trace_does_not_have_is_refused(self):
         raw = document("paced_a.json")
         raw["lockstep_pace"]["entry_medians"] = [
-            {"entry": "rk4/serial", "modes": [{"mode": 9, "median_ns": 1.0, "repetitions": 1}], "straddling": 0}]
+            {"entry": "rk4/serial", "modes": [{"mode": 0, "median_ns": 1.0, "repetitions": 1},
+                                              {"mode": 9, "median_ns": 1.0, "repetitions": 1}], "straddling": 0}]
         status, _, err = run_tool("compare", self.write("a.json", raw), fixture("paced_b.json"))
         self.assertEqual(status, 2)
-        self.assertIn("lockstep_pace.entry_medians[0].modes[0].mode: is 9", err)
+        self.assertIn("lockstep_pace.entry_medians[0].modes[1].mode: is 9", err)
 
 
 class Rankings(Scratch):
@@ -141,7 +142,7 @@ class Model(Scratch):
         raw["lockstep_model"] = dict(self.MODEL, evaluations_per_step=0)
         status, _, err = run_tool("compare", self.write("a.json", raw), fixture("machine_b.json"))
         self.assertEqual((status, len(err.splitlines())), (2, 1))
-        self.assertIn("lockstep_model.evaluations_per_step: is 0, not a whole number from 1", err)
+        self.assertIn("lockstep_model.evaluations_per_step: is 0, below the least 1", err)
 
 
 class MalformedSections(Scratch):
@@ -151,7 +152,7 @@ class MalformedSections(Scratch):
                  ("lockstep_layouts", layouts(("packed", "spread", 0)), "lockstep_layouts[0].kind: is 'spread'"),
                  ("lockstep_planned_pairs", [{"comparison": "false_sharing", "group": "g", "a": "/", "b": "x/y"}],
                   "lockstep_planned_pairs[0].a: is '/': no benchmark family"),
-                 ("lockstep_rankings", {"pin": "compact"}, "lockstep_rankings: is an object, not a list"))
+                 ("lockstep_rankings", {"pin": "compact"}, "lockstep_rankings: expected a list, not an object"))
         for key, value, problem in cases:
             with self.subTest(problem):
                 raw = document("machine_a.json")

@@ -397,7 +397,7 @@ class ReadingTheHeadline(Scratch):
         self.assertEqual(first.spread_pct, raw["spread_pct"])
         self.assertIsNone(load_run_file(fixture(HEADLINE)).headline.answer)
         raw["tied"] = True
-        block["answer"] = {"threads": 2, "pin": "compact", "entry": raw["entry"], "ns_per_step": 316.9,
+        block["answer"] = {"model": "", "threads": 2, "pin": "compact", "entry": raw["entry"], "ns_per_step": 316.9,
                            "serial_ns_per_step": 182.0, "vs_serial": 1.74, "a_later_key": 1}
         headline = load_run_file(self.write("tied.json", document)).headline
         self.assertTrue(headline.recommendations[0].tied)
@@ -440,10 +440,10 @@ class ReadingTheHeadline(Scratch):
             block["recommendations"][0]["tied"] = "yes"
 
         def answer_without_entry(block):
-            block["answer"] = {"threads": 2, "pin": "compact", "ns_per_step": 300.0}
+            block["answer"] = {"model": "", "threads": 2, "pin": "compact", "ns_per_step": 300.0}
 
         def answer_at_no_threads(block):
-            block["answer"] = {"threads": 0, "pin": "compact", "entry": block["recommendations"][0]["entry"],
+            block["answer"] = {"model": "", "threads": 0, "pin": "compact", "entry": block["recommendations"][0]["entry"],
                                "ns_per_step": 300.0}
 
         for mutate in (set_line, empty_lines, nameless, no_basis, endless_step, no_threads, tied_as_text,

@@ -15,6 +15,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -92,9 +93,21 @@ bench::run_book book_of(const nlohmann::json& file) {
     std::map<std::string, double> counters;
     for (const auto& [key, value] : row.items())
       if (value.is_number() && own.count(key) == 0) counters[key] = value.get<double>();
+    if (row.value("error_occurred", false)) {
+      // As the run's reporter keeps it (reporters.cpp): a stopped repetition
+      // is counted, the entry skipped only when none was measured.
+      if (entries.back().stop_reason.empty()) entries.back().stop_reason = row.value("error_message", std::string("error"));
+      ++entries.back().stopped_repetitions;
+      continue;
+    }
     entries.back().repetitions.push_back(std::move(counters));
-    if (row.value("error_occurred", false)) entries.back().error = row.value("error_message", std::string("error"));
   }
+  for (auto& entry : entries)
+    if (entry.repetitions.empty() && entry.stopped_repetitions > 0) {
+      entry.error = entry.stop_reason;
+      entry.stop_reason.clear();
+      entry.stopped_repetitions = 0;
+    }
   bench::run_book book;
   for (auto& entry : entries) book.record(std::move(entry));
   // Google Benchmark's context holds strings: "23.2".
@@ -291,6 +304,78 @@ TEST(RunFixture, TheSummaryHeadlineAndTheirJsonMatchTheGoldenFiles) {
   expect_golden("quick-pairs.summary.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/false));
   expect_golden("quick-pairs.summary-verbose.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/true));
   expect_golden("quick-pairs.headline.json", bench::headline_json(book.headline).dump(2) + "\n");
+}
+
+// Real run files from two kinds of machine: the AMD guest's quick Debug run
+// and a trimmed copy of an Intel guest's default Release run
+// (reports/tests/fixtures/trim_real_run.py says what was kept).
+const nlohmann::json& real_file(const std::string& relative) {
+  static std::map<std::string, nlohmann::json> files;
+  auto found = files.find(relative);
+  if (found == files.end()) {
+    std::ifstream in(std::string(LOCKSTEP_SOURCE_DIR) + "/" + relative);
+    found = files.emplace(relative, nlohmann::json::parse(in)).first;
+  }
+  return found->second;
+}
+
+// The answer never recommends a combination that its own pair with the
+// runner-up calls slower (the runner-up's step over the choice's, its
+// whole interval below 1), and a pair that cannot tell them apart (within
+// noise or unsure) is printed as a tie naming both.
+TEST(RunFixture, TheAnswerRecommendsWhatItsPairsSupportAndNamesTiesAsTies) {
+  for (const std::string relative :
+       {"tests/fixtures/run/quick-pairs.json", "reports/tests/fixtures/xeon_default_run_trimmed.json"}) {
+    SCOPED_TRACE(relative);
+    bench::run_book book = book_of(real_file(relative));
+    book.headline = bench::make_headline(book, {}, 2, "x.json");
+    std::size_t paired = 0;
+    for (const bench::headline_choice& choice : book.headline.choices) {
+      SCOPED_TRACE(choice.entry);
+      if (!choice.runner_up) continue;
+      ++paired;
+      EXPECT_FALSE(choice.runner_up->estimate.high < 1.0) << "the runner-up was faster side by side";
+      const bool clear = choice.runner_up->verdict == bench::ratio_verdict::penalty;
+      EXPECT_EQ(choice.tied, !clear);
+      const std::string first = choice.sync + " + " + choice.layout;
+      const std::string both = first + " or " + choice.runner_up->sync + " + " + choice.runner_up->layout + " (tied)";
+      const auto line = std::find_if(book.headline.lines.begin(), book.headline.lines.end(), [&](const std::string& l) {
+        return l.find(fmt::format("threads:{} pin:{}", choice.threads, choice.pin)) != std::string::npos &&
+               l.find(first) != std::string::npos;
+      });
+      ASSERT_NE(line, book.headline.lines.end()) << bench::headline_text(book.headline);
+      EXPECT_EQ(line->find(both) != std::string::npos, choice.tied) << *line;
+    }
+    EXPECT_GT(paired, 0u);
+  }
+}
+
+// No line of the answer is cut: the result file's lines are whole, and the
+// terminal's text wraps them without losing a character.
+TEST(RunFixture, NoAnswerLineIsCut) {
+  for (const std::string relative :
+       {"tests/fixtures/run/quick-pairs.json", "reports/tests/fixtures/xeon_default_run_trimmed.json"}) {
+    SCOPED_TRACE(relative);
+    bench::run_book book = book_of(real_file(relative));
+    book.headline = bench::make_headline(book, probes_of(real_file(relative)), 2, "x.json");
+    std::string joined_lines;
+    for (const auto& line : book.headline.lines) {
+      EXPECT_FALSE(line.ends_with("...")) << line;
+      joined_lines += line;
+    }
+    std::string text = bench::headline_text(book.headline);
+    std::string rejoined;
+    std::istringstream stream(text);
+    for (std::string piece; std::getline(stream, piece);) {
+      EXPECT_LE(piece.size(), 120u) << piece;
+      rejoined += piece.substr(std::min(piece.find_first_not_of(' '), piece.size()));
+    }
+    std::string without_spaces;
+    for (const char c : joined_lines) if (c != ' ') without_spaces += c;
+    std::string rejoined_without_spaces;
+    for (const char c : rejoined) if (c != ' ') rejoined_without_spaces += c;
+    EXPECT_EQ(rejoined_without_spaces, without_spaces);
+  }
 }
 
 }  // namespace

@@ -1,0 +1,115 @@
+// What the run derived, into its file (derived_sections.hpp).
+#include "bench/run/derived_sections.hpp"
+
+#include <algorithm>
+#include <map>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "bench/run/paired_blocks.hpp"
+#include "kernels/normal_modes.hpp"
+#include "kernels/oscillator.hpp"
+#include "kernels/rk4.hpp"
+#include "kernels/verification.hpp"
+#include "layouts/registry.hpp"
+#include "platform/statistics.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+nlohmann::json layouts_json() {
+  nlohmann::json layouts = nlohmann::json::array();
+  for (const auto& info : layouts::all_layout_info)
+    layouts.push_back({{"name", std::string(info.name)},
+                       {"kind", info.kind == layouts::layout_kind::shared ? "shared" : "private_copy"},
+                       {"writer_isolation", info.writer_isolation}});
+  return layouts;
+}
+
+nlohmann::json planned_json(const run_book& book) {
+  nlohmann::json planned = nlohmann::json::array();
+  for (const comparison& what : book.planned)
+    planned.push_back({{"comparison", std::string(to_string(what.kind))}, {"group", what.group}, {"a", what.a}, {"b", what.b}});
+  return planned;
+}
+
+nlohmann::json entry_medians_json(const run_book& book) {
+  nlohmann::json medians = nlohmann::json::array();
+  for (const mode_medians& entry : entries_in_several_modes(book)) {
+    nlohmann::json modes = nlohmann::json::array();
+    std::size_t straddling = 0;
+    for (const auto& [mode, values] : entry.by_mode) {
+      if (mode < 0) {
+        straddling = values.size();
+        continue;
+      }
+      modes.push_back({{"mode", mode}, {"median_ns", platform::median(values)}, {"repetitions", values.size()}});
+    }
+    medians.push_back({{"entry", entry.entry->name}, {"modes", modes}, {"straddling", straddling}});
+  }
+  return medians;
+}
+
+nlohmann::json rankings_json(const run_book& book) {
+  std::map<std::tuple<unsigned, std::string>, std::vector<measured_entry>> groups;
+  for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step"))
+    groups[{static_cast<unsigned>(std::stoul(step.entry->field("threads"))), step.entry->field("pin")}].push_back(step);
+  nlohmann::json rankings = nlohmann::json::array();
+  for (auto& [key, steps] : groups) {
+    std::stable_sort(steps.begin(), steps.end(),
+                     [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
+    nlohmann::json entries = nlohmann::json::array();
+    for (const measured_entry& step : steps) {
+      const auto vs_serial = step.entry->median("vs_serial");
+      entries.push_back({{"entry", step.entry->name},
+                         {"ns_per_step", step.median},
+                         {"vs_serial", vs_serial ? nlohmann::json(*vs_serial) : nlohmann::json(nullptr)}});
+    }
+    rankings.push_back({{"pin", std::get<1>(key)}, {"threads", std::get<0>(key)}, {"entries", entries}});
+  }
+  return rankings;
+}
+
+// The paper's two-mass system, the model of the run's answer: its C/m, initial
+// positions, normal modes beside the paper's printed roots, and the
+// derivative evaluations of one serial step.
+nlohmann::json model_json() {
+  const kernels::two_mass_params params{};
+  const kernels::two_mass_frequencies roots = kernels::two_mass_angular_frequencies(params);
+  return {{"c_over_m", params.c1 / params.m1},
+          {"positions_0", {params.x1, params.x2}},
+          {"roots",
+           {{"computed_rad_s", {{"fast", roots.fast}, {"slow", roots.slow}}},
+            {"paper_rad_s", {{"fast", kernels::kPaperFastRoot}, {"slow", kernels::kPaperSlowRoot}}},
+            {"paper_implied_c_over_m", kernels::kPaperFastRoot * kernels::kPaperSlowRoot}}},
+          {"evaluations_per_step", kernels::two_mass_model::kEquations * kernels::kRk4Stages}};
+}
+
+}  // namespace
+
+std::vector<mode_medians> entries_in_several_modes(const run_book& book) {
+  std::vector<mode_medians> several;
+  if (!book.pace || book.pace->modes.size() < 2) return several;
+  for (const auto& entry : book.entries()) {
+    if (!entry.error.empty()) continue;
+    const std::string kind = entry.field("kind");
+    if (kind != "rk4" && kind != "barrier") continue;
+    auto modes = entry.by_pace_mode(kind == "barrier" ? "ns_per_episode" : "ns_per_step");
+    const auto moded = std::count_if(modes.begin(), modes.end(), [](const auto& mode) { return mode.first >= 0; });
+    if (moded >= 2) several.push_back({&entry, std::move(modes)});
+  }
+  return several;
+}
+
+void write_derived_sections(nlohmann::json& document, const run_book& book) {
+  document["lockstep_layouts"] = layouts_json();
+  document["lockstep_planned_pairs"] = planned_json(book);
+  if (document.contains("lockstep_pace") && document["lockstep_pace"].is_object())
+    document["lockstep_pace"]["entry_medians"] = entry_medians_json(book);
+  document["lockstep_rankings"] = rankings_json(book);
+  document["lockstep_model"] = model_json();
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,35 @@
+#pragma once
+// What `lockstep run` derived, written into its file for compare and report
+// to read rather than derive again (reports/lockstep_reports/derived_reader.py
+// reads each; docs/schemas/run.schema.json holds their shapes):
+//
+//   lockstep_layouts          every layout of the registry, in its order, with
+//                             its kind and writer isolation (the traits that
+//                             plan the false-sharing comparisons)
+//   lockstep_planned_pairs    every comparison the run planned, measured or not
+//   lockstep_pace.entry_medians
+//                             each entry that ran in more than one pace mode:
+//                             its median per mode (summary.cpp prints the same)
+//   lockstep_rankings         per placement and thread count, the RK4 entries
+//                             fastest first, collapsed entries left out
+//   lockstep_model            the model's constants and normal modes as the
+//                             kernel holds them
+#include <nlohmann/json.hpp>
+
+#include "bench/run/run_book.hpp"
+
+namespace lockstep::bench {
+
+// Adds the sections above to the result document (lockstep_pace must be
+// there already, when the run has a pace trace).
+void write_derived_sections(nlohmann::json& document, const run_book& book);
+
+// One entry's medians per pace mode, as the summary prints them and the file
+// holds them: rk4 and barrier entries whose repetitions ran in two modes or more.
+struct mode_medians {
+  const captured_entry* entry = nullptr;
+  std::map<int, std::vector<double>> by_mode;  // mode -> the repetitions' times; -1: straddled a change
+};
+std::vector<mode_medians> entries_in_several_modes(const run_book& book);
+
+}  // namespace lockstep::bench
