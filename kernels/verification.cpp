@@ -222,7 +222,8 @@ void check_integration(const Model& model, const chain_model& chain, const norma
     if (given_step) {
       report.energy.initial = model.energy(integrator.state());
       report.trajectory.reserve(steps + 1);
-      report.trajectory.push_back({0.0, positions_of(integrator.state())});
+      analytic.state_at(0.0, exact);
+      report.trajectory.push_back({0.0, positions_of(integrator.state()), positions_of(exact)});
     }
     for (std::uint64_t step = 1; step <= rung.steps; ++step) {
       integrator.step();
@@ -231,7 +232,7 @@ void check_integration(const Model& model, const chain_model& chain, const norma
       analytic.state_at(time, exact);
       rung.max_error = std::max(rung.max_error, position_error(state, exact));
       if (given_step) {
-        report.trajectory.push_back({time, positions_of(state)});
+        report.trajectory.push_back({time, positions_of(state), positions_of(exact)});
         const double energy = model.energy(state);
         const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
                                                          : energy;

@@ -167,7 +167,8 @@ struct dopri5_report {
 
 struct trajectory_point {
   double time = 0.0;
-  std::vector<double> positions;  // x1..xs, m
+  std::vector<double> positions;  // x1..xs, m: RK4's
+  std::vector<double> exact;      // x1..xs, m: the analytic solution at the same time
 };
 
 struct verify_report {

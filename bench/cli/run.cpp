@@ -5,43 +5,27 @@
 // (bench/run/matrix_run.hpp, which measures the matrix, the pairs and the
 // pace trace and writes the result file atomically), then the summary on
 // stdout (bench/run/summary.hpp). Progress goes to stderr.
-#include <benchmark/benchmark.h>
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cstdlib>
-#include <map>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 #include <optional>
-#include <regex>
-#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bench/cli/options.hpp"
-#include "bench/run/barrier_entries.hpp"
 #include "bench/cli/command.hpp"
-#include "bench/results/machine_context.hpp"
 #include "bench/run/matrix_run.hpp"
-#include "bench/run/pace.hpp"
-#include "bench/run/paired_blocks.hpp"
 #include "bench/run/run_book.hpp"
-#include "bench/run/reporters.hpp"
 #include "bench/results/result_file.hpp"
 #include "bench/run/summary.hpp"
-#include "bench/run/team_driver.hpp"
-#include "bench/run/rk4_entries.hpp"
 #include "bench/run/run_plan.hpp"
-#include "bench/run/scaling.hpp"
 #include "kernels/model_choice.hpp"
-#include "kernels/oscillator.hpp"
 #include "layouts/registry.hpp"
-#include "platform/clock.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 #include "sync/registry.hpp"

@@ -153,12 +153,17 @@ std::string verify_text(const verify_report& report) {
 std::string verify_csv(const verify_report& report) {
   fmt::memory_buffer buffer;
   fmt::format_to(std::back_inserter(buffer), "t");
+  // RK4's positions, then the analytic solution's at the same time (the
+  // report draws them against each other and computes neither).
   for (std::size_t mass = 1; mass <= report.settings.masses(); ++mass)
     fmt::format_to(std::back_inserter(buffer), ",x{}", mass);
+  for (std::size_t mass = 1; mass <= report.settings.masses(); ++mass)
+    fmt::format_to(std::back_inserter(buffer), ",exact_x{}", mass);
   fmt::format_to(std::back_inserter(buffer), "\n");
   for (const auto& point : report.trajectory) {
     fmt::format_to(std::back_inserter(buffer), "{}", point.time);
     for (double position : point.positions) fmt::format_to(std::back_inserter(buffer), ",{}", position);
+    for (double position : point.exact) fmt::format_to(std::back_inserter(buffer), ",{}", position);
     fmt::format_to(std::back_inserter(buffer), "\n");
   }
   return fmt::to_string(buffer);

@@ -95,19 +95,21 @@ TEST(VerifyCli, CsvHoldsTheTrajectory) {
   std::istringstream csv(slurp(path));
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
-  EXPECT_EQ(line, "t,x1,x2");
+  EXPECT_EQ(line, "t,x1,x2,exact_x1,exact_x2");
   const lockstep::kernels::normal_mode_solution exact =
       lockstep::kernels::normal_mode_solution::two_mass(lockstep::kernels::two_mass_params{});
   int rows = 0;
   while (std::getline(csv, line)) {
-    double time = 0, x1 = 0, x2 = 0;
-    char comma1 = 0, comma2 = 0;
+    double time = 0, x1 = 0, x2 = 0, exact_x1 = 0, exact_x2 = 0;
+    char comma1 = 0, comma2 = 0, comma3 = 0, comma4 = 0;
     std::istringstream row(line);
-    ASSERT_TRUE(row >> time >> comma1 >> x1 >> comma2 >> x2) << line;
-    ASSERT_EQ(comma1, ',');
-    ASSERT_EQ(comma2, ',');
+    ASSERT_TRUE(row >> time >> comma1 >> x1 >> comma2 >> x2 >> comma3 >> exact_x1 >> comma4 >> exact_x2) << line;
+    ASSERT_EQ(std::string({comma1, comma2, comma3, comma4}), ",,,,");
     EXPECT_NEAR(time, rows * 0.002, 1e-12);
     const std::vector<double> state = exact.state_at(time);
+    // The file's exact columns are the analytic solution (to the digits written).
+    EXPECT_NEAR(exact_x1, state[0], 1e-12) << "t = " << time;
+    EXPECT_NEAR(exact_x2, state[1], 1e-12) << "t = " << time;
     // RK4 at h = 2 ms over 0.5 s: the bound from h is about 1.4e-4 m.
     EXPECT_NEAR(x1, state[0], 2e-4) << "t = " << time;
     EXPECT_NEAR(x2, state[1], 2e-4) << "t = " << time;
@@ -208,9 +210,22 @@ TEST(VerifyCli, MassesChecksTheUniformChain) {
   std::istringstream csv(slurp(csv_path));
   std::string line;
   ASSERT_TRUE(std::getline(csv, line));
-  EXPECT_EQ(line, "t,x1,x2,x3,x4,x5,x6,x7,x8");
+  EXPECT_EQ(line,
+            "t,x1,x2,x3,x4,x5,x6,x7,x8,exact_x1,exact_x2,exact_x3,exact_x4,exact_x5,exact_x6,exact_x7,exact_x8");
   ASSERT_TRUE(std::getline(csv, line));
-  EXPECT_EQ(line, "0,2,-3,2,-3,2,-3,2,-3");
+  // RK4 starts from the initial state itself; the exact solution's sum of
+  // modes gives it back to rounding.
+  EXPECT_EQ(line.rfind("0,2,-3,2,-3,2,-3,2,-3,", 0), 0u) << line;
+  std::istringstream row(line.substr(std::string("0,2,-3,2,-3,2,-3,2,-3,").size()));
+  for (int mass = 0; mass < 8; ++mass) {
+    double exact = 0;
+    char comma = ',';
+    ASSERT_TRUE(row >> exact) << line;
+    EXPECT_NEAR(exact, mass % 2 == 0 ? 2.0 : -3.0, 1e-12) << line;
+    if (mass < 7) {
+      ASSERT_TRUE(row >> comma && comma == ',') << line;
+    }
+  }
 }
 
 TEST(VerifyCli, HelpNamesTheFlags) {
