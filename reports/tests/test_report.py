@@ -718,7 +718,7 @@ class AnswerBox(Pages):
     def test_the_answer_first_comes_before_the_table(self):
         document = load_document(XEON)
         block = document["lockstep_headline"]
-        block["answer"] = {"threads": 2, "pin": "compact", "entry": block["recommendations"][0]["entry"],
+        block["answer"] = {"model": "", "threads": 2, "pin": "compact", "entry": block["recommendations"][0]["entry"],
                            "ns_per_step": 767.0364218455744, "serial_ns_per_step": 26.8, "vs_serial": 28.62}
         block["lines"].insert(0, "Best: threads:2 pin:compact mailbox + per_thread, 28.6x the serial step")
         html, markdown = self.pages(self.write("first.json", document))

@@ -42,7 +42,8 @@ TEST(ReportsCli, CompareShowsTheForcedRegressionAndPassesFailAboveThrough) {
 }
 
 TEST(ReportsCli, OptionsBeforeTheFilesPassThroughToo) {
-  const auto result = run_command({LOCKSTEP_BINARY, "compare", "--fail-above", "50", "--alpha", "0.01",
+  // The q-values and their alpha are --all's (the default text leaves them out).
+  const auto result = run_command({LOCKSTEP_BINARY, "compare", "--fail-above", "50", "--alpha", "0.01", "--all",
                                    fixture("machine_a.json"), fixture("machine_a_rerun.json")});
   EXPECT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("alpha 0.01"), std::string::npos);
