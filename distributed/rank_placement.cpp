@@ -9,7 +9,6 @@
 #include <array>
 #include <cstring>
 #include <fstream>
-#include <limits>
 #include <map>
 
 #include "distributed/yield_when_idle.hpp"
@@ -82,6 +81,19 @@ std::vector<std::optional<unsigned>> maximum_matching(const std::vector<std::vec
   return assigned;
 }
 
+// The plan of `kind` for all of a machine's ranks, over every CPU one of
+// them was given that this topology knows (a container's topology may lack
+// another container's CPUs).
+platform::placement_plan plan_over_machine(const platform::topology& hardware, platform::placement kind,
+                                           const machine& ranks) {
+  std::vector<unsigned> cpus;
+  for (unsigned cpu : ranks.cpus)
+    if (hardware.has_pu(cpu)) cpus.push_back(cpu);
+  platform::topology all = hardware;
+  if (!cpus.empty()) all.restrict_affinity(cpus);
+  return platform::plan_placement(all, kind, static_cast<unsigned>(ranks.ranks.size()));
+}
+
 std::string hosts_clause(const machine& ranks) {
   return ranks.hosts.size() == 1 ? "host " + ranks.hosts.front()
                                  : fmt::format("hosts {} (one kernel, {})", listed(ranks.hosts), ranks.kernel);
@@ -130,14 +142,7 @@ std::vector<std::vector<unsigned>> plan_machine(const platform::topology& hardwa
   for (int rank : ranks.ranks) allowed.push_back(reports[static_cast<std::size_t>(rank)].cpus_given);
   if (kind == platform::placement::none) return allowed;
 
-  // The plan over every CPU the machine's ranks were given (those this
-  // topology knows: a container's topology may lack another's CPUs).
-  std::vector<unsigned> cpus;
-  for (unsigned cpu : ranks.cpus)
-    if (hardware.has_pu(cpu)) cpus.push_back(cpu);
-  platform::topology all = hardware;
-  if (!cpus.empty()) all.restrict_affinity(cpus);
-  const platform::placement_plan plan = platform::plan_placement(all, kind, static_cast<unsigned>(count));
+  const platform::placement_plan plan = plan_over_machine(hardware, kind, ranks);
   std::vector<std::optional<unsigned>> preferred;
   std::map<unsigned, std::size_t> position;  // CPU -> its place in the order ranks try CPUs in
   for (const auto& entry : plan.entries) {
@@ -371,14 +376,7 @@ rank_placement place_ranks(const world& job, platform::placement kind, const pla
   const machine& mine = result.machines[result.my_machine];
   const auto my_index =
       static_cast<std::size_t>(std::find(mine.ranks.begin(), mine.ranks.end(), job.rank) - mine.ranks.begin());
-  {
-    platform::topology all = hardware;
-    std::vector<unsigned> cpus;
-    for (unsigned cpu : mine.cpus)
-      if (hardware.has_pu(cpu)) cpus.push_back(cpu);
-    if (!cpus.empty()) all.restrict_affinity(cpus);
-    result.plan = platform::plan_placement(all, kind, static_cast<unsigned>(mine.ranks.size()));
-  }
+  result.plan = plan_over_machine(hardware, kind, mine);
   const std::vector<std::vector<unsigned>> placed = plan_machine(hardware, kind, mine, result.ranks);
   platform::set_current_thread_affinity(placed.at(my_index));
   const platform::placement_plan host_alone =

@@ -37,7 +37,7 @@ std::string transport_label(const report_input& input) {
   return std::string(to_string(input.how));
 }
 
-// "bound: rank 0 to CPU 0, rank 1 to CPU 1; 2 hosts on one kernel; no rank yields when idle"
+// "bound: rank 0 to CPU 0, rank 1 to CPU 1; hosts a, b on one kernel; no rank yields when idle"
 std::string bound_text(const rank_placement& placement) {
   std::vector<std::string> ranks;
   std::vector<int> yielding;
@@ -51,15 +51,12 @@ std::string bound_text(const rank_placement& placement) {
   std::string kernels;
   for (const machine& each : placement.machines)
     if (each.hosts.size() > 1) kernels += fmt::format("; hosts {} on one kernel", fmt::join(each.hosts, ", "));
-  const std::string yields =
-      unknown ? "the MPI library does not say whether ranks yield when idle"
-      : yielding.empty()                     ? "no rank yields when idle"
-      : yielding.size() == placement.ranks.size() ? "every rank yields when idle"
-                                                  : fmt::format("ranks {} yield when idle", fmt::join(yielding, ", "));
+  std::string yields = fmt::format("ranks {} yield when idle", fmt::join(yielding, ", "));
+  if (unknown) yields = "the MPI library does not say whether ranks yield when idle";
+  else if (yielding.empty()) yields = "no rank yields when idle";
+  else if (yielding.size() == placement.ranks.size()) yields = "every rank yields when idle";
   return fmt::format("bound: {}{}; {}\n", fmt::join(ranks, ", "), kernels, yields);
 }
-
-nlohmann::json cpus_json(const std::vector<unsigned>& cpus) { return cpus; }
 
 // The result file's `placement`: every rank's report, every kernel's ranks,
 // what was found and done.
@@ -69,8 +66,8 @@ nlohmann::json placement_json(const rank_placement& placement) {
     ranks.push_back({{"rank", report.rank},
                      {"host", report.host},
                      {"kernel", report.kernel},
-                     {"cpus_given", cpus_json(report.cpus_given)},
-                     {"cpus_bound", cpus_json(report.cpus_bound)},
+                     {"cpus_given", report.cpus_given},
+                     {"cpus_bound", report.cpus_bound},
                      {"cpu_host_by_host",
                       report.cpu_host_by_host ? nlohmann::json(*report.cpu_host_by_host) : nlohmann::json(nullptr)},
                      {"yields_when_idle",
@@ -85,9 +82,9 @@ nlohmann::json placement_json(const rank_placement& placement) {
     machines.push_back({{"kernel", each.kernel},
                         {"hosts", each.hosts},
                         {"ranks", each.ranks},
-                        {"cpus", cpus_json(each.cpus)},
+                        {"cpus", each.cpus},
                         {"crowded", verdict.crowded ? nlohmann::json{{"ranks", verdict.crowded->ranks},
-                                                                     {"cpus", cpus_json(verdict.crowded->cpus)}}
+                                                                     {"cpus", verdict.crowded->cpus}}
                                                     : nlohmann::json(nullptr)},
                         {"host_by_host_shared", std::move(host_by_host)},
                         {"remedy", to_string(verdict.remedy)}});
