@@ -134,12 +134,12 @@ template <kernels::oscillator_model Model>
 class exchange_runner {
  public:
   exchange_runner(const world& job, const benchmark_settings& settings, const Model& model, std::int64_t offset,
-                  const platform::placement_plan& plan)
-      : job_(job), settings_(settings), model_(model), offset_(offset), plan_(plan),
+                  const rank_placement& placement)
+      : job_(job), settings_(settings), model_(model), offset_(offset), placement_(placement),
         setup_{job.comm, job.host_comm, job.rank, job.size,
                layouts::partition(model.equations(), static_cast<unsigned>(job.size)),
                kernels::plan_participants(model, layouts::partition(model.equations(), static_cast<unsigned>(job.size))),
-               platform::is_oversubscribed(static_cast<unsigned>(job.host_size), platform::affinity_cpu_count())} {
+               placement.crowded_here()} {
     // The serial reference for the whole trajectory one measurement runs.
     kernels::staged_rk4<Model> serial(model_, settings.dt);
     serial.run(settings.warmup_steps + 2 * settings.steps);
@@ -220,7 +220,7 @@ class exchange_runner {
                static_cast<int>(stages), MPI_INT64_T, 0, job_.comm);
     // Per rank: cpu, switches, migrations (-1: unavailable), futex waits.
     const std::int64_t mine[5] = {
-        plan_.pu_at(static_cast<unsigned>(job_.host_rank)) ? static_cast<std::int64_t>(*plan_.pu_at(static_cast<unsigned>(job_.host_rank))) : -1,
+        placement_.bound_cpu(job_.rank) ? static_cast<std::int64_t>(*placement_.bound_cpu(job_.rank)) : -1,
         switches.total_switches(), switches.migrations.value_or(-1), static_cast<std::int64_t>(futex_waits), 0};
     std::vector<std::int64_t> per_rank(root ? 5 * static_cast<std::size_t>(job_.size) : 0);
     MPI_Gather(mine, 5, MPI_INT64_T, per_rank.data(), 5, MPI_INT64_T, 0, job_.comm);
@@ -274,7 +274,7 @@ class exchange_runner {
   const benchmark_settings& settings_;
   Model model_;
   std::int64_t offset_;
-  const platform::placement_plan& plan_;
+  const rank_placement& placement_;
   exchange_setup setup_;
   std::vector<double> reference_;
   stage_record record_;
@@ -283,7 +283,7 @@ class exchange_runner {
 template <kernels::oscillator_model Model>
 void run_exchanges(const world& job, const benchmark_settings& settings, const Model& model, std::int64_t offset,
                    watchdog& dog, const std::function<void(const std::string&)>& progress, benchmark_result& result) {
-  exchange_runner<Model> runner(job, settings, model, offset, result.plan);
+  exchange_runner<Model> runner(job, settings, model, offset, result.placement);
   dog.phase("building the exchanges");
   std::vector<std::unique_ptr<exchange>> built;
   for (const exchange_entry* entry : settings.exchanges) built.push_back(entry->make(runner.setup()));
@@ -310,9 +310,13 @@ benchmark_result run_benchmark(const world& job, const benchmark_settings& setti
                                const std::function<void(const std::string&)>& progress) {
   benchmark_result result;
   dog.phase("placing the ranks");
+  // Loaded before anything pins this thread: its affinity set is what the rank was given.
   const platform::topology machine = platform::topology::this_machine();
-  result.plan = platform::plan_placement(machine, settings.pin, static_cast<unsigned>(job.host_size));
-  platform::pin_current_thread(result.plan, static_cast<unsigned>(job.host_rank));
+  {
+    const waiting_for_others waiting(dog);
+    result.placement = place_ranks(job, settings.pin, machine);
+  }
+  if (job.rank == 0 && !result.placement.line.empty()) progress(result.placement.line);
   dog.phase("estimating clock offsets");
   result.one_clock = job.one_host();
   const std::int64_t offset = clock_offset(job, dog);

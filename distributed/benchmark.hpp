@@ -2,7 +2,11 @@
 // `lockstep mpi`'s measurement, on every rank of the job (collective over
 // MPI_COMM_WORLD); the command (bench/cli/mpi.cpp) parses, prints and writes.
 //
-// Per round, side by side (rounds interleave the exchanges, so a machine that
+// First the ranks are placed (rank_placement.hpp): every rank reports its
+// kernel and the CPUs it was given, the ranks of each kernel are placed
+// together, every rank reports the CPUs it is bound to, and ranks that must
+// share a CPU yield when idle; rank 0 says so in one line (`progress`).
+// Then, per round, side by side (rounds interleave the exchanges, so a machine that
 // changes pace moves them all):
 //   1. the ping-pong calibration between ranks 0 and 1, timed as the OSU
 //      Micro-Benchmarks time osu_latency: 0-byte MPI_Send / MPI_Recv, a
@@ -30,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "distributed/rank_placement.hpp"
 #include "distributed/registry.hpp"
 #include "distributed/watchdog.hpp"
 #include "distributed/world.hpp"
@@ -65,7 +70,7 @@ struct benchmark_settings {
 struct rank_figures {
   int rank = 0;
   std::string host;
-  std::optional<unsigned> cpu;  // where it was pinned (none: unpinned)
+  std::optional<unsigned> cpu;  // the one CPU it was bound to (none: several, unpinned)
   double stage_p50_ns = 0;
   double stage_p99_ns = 0;
   std::int64_t context_switches = 0;
@@ -96,7 +101,7 @@ struct benchmark_result {
   std::vector<pingpong_figures> pingpongs;
   std::vector<exchange_figures> exchanges;
   bool one_clock = true;                 // arrivals read on one host's clock (else offset-corrected)
-  platform::placement_plan plan;         // this host's plan (rank 0's)
+  rank_placement placement;              // where every rank ran, and whether two shared a CPU
 };
 
 // Collective. `progress` is called on rank 0 only. The result is complete on

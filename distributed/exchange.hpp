@@ -81,7 +81,7 @@ struct exchange_setup {
   int size;
   layouts::partition blocks;
   std::vector<kernels::participant_plan> plans;  // index = rank
-  bool oversubscribed = false;  // more ranks on this host than CPUs to run them: waits must yield
+  bool oversubscribed = false;  // ranks of this rank's machine share CPUs (rank_placement.hpp: crowded): waits must yield
 
   [[nodiscard]] const kernels::participant_plan& mine() const { return plans[static_cast<std::size_t>(rank)]; }
   // The ranks that read this rank's block, ascending.

@@ -37,6 +37,64 @@ std::string transport_label(const report_input& input) {
   return std::string(to_string(input.how));
 }
 
+// "bound: rank 0 to CPU 0, rank 1 to CPU 1; hosts a, b on one kernel; no rank yields when idle"
+std::string bound_text(const rank_placement& placement) {
+  std::vector<std::string> ranks;
+  std::vector<int> yielding;
+  bool unknown = false;
+  for (const rank_report& report : placement.ranks) {
+    ranks.push_back(fmt::format("rank {} to CPU{} {}", report.rank, report.cpus_bound.size() == 1 ? "" : "s",
+                                fmt::join(report.cpus_bound, ",")));
+    if (!report.yields_when_idle) unknown = true;
+    if (report.yields_when_idle.value_or(false)) yielding.push_back(report.rank);
+  }
+  std::string kernels;
+  for (const machine& each : placement.machines)
+    if (each.hosts.size() > 1) kernels += fmt::format("; hosts {} on one kernel", fmt::join(each.hosts, ", "));
+  std::string yields = fmt::format("ranks {} yield when idle", fmt::join(yielding, ", "));
+  if (unknown) yields = "the MPI library does not say whether ranks yield when idle";
+  else if (yielding.empty()) yields = "no rank yields when idle";
+  else if (yielding.size() == placement.ranks.size()) yields = "every rank yields when idle";
+  return fmt::format("bound: {}{}; {}\n", fmt::join(ranks, ", "), kernels, yields);
+}
+
+// The result file's `placement`: every rank's report, every kernel's ranks,
+// what was found and done.
+nlohmann::json placement_json(const rank_placement& placement) {
+  nlohmann::json ranks = nlohmann::json::array();
+  for (const rank_report& report : placement.ranks)
+    ranks.push_back({{"rank", report.rank},
+                     {"host", report.host},
+                     {"kernel", report.kernel},
+                     {"cpus_given", report.cpus_given},
+                     {"cpus_bound", report.cpus_bound},
+                     {"cpu_host_by_host",
+                      report.cpu_host_by_host ? nlohmann::json(*report.cpu_host_by_host) : nlohmann::json(nullptr)},
+                     {"yields_when_idle",
+                      report.yields_when_idle ? nlohmann::json(*report.yields_when_idle) : nlohmann::json(nullptr)}});
+  nlohmann::json machines = nlohmann::json::array();
+  for (std::size_t index = 0; index < placement.machines.size(); ++index) {
+    const machine& each = placement.machines[index];
+    const machine_verdict& verdict = placement.verdicts.at(index);
+    nlohmann::json host_by_host = nlohmann::json::array();
+    for (const shared_cpu& shared : verdict.host_by_host)
+      host_by_host.push_back({{"cpu", shared.cpu}, {"ranks", shared.ranks}});
+    machines.push_back({{"kernel", each.kernel},
+                        {"hosts", each.hosts},
+                        {"ranks", each.ranks},
+                        {"cpus", each.cpus},
+                        {"crowded", verdict.crowded ? nlohmann::json{{"ranks", verdict.crowded->ranks},
+                                                                     {"cpus", verdict.crowded->cpus}}
+                                                    : nlohmann::json(nullptr)},
+                        {"host_by_host_shared", std::move(host_by_host)},
+                        {"remedy", to_string(verdict.remedy)}});
+  }
+  return {{"remedy", to_string(placement.remedy)},
+          {"warning", placement.line.empty() ? nlohmann::json(nullptr) : nlohmann::json(placement.line)},
+          {"ranks", std::move(ranks)},
+          {"machines", std::move(machines)}};
+}
+
 }  // namespace
 
 mpi_analysis analyse(const report_input& input) {
@@ -112,7 +170,7 @@ std::string mpi_text(const mpi_analysis& analysis) {
       "lockstep mpi: {} ranks on {} host{} ({} transport, {}), {}, pin {}, {} rounds of {} steps\n", job.size,
       job.hosts, job.hosts == 1 ? "" : "s", transport_label(input), analysis.library_short,
       settings.model.description(), input.pin, settings.rounds, settings.steps);
-  if (!measured.plan.note.empty()) out += fmt::format("placement: {}\n", measured.plan.note);
+  if (!measured.placement.plan.note.empty()) out += fmt::format("placement: {}\n", measured.placement.plan.note);
   if (!job.one_host()) {
     std::string hosts;
     for (const auto& [host, ranks] : ranks_by_host(job))
@@ -120,6 +178,7 @@ std::string mpi_text(const mpi_analysis& analysis) {
                            fmt::join(ranks, ", "));
     out += fmt::format("hosts: {}\n", hosts);
   }
+  out += bound_text(measured.placement);
   if (!measured.pingpongs.empty()) {
     const auto& last = measured.pingpongs.back();
     out += fmt::format(
@@ -262,6 +321,7 @@ nlohmann::json mpi_json(const mpi_analysis& analysis) {
   }
   document["exchanges"] = std::move(details);
   document["not_applicable"] = input.not_applicable;
+  document["placement"] = placement_json(measured.placement);
   return document;
 }
 

@@ -66,7 +66,9 @@ std::map<std::string, std::string> mpi_context(const mpi_analysis& analysis);
 // The result file's own keys: settings, benchmarks (one entry per round and
 // exchange, and per round for the ping-pong, in Google Benchmark's shape:
 // real_time is a step's time, or the ping-pong's one-way time), exchanges
-// (the last round's details) and not_applicable.
+// (the last round's details), not_applicable and placement (every rank's
+// kernel and CPUs, each kernel's ranks, whether two shared a CPU and what was
+// done: rank_placement.hpp).
 nlohmann::json mpi_json(const mpi_analysis& analysis);
 
 }  // namespace lockstep::distributed

@@ -6,8 +6,8 @@
 // and finalises it when it goes. world describes
 // MPI_COMM_WORLD: the rank, the size, the host this rank runs on and how many
 // hosts the job spans (ranks that share memory, MPI_COMM_TYPE_SHARED, count as
-// one host), and this rank's place among the ranks of its host (what
-// placement pins by).
+// one host), and this rank's place among the ranks of its host. (Placement
+// groups ranks by kernel, not by host: rank_placement.hpp.)
 #include <mpi.h>
 
 #include <string>

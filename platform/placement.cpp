@@ -234,6 +234,17 @@ std::optional<unsigned> current_cpu() noexcept {
   return static_cast<unsigned>(cpu);
 }
 
+std::vector<unsigned> current_thread_affinity() {
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  std::vector<unsigned> cpus;
+  // pid 0: the calling thread, as set_affinity_or_throw sets it.
+  if (::sched_getaffinity(0, sizeof mask, &mask) != 0) return cpus;
+  for (unsigned cpu = 0; cpu < CPU_SETSIZE; ++cpu)
+    if (CPU_ISSET(cpu, &mask)) cpus.push_back(cpu);
+  return cpus;
+}
+
 unsigned affinity_cpu_count() noexcept {
   cpu_set_t mask;
   CPU_ZERO(&mask);

@@ -118,6 +118,9 @@ void pin_current_thread_to_pu(unsigned os_pu);
 void set_current_thread_affinity(std::span<const unsigned> os_pus);
 // The CPU the calling thread runs on now (sched_getcpu), or empty.
 std::optional<unsigned> current_cpu() noexcept;
+// The CPUs the calling thread may run on now (sched_getaffinity of the
+// thread: what pinning left it), ascending; empty when the kernel will not say.
+std::vector<unsigned> current_thread_affinity();
 
 // CPUs in the process's affinity set right now (sched_getaffinity of the
 // process), at least 1. Cheap enough for a primitive's constructor.

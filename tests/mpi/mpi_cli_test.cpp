@@ -89,6 +89,24 @@ void expect_complete(const nlohmann::json& document, int ranks, const std::set<s
   }
 }
 
+// The lines on stderr that say busy-polling ranks could share a CPU
+// (distributed/rank_placement.hpp: rank 0 prints one, whatever the ranks).
+std::vector<std::string> sharing_lines(const std::string& err) {
+  std::vector<std::string> found;
+  std::istringstream lines(err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("busy-polling ranks could share a CPU") != std::string::npos) found.push_back(line);
+  return found;
+}
+
+// Each rank's CPUs as it reported them once placed (the file's placement).
+std::vector<std::vector<unsigned>> bound_cpus(const nlohmann::json& document) {
+  std::vector<std::vector<unsigned>> result;
+  for (const auto& rank : document.at("placement").at("ranks"))
+    result.push_back(rank.at("cpus_bound").get<std::vector<unsigned>>());
+  return result;
+}
+
 const std::set<std::string> kEveryExchange{"p2p", "allgather", "rma_put", "shm_window"};
 const std::set<std::string> kNetworkExchanges{"p2p", "allgather", "rma_put"};
 
@@ -100,7 +118,82 @@ TEST(MpiCommand, TwoRanksSharedMemoryEveryExchangeBitwise) {
   EXPECT_NE(result.err.find("lockstep mpi: running: "), std::string::npos) << "the launcher shows its command";
   EXPECT_NE(result.err.find("OMPI_ALLOW_RUN_AS_ROOT"), std::string::npos);
   EXPECT_NE(result.out.find("ping-pong"), std::string::npos);
-  expect_complete(read_json(out), 2, kEveryExchange, "shm");
+  const nlohmann::json document = read_json(out);
+  expect_complete(document, 2, kEveryExchange, "shm");
+  // Two ranks given two CPUs or more, compact: a CPU each, nothing to say.
+  if (document.at("placement").at("ranks").at(0).at("cpus_given").size() >= 2) {
+    EXPECT_TRUE(sharing_lines(result.err).empty()) << result.err;
+    EXPECT_EQ(document.at("placement").at("remedy"), "none");
+    EXPECT_TRUE(document.at("placement").at("warning").is_null());
+    const auto bound = bound_cpus(document);
+    ASSERT_EQ(bound.size(), 2U);
+    ASSERT_EQ(bound[0].size(), 1U);
+    ASSERT_EQ(bound[1].size(), 1U);
+    EXPECT_NE(bound[0], bound[1]);
+    for (const auto& details : document.at("exchanges"))
+      for (std::size_t rank = 0; rank < 2; ++rank) EXPECT_EQ(details.at("per_rank").at(rank).at("cpu"), bound[rank][0]);
+  }
+}
+
+// Two ranks forced onto CPU 0: by the affinity set lockstep is started with
+// (taskset), and by the user's own mpirun binding both ranks to slot 0 (a
+// rankfile). Neither is oversubscribed to mpirun (it leaves
+// mpi_yield_when_idle alone), so lockstep finds them bound to one CPU, says
+// so in one line on stderr before measuring, makes them yield when idle, and
+// records it; the measurement completes, bitwise.
+TEST(MpiCommand, TwoRanksForcedOntoOneCpuAreSaidYieldAndRecorded) {
+  scratch_directory scratch("lockstep-mpi-test");
+  const std::string rankfile = scratch.file("rankfile");
+  std::ofstream(rankfile) << "rank 0=localhost slot=0\nrank 1=localhost slot=0\n";
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+  ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  const std::vector<std::string> words{"--exchange", "p2p,shm_window", "--steps", "40", "--warmup", "4", "--rounds",
+                                       "1", "--pingpong", "100", "--watchdog", "20s"};
+  struct way {
+    std::string name;
+    std::vector<std::string> before;  // the command lockstep runs under
+    bool launches = true;             // lockstep launches mpirun itself
+  };
+  const std::vector<way> ways{
+      {"taskset", {"taskset", "-c", "0"}, true},
+      {"rankfile", {"mpirun", "--np", "2", "--rankfile", rankfile, "--mca", "btl", "self,vader", "--mca",
+                    "btl_vader_single_copy_mechanism", "none"}, false}};
+  for (const way& forced : ways) {
+    SCOPED_TRACE(forced.name);
+    const std::string out = scratch.file(forced.name + ".json");
+    std::vector<std::string> argv = forced.before;
+    argv.insert(argv.end(), {LOCKSTEP_BINARY, "mpi"});
+    if (forced.launches) argv.insert(argv.end(), {"--ranks", "2"});
+    argv.insert(argv.end(), words.begin(), words.end());
+    argv.insert(argv.end(), {"--out", out});
+    const command_result result = run_command(argv);
+    ASSERT_EQ(result.exit_status, 0) << result.err;
+    const std::vector<std::string> said = sharing_lines(result.err);
+    ASSERT_EQ(said.size(), 1U) << result.err;
+    EXPECT_TRUE(std::regex_search(said[0], std::regex(R"(^lockstep mpi: busy-polling ranks could share a CPU: ranks 0 and 1 on host \S+ are bound to CPU 0 between them; they yield when idle)")))
+        << said[0];
+    // Said before anything was measured.
+    EXPECT_LT(result.err.find(said[0]), result.err.find("ping-pong")) << result.err;
+
+    const nlohmann::json document = read_json(out);
+    const nlohmann::json& placement = document.at("placement");
+    EXPECT_EQ(placement.at("remedy"), "yield_when_idle");
+    EXPECT_EQ("lockstep mpi: " + placement.at("warning").get<std::string>(), said[0]);
+    EXPECT_EQ(bound_cpus(document), (std::vector<std::vector<unsigned>>{{0}, {0}}));
+    for (const auto& rank : placement.at("ranks")) {
+      EXPECT_EQ(rank.at("cpus_given"), nlohmann::json::array({0}));
+      EXPECT_EQ(rank.at("yields_when_idle"), true);
+      EXPECT_EQ(rank.at("kernel"), placement.at("ranks").at(0).at("kernel"));
+    }
+    ASSERT_EQ(placement.at("machines").size(), 1U);
+    EXPECT_EQ(placement.at("machines").at(0).at("crowded"),
+              (nlohmann::json{{"ranks", {0, 1}}, {"cpus", {0}}}));
+    for (const auto& entry : document.at("benchmarks")) {
+      if (entry.contains("bitwise")) {
+        EXPECT_EQ(entry.at("bitwise"), 1) << entry.at("name");
+      }
+    }
+  }
 }
 
 TEST(MpiCommand, FourRanksOversubscribedEveryExchangeBitwise) {

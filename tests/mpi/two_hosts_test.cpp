@@ -10,9 +10,12 @@
 // file, the ping-pong between the hosts; shm_window refused with its reason;
 // a rank that stalls on B named by its own watchdog; a rank killed on B and
 // B's link taken down mid-run each end the job with a message naming B and
-// leave no process in either namespace. Behaviour only, never a time: the
-// two namespaces' TCP path is slow here (a few ms one-way on a busy 2-CPU
-// VM), so the runs are a few steps.
+// leave no process in either namespace; the two hosts, which share this
+// machine's kernel, placed as one machine (disjoint CPUs, from what each rank
+// reports it is bound to), and ranks that must share a CPU yielding, said in
+// one line and recorded. Behaviour only, never a time; the runs
+// are a few steps (a hop between the namespaces costs some microseconds
+// here, and far more on a busy 2-CPU VM).
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -106,6 +109,54 @@ void expect_nothing_left(const two_hosts& hosts, std::chrono::seconds bound) {
 
 const std::set<std::string> kNetworkExchanges{"p2p", "allgather", "rma_put"};
 
+// The lines on stderr that say busy-polling ranks could share a CPU.
+std::vector<std::string> sharing_lines(const std::string& err) {
+  std::vector<std::string> found;
+  std::istringstream lines(err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.find("busy-polling ranks could share a CPU") != std::string::npos) found.push_back(line);
+  return found;
+}
+
+// The two hosts share this machine's kernel: each rank reports the same
+// kernel, and they are placed as the ranks of one host, on disjoint CPUs
+// (each host placing its own ranks from its CPU 0 put both on CPU 0, where
+// each polling rank waited a scheduler tick for the other). Checked from the
+// CPUs every rank reported it was bound to, before measuring; lockstep says
+// what it did in one line and records it.
+TEST(MpiTwoHosts, HostsOfOneKernelArePlacedOnDisjointCpus) {
+  REQUIRE_TWO_HOSTS(hosts);
+  scratch_directory scratch("lockstep-two-hosts-test");
+  const std::string out = scratch.file("one-kernel.json");
+  auto words = few_steps("2");
+  words.insert(words.end(), {"--exchange", "p2p", "--out", out});
+  const command_result result = on_a(hosts, words);
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const nlohmann::json placement = read_json(out).at("placement");
+  const nlohmann::json& ranks = placement.at("ranks");
+  ASSERT_EQ(ranks.size(), 2U);
+  EXPECT_EQ(ranks.at(0).at("host"), hosts.a);
+  EXPECT_EQ(ranks.at(1).at("host"), hosts.b);
+  EXPECT_EQ(ranks.at(0).at("kernel"), ranks.at(1).at("kernel"));
+  EXPECT_EQ(ranks.at(0).at("kernel").get<std::string>().rfind("boot id ", 0), 0U) << ranks.at(0).at("kernel");
+  ASSERT_EQ(placement.at("machines").size(), 1U);
+  EXPECT_EQ(placement.at("machines").at(0).at("hosts"), (nlohmann::json{hosts.a, hosts.b}));
+  if (ranks.at(0).at("cpus_given").size() < 2) GTEST_SKIP() << "fewer than 2 CPUs here: the ranks must share one";
+  const auto bound_0 = ranks.at(0).at("cpus_bound").get<std::vector<unsigned>>();
+  const auto bound_1 = ranks.at(1).at("cpus_bound").get<std::vector<unsigned>>();
+  ASSERT_EQ(bound_0.size(), 1U);
+  ASSERT_EQ(bound_1.size(), 1U);
+  EXPECT_NE(bound_0, bound_1) << "two hosts of one kernel put their ranks on one CPU";
+  EXPECT_TRUE(placement.at("machines").at(0).at("crowded").is_null());
+  // Each host alone would have pinned its rank to its own first CPU: the same one.
+  EXPECT_EQ(ranks.at(0).at("cpu_host_by_host"), ranks.at(1).at("cpu_host_by_host"));
+  EXPECT_EQ(placement.at("remedy"), "placed_apart");
+  const std::vector<std::string> said = sharing_lines(result.err);
+  ASSERT_EQ(said.size(), 1U) << result.err;
+  EXPECT_NE(said[0].find("hosts " + hosts.a + " and " + hosts.b + " share one kernel"), std::string::npos) << said[0];
+  EXPECT_EQ("lockstep mpi: " + placement.at("warning").get<std::string>(), said[0]);
+}
+
 TEST(MpiTwoHosts, TwoAndFourRanksAcrossTheHostsBitwise) {
   REQUIRE_TWO_HOSTS(hosts);
   for (const std::string ranks : {"2", "4"}) {
@@ -159,6 +210,16 @@ TEST(MpiTwoHosts, TwoAndFourRanksAcrossTheHostsBitwise) {
     }
     for (const std::string shm : {"shm_window/futex_spin", "shm_window/mailbox"})
       EXPECT_NE(document.at("not_applicable").value(shm, "").find("span 2 hosts"), std::string::npos) << shm;
+    // One kernel: the hosts' ranks are placed as one machine's. Four ranks
+    // on fewer CPUs must share them: they yield when idle, said in one line.
+    const nlohmann::json& placement = document.at("placement");
+    ASSERT_EQ(placement.at("machines").size(), 1U);
+    EXPECT_EQ(sharing_lines(result.err).size(), 1U) << result.err;
+    const std::size_t cpus = placement.at("machines").at(0).at("cpus").size();
+    if (static_cast<std::size_t>(count) > cpus) {
+      EXPECT_EQ(placement.at("remedy"), "yield_when_idle");
+      for (const auto& rank : placement.at("ranks")) EXPECT_EQ(rank.at("yields_when_idle"), true);
+    }
   }
 }
 

@@ -2,7 +2,8 @@
 
 Runs one kind's commands with the smallest settings that still write every shape of the file (delay: plain,
 --compare-pinning, --per-cpu, --find-period with and without an answer; run: plain and --scaling; verify: two
-masses and a chain; topology: this machine and a synthetic one), and checks each file as a writer's test does: strictly, so a key
+masses and a chain; topology: this machine and a synthetic one; mpi: two ranks, and two ranks that must share
+a CPU), and checks each file as a writer's test does: strictly, so a key
 a writer adds or misspells without its schema fails here (reports/lockstep_reports/schemas.py, strict=True).
 The reader checks the same schemas when it reads a file (reports/lockstep_reports/inputs.py, read_document).
 
@@ -43,13 +44,20 @@ SHAPES = {
     "falseshare": [("plain", ["falseshare", "--strides", "8,64", "--window", "5ms", "--repeats", "2"], [], {})],
     "migrate": [("plain", ["migrate", "--repeats", "5", "--bytes", "4096"], [], {})],
     "mpi": [("two ranks", ["mpi", "--ranks", "2", "--steps", "50", "--warmup", "5", "--rounds", "1",
-                           "--pingpong", "100"], [], {})],
+                           "--pingpong", "100"], [], {}),
+            # Both ranks given CPU 0 only: the placement's crowded machine and its remedy.
+            ("two ranks on one CPU", ["mpi", "--ranks", "2", "--steps", "50", "--warmup", "5", "--rounds", "1",
+                                      "--pingpong", "100"], [], {})],
     "verify": [("two masses", ["verify"], [], {}), ("chain", ["verify", "--masses", "3"], [], {})],
     "topology": [
         ("this machine", ["topology"], [], {}),
         ("synthetic", ["topology"], [], {"HWLOC_SYNTHETIC": "pack:2 l3:2 l2:1 core:2 pu:2"}),
     ],
 }
+
+
+# (kind, shape) -> the command lockstep runs under (taskset -c 0: the process may run on CPU 0 only).
+WRAPPERS = {("mpi", "two ranks on one CPU"): ["taskset", "-c", "0"]}
 
 
 def main() -> int:
@@ -64,7 +72,7 @@ def main() -> int:
         directory = options.keep or scratch
         for index, (shape, before, after, environment) in enumerate(SHAPES[options.kind]):
             out = os.path.join(directory, f"{options.kind}-{index}.json")
-            command = [options.lockstep] + before + ["--out", out] + after
+            command = WRAPPERS.get((options.kind, shape), []) + [options.lockstep] + before + ["--out", out] + after
             done = subprocess.run(command, env={**os.environ, **environment}, stdout=subprocess.DEVNULL,
                                   stderr=subprocess.PIPE, text=True, timeout=300)
             if done.returncode != 0:
