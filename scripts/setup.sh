@@ -18,6 +18,7 @@ build_packages=(
   libboost-dev libck-dev libeigen3-dev libcli11-dev nlohmann-json3-dev libfmt-dev
   python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2 python3-jsonschema
   openmpi-bin libopenmpi-dev
+  patchelf  # scripts/bundle.sh: the bundled Open MPI libraries find theirs beside them
 )
 test_packages=(rt-tests chromium libbenchmark-tools spin iproute2)
 

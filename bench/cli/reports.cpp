@@ -8,10 +8,11 @@
 // Why /usr/bin/python3 and not `python3` from PATH: a pyenv python3 may come
 // first on PATH and cannot import Debian's numpy, scipy and matplotlib.
 //
-// Where reports/ is: the source tree this binary was configured from
-// (build_info::kSourceDir), or the directory named by LOCKSTEP_REPORTS_DIR
-// when the binary runs away from its source tree (an installed copy, a test
-// that points at another checkout). LOCKSTEP_PYTHON overrides the interpreter.
+// Where reports/ is: the directory named by LOCKSTEP_REPORTS_DIR (a test that
+// points at another checkout); else share/lockstep/reports beside the binary's
+// bin/, where an installed copy or a bundle (scripts/bundle.sh) carries it;
+// else the source tree this binary was configured from
+// (build_info::kSourceDir). LOCKSTEP_PYTHON overrides the interpreter.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
@@ -21,6 +22,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -38,11 +40,22 @@ std::string environment_or(const char* name, const std::string& fallback) {
   return (value != nullptr && *value != '\0') ? std::string(value) : fallback;
 }
 
+// The reports/ directory, in the order the comment at the top gives.
+std::string reports_directory() {
+  if (const char* named = std::getenv("LOCKSTEP_REPORTS_DIR"); named != nullptr && *named != '\0') return named;
+  std::error_code error;
+  const std::filesystem::path binary = std::filesystem::read_symlink("/proc/self/exe", error);
+  if (!error) {
+    const std::filesystem::path installed = binary.parent_path().parent_path() / "share/lockstep/reports";
+    if (std::filesystem::exists(installed / kEntryScript, error)) return installed.string();
+  }
+  return std::string(build_info::kSourceDir) + "/reports";
+}
+
 // Replaces this process with `python3 reports/cli.py <tool> <arguments...>`.
 // Returns only by throwing: exec failed, or the entry point is missing.
 [[noreturn]] void exec_python_tool(const std::string& tool, const std::vector<std::string>& arguments) {
-  const std::string reports_dir =
-      environment_or("LOCKSTEP_REPORTS_DIR", std::string(build_info::kSourceDir) + "/reports");
+  const std::string reports_dir = reports_directory();
   const std::string python = environment_or("LOCKSTEP_PYTHON", kDefaultPython);
   const std::string script = reports_dir + "/" + kEntryScript;
 
@@ -52,8 +65,9 @@ std::string environment_or(const char* name, const std::string& fallback) {
                                   script, std::strerror(errno)));
   }
   if (::access(python.c_str(), X_OK) != 0) {
-    throw usage_error(fmt::format("cannot run {} ({}); `scripts/setup.sh` installs python3 with numpy, scipy "
-                                  "and matplotlib",
+    throw usage_error(fmt::format("cannot run {} ({}): compare and report need Python 3 with Debian's "
+                                  "python3-numpy python3-scipy python3-matplotlib python3-jinja2 python3-jsonschema "
+                                  "(LOCKSTEP_PYTHON names another interpreter); the measuring commands do not",
                                   python, std::strerror(errno)));
   }
 
