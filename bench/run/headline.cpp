@@ -10,6 +10,8 @@
 #include <tuple>
 #include <vector>
 
+#include "bench/probe_reports/falseshare_report.hpp"
+#include "bench/probes/falseshare.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/run/run_book.hpp"
 #include "platform/format.hpp"
@@ -31,10 +33,6 @@ std::string short_list(const std::vector<std::string>& names, std::size_t shown 
 // The terminal's width for the answer: headline_text wraps longer lines at
 // a word (a line in the result file and the report stays whole).
 constexpr std::size_t kLineWidth = 120;
-
-std::string ratio_text(const ratio_estimate& estimate, ratio_verdict verdict) {
-  return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {}", estimate.median, estimate.low, estimate.high, to_string(verdict));
-}
 
 // The verdict of a rival's step over the choice's, in words about the rival.
 std::string rival_verdict_words(ratio_verdict verdict) {
@@ -211,16 +209,63 @@ std::string answer_line(const headline_answer& answer) {
   return line + fmt::format(": the parallel step is {:.2f}x faster than the serial one (medians)", 1.0 / ratio);
 }
 
-void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& probes) {
-  if (probes.false_sharing) {
-    const false_sharing_probe& probe = *probes.false_sharing;
-    lines.push_back(fmt::format("False sharing: two writers {} B apart (one line) against {} B apart take {} a write "
-                                "(probe on CPUs {}, {} pairs)",
-                                probe.sharing_stride, probe.apart_stride, ratio_text(probe.estimate, probe.verdict),
-                                probe.cpus, probe.pairs));
-  } else {
-    lines.push_back("False sharing: probe unavailable (" + probes.false_sharing_unavailable + ")");
+// What false sharing costs here, per access pattern (the probe beside the
+// matrix, worded as lockstep falseshare words it: falseshare_answer_of), which
+// patterns the step's layouts exercise, and what the step's own groups showed.
+// Each line whole: headline_text wraps it for the terminal.
+void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& answers) {
+  std::vector<pattern_figure> figures;
+  std::vector<std::string> unmeasured;
+  std::size_t fewest_pairs = 0;
+  std::size_t most_pairs = 0;
+  for (std::size_t index = 0; index < probes::all_access_patterns.size(); ++index) {
+    const auto probe = std::find_if(answers.false_sharing.begin(), answers.false_sharing.end(), [&](const auto& measured) {
+      return probes::find_access_pattern(measured.pattern) == index;
+    });
+    if (probe == answers.false_sharing.end()) {
+      unmeasured.emplace_back(probes::all_access_patterns[index].words);
+      continue;
+    }
+    figures.push_back({index, probe->estimate, probe->verdict});
+    fewest_pairs = figures.size() == 1 ? probe->pairs : std::min(fewest_pairs, probe->pairs);
+    most_pairs = std::max(most_pairs, probe->pairs);
   }
+  if (figures.empty()) {
+    lines.push_back(fmt::format("False sharing: probe unavailable ({})", answers.false_sharing_unavailable.empty()
+                                                                            ? std::string("no pattern was paired")
+                                                                            : answers.false_sharing_unavailable));
+  } else {
+    const false_sharing_probe& first = answers.false_sharing.front();
+    const std::string pairs = fewest_pairs == most_pairs ? fmt::format("{} pairs", most_pairs)
+                                                         : fmt::format("{}-{} pairs", fewest_pairs, most_pairs);
+    lines.push_back(fmt::format("False sharing, one line against apart (words {} B against {} B apart, per access; "
+                                "CPUs {}{}, {}):",
+                                first.sharing_stride, first.apart_stride, first.cpus,
+                                answers.false_sharing_relation.empty()
+                                    ? std::string()
+                                    : fmt::format(", {}", answers.false_sharing_relation),
+                                pairs));
+    const falseshare_answer answer =
+        falseshare_answer_of(figures, {first.cpus, answers.false_sharing_relation, book.c2c_one_way_ns()});
+    std::string line = "  ";
+    for (std::size_t index = 0; index < answer.figures.size(); ++index)
+      line.append(answer.figures[index]).append(index + 1 == answer.figures.size() ? ": " : ", ");
+    line += answer.conclusion;
+    if (!unmeasured.empty()) {
+      line += "; not measured: ";
+      for (std::size_t index = 0; index < unmeasured.size(); ++index)
+        line.append(index == 0 ? "" : index + 1 == unmeasured.size() ? " and " : ", ").append(unmeasured[index]);
+    }
+    lines.push_back(std::move(line));
+  }
+  // Which patterns the step's layouts exercise: the probe's table says
+  // (kInStepLayouts, proved against the layouts in bench/probes/falseshare.cpp).
+  std::string in_step;
+  for (const auto& info : probes::all_access_patterns)
+    if (info.in_step_layouts) in_step.append(in_step.empty() ? "" : " and ").append(info.words);
+  lines.push_back(fmt::format("  the step's layouts exercise {}: owners store plain doubles that the others read after "
+                              "the sync (the syncs' atomics sit on lines of their own, which no layout moves)",
+                              in_step));
   std::size_t compared = 0;
   std::vector<std::pair<double, std::string>> penalties;
   for (const paired_result& pair : book.pairs) {
@@ -433,13 +478,25 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"runner_up", rival_json(choice.runner_up)},
                                {"baseline", rival_json(choice.baseline)}});
   }
+  // Per pattern; and, as files before the patterns had it, the one pattern
+  // the probe measured then (kOlderFilesFigure: plain stores).
   nlohmann::json false_sharing = nullptr;
-  if (const auto& probe = headline.probes.false_sharing) {
-    false_sharing = estimate_json(probe->estimate, probe->verdict);
-    false_sharing["cpus"] = probe->cpus;
-    false_sharing["sharing_stride_bytes"] = probe->sharing_stride;
-    false_sharing["apart_stride_bytes"] = probe->apart_stride;
-    false_sharing["pairs"] = probe->pairs;
+  nlohmann::json false_sharing_patterns = nlohmann::json::array();
+  for (const false_sharing_probe& probe : headline.probes.false_sharing) {
+    nlohmann::json figure = estimate_json(probe.estimate, probe.verdict);
+    figure["cpus"] = probe.cpus;
+    figure["sharing_stride_bytes"] = probe.sharing_stride;
+    figure["apart_stride_bytes"] = probe.apart_stride;
+    figure["pairs"] = probe.pairs;
+    const auto pattern = probes::find_access_pattern(probe.pattern);
+    if (pattern && probes::all_access_patterns[*pattern].older_files_figure) false_sharing = figure;
+    figure["pattern"] = probe.pattern;
+    if (pattern) {
+      figure["words"] = probes::all_access_patterns[*pattern].words;
+      figure["in_step_layouts"] = probes::all_access_patterns[*pattern].in_step_layouts;
+    }
+    figure["cpus_relation"] = headline.probes.false_sharing_relation;
+    false_sharing_patterns.push_back(std::move(figure));
   }
   nlohmann::json migration = nullptr;
   if (const auto& probe = headline.probes.migration) {
@@ -473,6 +530,7 @@ nlohmann::json headline_json(const run_headline& headline) {
           {"recommendations", recommendations},
           {"collapsed", headline.collapsed},
           {"false_sharing_probe", false_sharing},
+          {"false_sharing_patterns", false_sharing_patterns},
           {"false_sharing_probe_unavailable", headline.probes.false_sharing_unavailable},
           {"migration_probe", migration},
           {"migration_probe_unavailable", headline.probes.migration_unavailable}};

@@ -14,9 +14,10 @@
 //     runner-up and std::barrier against it, as paired ratios with their
 //     intervals and verdicts (the paper's question: what synchronisation
 //     costs here);
-//   * what false sharing costs: the known-answer probe (two writers on one
-//     line against two lines apart, lockstep falseshare's measurement, short)
-//     and how many primitives showed a penalty in the step;
+//   * what false sharing costs: the known-answer probe per access pattern
+//     (two threads' words on one line against 128 bytes apart, lockstep
+//     falseshare's measurement, short), which patterns the step's layouts
+//     exercise, and how many of the step's groups showed a penalty;
 //   * what migration costs: the migrate probe's forced move and refill, and
 //     how often the unpinned entries actually migrated; never a ratio of two
 //     entries neither of which migrated;
@@ -91,13 +92,15 @@ struct headline_choice {
   std::optional<headline_rival> baseline;  // kBaselinePrimitive against the choice
 };
 
-// The known answers measured beside the matrix (matrix_run.cpp, briefly):
+// The known answers measured beside the matrix (known_answers.cpp, briefly):
 // the figures a user checks the step's own ratios against.
+// One access pattern's false sharing (bench/probes/falseshare.hpp).
 struct false_sharing_probe {
+  std::string pattern;              // its name in probes::all_access_patterns
   std::string cpus;                 // "0,1"
-  std::size_t sharing_stride = 0;   // bytes between the two writers' counters
+  std::size_t sharing_stride = 0;   // bytes between the two threads' words
   std::size_t apart_stride = 0;
-  ratio_estimate estimate;          // ns per write, sharing / apart, paired per repeat
+  ratio_estimate estimate;          // ns per access, sharing / apart, paired per repeat
   ratio_verdict verdict = ratio_verdict::unsure;
   std::size_t pairs = 0;
 };
@@ -108,8 +111,11 @@ struct migration_probe {
   platform::distribution refill;    // first pass after the move minus the next
 };
 struct known_answers {
-  std::optional<false_sharing_probe> false_sharing;
-  std::string false_sharing_unavailable;  // why not, when absent
+  // Per access pattern measured, in the probe's table order (a pattern whose
+  // penalty could not be paired is absent).
+  std::vector<false_sharing_probe> false_sharing;
+  std::string false_sharing_relation;     // hwloc's word for the probe's two CPUs ("shared L3"); empty: unknown
+  std::string false_sharing_unavailable;  // why not, when none
   std::optional<migration_probe> migration;
   std::string migration_unavailable;
 };

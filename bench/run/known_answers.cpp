@@ -14,10 +14,11 @@
 
 namespace lockstep::bench {
 
-// falseshare's two strides (one line, 8 bytes apart, against 128 bytes apart:
-// no shared line nor shared prefetch pair) on the pinned pair, and migrate's
-// forced moves between those two CPUs. Blocks of 20 ms (10 ms quick) over 7
-// repeats (5 quick) cost about 0.3 s; 60 moves (30 quick) a few ms.
+// falseshare's patterns at its two strides (one line, 8 bytes apart, against
+// 128 bytes apart: no shared line nor shared prefetch pair) on the pinned
+// pair, and migrate's forced moves between those two CPUs. Four patterns x
+// two strides of 4 ms (3 ms quick) over 9 repeats (7 quick) cost about 0.3 s
+// (0.17 s); 60 moves (30 quick) a few ms.
 known_answers measure_known_answers(const platform::topology& machine, bool quick) {
   known_answers answers;
   const platform::placement_plan pair = platform::plan_placement(machine, platform::placement::compact, 2);
@@ -31,20 +32,22 @@ known_answers measure_known_answers(const platform::topology& machine, bool quic
   try {
     probes::falseshare_settings settings;
     settings.cpus = {static_cast<int>(first), static_cast<int>(second)};
-    settings.strides = {8, platform::kPrefetchPair};
-    settings.window_ns = quick ? 10'000'000 : 20'000'000;
-    settings.repeats = quick ? 5 : 7;
+    settings.patterns = probes::plan_patterns({8, platform::kPrefetchPair});
+    settings.window_ns = quick ? 3'000'000 : 4'000'000;
+    settings.repeats = quick ? 7 : 9;
     const falseshare_analysis analysis = analyse_falseshare(probes::measure_false_sharing(settings));
-    if (analysis.penalty) {
-      answers.false_sharing = false_sharing_probe{fmt::format("{},{}", first, second),
-                                                  analysis.penalty->sharing_stride_bytes,
-                                                  analysis.penalty->apart_stride_bytes,
-                                                  analysis.penalty->estimate,
-                                                  analysis.penalty->verdict,
-                                                  analysis.penalty->ratios.size()};
-    } else {
-      answers.false_sharing_unavailable = "no repeat scheduled both writers";
+    answers.false_sharing_relation = cpus_relation(machine, settings.cpus);
+    for (const pattern_analysis& pattern : analysis.patterns) {
+      if (!pattern.penalty) continue;
+      answers.false_sharing.push_back(false_sharing_probe{std::string(probes::all_access_patterns[pattern.pattern].name),
+                                                          fmt::format("{},{}", first, second),
+                                                          pattern.penalty->sharing_stride_bytes,
+                                                          pattern.penalty->apart_stride_bytes,
+                                                          pattern.penalty->estimate,
+                                                          pattern.penalty->verdict,
+                                                          pattern.penalty->ratios.size()});
     }
+    if (answers.false_sharing.empty()) answers.false_sharing_unavailable = "no repeat scheduled both threads";
   } catch (const std::exception& error) {
     answers.false_sharing_unavailable = error.what();
   }

@@ -69,7 +69,7 @@ std::string plan_of(const platform::topology& machine, const run_selection& sele
     seen.push_back(model.masses);
     std::string at;
     for (const unsigned other : selection.threads)
-      if (kernels::model_for(other, selection.masses) == model) at += (at.empty() ? "" : ",") + std::to_string(other);
+      if (kernels::model_for(other, selection.masses) == model) at += fmt::format("{}{}", at.empty() ? "" : ",", other);
     models += fmt::format("{}{} at threads {}", models.empty() ? "" : "; ", model.description(), at);
   }
   std::string kinds;
@@ -215,7 +215,7 @@ void add_run_context(const matrix_request& request, const prepared_matrix& run) 
   // happen inside a library, out of sight (sync/registry.hpp: counts_futex_waits).
   std::string hidden;
   for (const auto& info : sync::all_primitive_info)
-    if (!info.counts_futex_waits) hidden += (hidden.empty() ? "" : ",") + std::string(info.name);
+    if (!info.counts_futex_waits) hidden += fmt::format("{}{}", hidden.empty() ? "" : ",", info.name);
   benchmark::AddCustomContext("futex_waits_unavailable", hidden.empty() ? "none" : hidden);
   benchmark::AddCustomContext("lockstep_order", request.interleave
                                                     ? "random interleaving (the default): the repetitions of every "

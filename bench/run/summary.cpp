@@ -388,7 +388,8 @@ std::string render_summary(const run_book& book, const std::string& result_path,
   if (!verbose) {
     if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
     short_ranking(out, book, kShortRankingPerGroup);
-    out += "\n" + headline_text(book.headline);
+    out += '\n';
+    out += headline_text(book.headline);
     return out;
   }
   step_ranking(out, book);
@@ -398,7 +399,8 @@ std::string render_summary(const run_book& book, const std::string& result_path,
   if (book.scaling) out += render_scaling(scaling_of(book));
   per_mode_medians(out, book);
   left_out_lines(out, book, skipped);
-  out += "\n" + headline_text(book.headline);
+  out += '\n';
+  out += headline_text(book.headline);
   return out;
 }
 

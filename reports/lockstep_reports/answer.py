@@ -222,10 +222,14 @@ GLOSSARY = (
                                                    "below it, within noise inside it, unsure across its edge. "
                                                    "Tied: the pair cannot tell the two apart (within noise or "
                                                    "unsure), so both are named."),
-    ("a write (false sharing)", "the false-sharing probe: the time of one write with the two writers' words on "
-                                "one cache line over its time with them apart (the distances are in the line). "
-                                "Penalty: sharing the line made a write slower; gain: faster, so this probe's "
-                                "writes showed no false sharing on this machine."),
+    ("one line against apart (false sharing)", "the false-sharing probe: the time of one access with the two "
+                                               "threads' words on one cache line over its time with them apart "
+                                               "(the distances are in the line), per access pattern: plain "
+                                               "stores, atomic read-modify-writes, seq_cst stores, a writer beside "
+                                               "a reader (files written before the patterns measured plain stores "
+                                               "only: \"a write\"). Penalty: sharing the line made that access "
+                                               "slower; gain or within noise: this machine hid false sharing for "
+                                               "that pattern."),
     ("collapsed", "an entry that ran with more threads than CPUs at 100 times the best of its kind or more: left "
                   "out of the rankings, ratios and colour scales."),
 )

@@ -5,9 +5,10 @@ false sharing per access pattern, and the crossover (the model size from which a
 
 Read leniently (a key not named here is ignored) but checked: what is read must hold what it says, else one line
 naming its JSON path, as the headline's other parts (run_reader.py). A file without a part reads without it:
-`lockstep_headline.false_sharing_patterns` (false sharing per access pattern) and the top-level
-`lockstep_crossover` are written by later lockstep revisions than the files in tests/fixtures; their shapes are
-the ones below and in reports/README.md ("compare", across machines).
+`lockstep_headline.false_sharing_patterns` (false sharing per access pattern) is written by `lockstep run` since
+the probe measures each pattern (headline_json in bench/run/headline.cpp; tests/fixtures/run/quick-pairs.headline.json
+is its output), the top-level `lockstep_crossover` by a later revision than the files in tests/fixtures; their
+shapes are the ones below and in reports/README.md ("compare", across machines).
 """
 from __future__ import annotations
 
@@ -19,7 +20,10 @@ from .checks import fail
 from .schemas import json_kind, shown
 
 HEADLINE = fields.HEADLINE_KEY
-PATTERNS_KEY = "false_sharing_patterns"  # in lockstep_headline: [{pattern, median, ci_low, ci_high, verdict}]
+# In lockstep_headline: [{pattern, median, ci_low, ci_high, verdict}, with `words`, the pattern as the headline
+# names it ("atomic read-modify-writes"), where lockstep run wrote them].
+PATTERNS_KEY = "false_sharing_patterns"
+PATTERN_WORDS = "words"
 CROSSOVER_KEY = "lockstep_crossover"  # top level: {crossovers: [{threads, sync, masses, ci_low, ci_high, pin}]}
 
 
@@ -27,8 +31,9 @@ CROSSOVER_KEY = "lockstep_crossover"  # top level: {crossovers: [{threads, sync,
 class PairedRatio:
     """A ratio measured as a pair, with its interval and verdict (fields.PAIR_VERDICTS' words as the file wrote
     them): a recommendation's baseline (its step over the chosen one's; `name` the baseline's primitive), a
-    false-sharing probe or pattern (a write's time on one shared line over its time on lines apart; `name` the
-    pattern). median None: the file says it could not be measured."""
+    false-sharing probe or pattern (an access's time on one shared line over its time on lines apart; `name` the
+    pattern, in the headline's words where the file has them). median None: the file says it could not be
+    measured."""
 
     name: str
     median: float | None
@@ -125,6 +130,14 @@ def _paired(path: str, place: tuple, block, name_key: str, nullable: bool = Fals
     return PairedRatio(name, median, low, high, verdict)
 
 
+def _pattern(path: str, place: tuple, block) -> PairedRatio:
+    """One access pattern's false sharing, named by its words where the file has them ("plain stores"), else by
+    its `pattern`."""
+    ratio = _paired(path, place, block, "pattern")  # a pattern that could not be paired is left out, never null
+    words = _text(path, place, block, PATTERN_WORDS, required=False)
+    return PairedRatio(words, ratio.median, ratio.ci_low, ratio.ci_high, ratio.verdict) if words else ratio
+
+
 def _reason(path: str, block: dict, key: str) -> str | None:
     """Why a probe was unavailable (its *_unavailable text), None when the file gives no reason."""
     value = block.get(key)
@@ -190,7 +203,7 @@ def read_answer(path: str, document: dict) -> RunAnswer | None:
     block = _object(path, (HEADLINE,), document[HEADLINE])
     baselines, oversubscribed = _recommendation_parts(path, block)
     probe = block.get("false_sharing_probe")
-    patterns = tuple(_paired(path, (HEADLINE, PATTERNS_KEY, index), raw, "pattern", nullable=True)
+    patterns = tuple(_pattern(path, (HEADLINE, PATTERNS_KEY, index), raw)
                      for index, raw in enumerate(_list(path, (HEADLINE, PATTERNS_KEY),
                                                        block.get(PATTERNS_KEY, []))))
     return RunAnswer(baselines, oversubscribed,

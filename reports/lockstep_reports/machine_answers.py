@@ -26,7 +26,7 @@ ABSENT = "-"
 # What the machines' differences show beside the CPU model (which the answers' first row shows).
 MACHINE_DETAIL = tuple(key for key in MACHINE_KEYS if key != "cpu_model") + ("mhz_per_cpu",)
 # A paired verdict (statistics.VERDICTS) in the words of each ratio: the baseline's step over the recommended
-# one's, and a write's time on one shared cache line over its time on lines apart.
+# one's, and an access's time on one shared cache line over its time on lines apart.
 BASELINE_WORDS = {statistics.GAIN: "faster", statistics.WITHIN_NOISE: "a tie", statistics.UNSURE: "unsure"}
 FALSE_SHARING_WORDS = {statistics.GAIN: "one line faster",
                        statistics.WITHIN_NOISE: "no penalty", statistics.UNSURE: "unsure"}
@@ -185,7 +185,7 @@ def _legend(rows: list[list[str]]) -> list[str]:
     if "crossover" in labels:
         parts.append("crossover: the model size from which the parallel step beats the serial one")
     if "false sharing" in labels:
-        parts.append("false sharing: a write's time on one shared cache line over lines apart")
+        parts.append("false sharing: an access's time on one shared cache line over lines apart")
     if "migration" in labels:
         parts.append("migration: medians of a forced move between CPUs and of the cache refill after it")
     if any(ABSENT in row[1:] for row in rows):

@@ -8,6 +8,7 @@ import unittest
 
 from support import REPORTS_DIR, Scratch, fixture, logical_line, run_tool
 
+from lockstep_reports.answer_reader import read_answer
 from lockstep_reports.compare import compare_pair
 from lockstep_reports.inputs import load_run_file
 from lockstep_reports.text_layout import WIDTH, table
@@ -18,6 +19,8 @@ XEON = fixture("xeon_default_run_trimmed.json")
 AMD_DEBUG_QUICK = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.json")
 AMD_QUICK = fixture("run_quick_split.json")
 AMD_DEFAULT = fixture("amd_default_run_trimmed.json")
+# lockstep run's headline of that quick run, as the harness writes it today (tests/run/run_fixture_test.cpp).
+LOCKSTEP_HEADLINE = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.headline.json")
 # How many lines "about 40" may take.
 ABOUT_40 = 50
 
@@ -200,9 +203,11 @@ class TheAnswersParts(Scratch):
     """What the answer shows of fields later lockstep revisions write: false sharing per access pattern
     (lockstep_headline.false_sharing_patterns) and the crossover (lockstep_crossover); silent without them."""
 
+    # As lockstep run writes them (docs/schemas/run.schema.json), but for the words, which a file may leave out.
+    WHERE = {"cpus": "0,1", "sharing_stride_bytes": 8, "apart_stride_bytes": 128, "pairs": 9}
     PATTERNS = [{"pattern": "relaxed load + store", "median": 0.93, "ci_low": 0.80, "ci_high": 1.05,
-                 "verdict": "within noise", "sharing_stride_bytes": 8},
-                {"pattern": "fetch_add", "median": 4.6, "ci_low": 4.1, "ci_high": 4.8, "verdict": "penalty"}]
+                 "verdict": "within noise", **WHERE},
+                {"pattern": "fetch_add", "median": 4.6, "ci_low": 4.1, "ci_high": 4.8, "verdict": "penalty", **WHERE}]
     CROSSOVERS = {"crossovers": [{"threads": 2, "pin": "compact", "sync": "mailbox", "masses": 2048, "ci_low": 1500,
                                   "ci_high": 3000},
                                  {"threads": 2, "pin": "compact", "sync": "std_barrier", "masses": None}]}
@@ -230,9 +235,26 @@ class TheAnswersParts(Scratch):
         self.assertEqual(cell, "mailbox from 2048 masses [1500, 3000]; std_barrier: none within the sweep")
         self.assertNotIn("crossover", compared(XEON, AMD_DEBUG_QUICK))  # absent from both: not a word
 
+    def test_the_patterns_lockstep_run_writes_are_read_as_written(self):
+        """The writer and the reader agree: lockstep run's own headline (headline_json in bench/run/headline.cpp,
+        whose output tests/run/run_fixture_test.cpp pins as tests/fixtures/run/quick-pairs.headline.json) read
+        through answer_reader gives each pattern's figures as the file holds them, named by the headline's words,
+        and compare shows them."""
+        with open(LOCKSTEP_HEADLINE, encoding="utf-8") as stream:
+            written = json.load(stream)
+        self.assertTrue(written["false_sharing_patterns"])
+        answer = read_answer(LOCKSTEP_HEADLINE, {"lockstep_headline": written})
+        self.assertEqual([(p.name, p.median, p.ci_low, p.ci_high, p.verdict) for p in answer.patterns],
+                         [(w["words"], w["median"], w["ci_low"], w["ci_high"], w["verdict"])
+                          for w in written["false_sharing_patterns"]])
+        out = compared(self.with_parts(written["false_sharing_patterns"]), AMD_DEBUG_QUICK)
+        for pattern in answer.patterns:
+            row = out.splitlines()[line_index(out, f"  {pattern.name}")]
+            self.assertIn(f"{pattern.median:#.3g}x [{pattern.ci_low:#.3g}, {pattern.ci_high:#.3g}]", row)
+
     def test_a_malformed_part_is_one_line_naming_its_place(self):
         bad = [(dict(self.PATTERNS[0], median="4x"), None, "lockstep_headline.false_sharing_patterns[0].median"),
-               ([{"median": 2.0, "ci_low": 1.0, "ci_high": 3.0, "verdict": "penalty"}], None,
+               ([{"median": 2.0, "ci_low": 1.0, "ci_high": 3.0, "verdict": "penalty", **self.WHERE}], None,
                 "lockstep_headline.false_sharing_patterns[0].pattern"),
                (None, {"crossovers": [{"threads": 0, "sync": "mailbox", "masses": 8}]},
                 "lockstep_crossover.crossovers[0].threads"),

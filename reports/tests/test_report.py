@@ -735,8 +735,8 @@ class AnswerBox(Pages):
         html, markdown = self.pages(XEON)
         section, box = answer_boxes(html, markdown)
         words = box.split("Words used above:")[1]
-        for word in ("**pace**", "Over 2 paces", "**c2c transfers a stage**", "**a write (false sharing)**",
-                     "**Nx [low, high]**", "tied"):
+        for word in ("**pace**", "Over 2 paces", "**c2c transfers a stage**", "**one line against apart (false sharing)**",
+                     "measured plain stores only", "**Nx [low, high]**", "tied"):
             self.assertIn(word, words)
         self.assertIn('<dl class="glossary">', section)
         self.assertLess(box.index("gain a write"), box.index("Words used above:"))

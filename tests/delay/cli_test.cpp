@@ -116,16 +116,37 @@ TEST(FalseshareCommand, WritesParseableJson) {
   const auto result = run_command(
       {LOCKSTEP_BINARY, "falseshare", "--window", "2ms", "--repeats", "1", "--strides", "8,64,128", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
-  EXPECT_NE(result.out.find("time per write"), std::string::npos);
+  EXPECT_NE(result.out.find("ns per access by stride"), std::string::npos) << result.out;
+  // The text ends with the answer, one line, which the file holds too.
+  const std::string last_line = result.out.substr(result.out.rfind('\n', result.out.size() - 2) + 1);
+  EXPECT_EQ(last_line.rfind("answer: ", 0), 0u) << result.out;
   const auto document = read_json(path);
   EXPECT_EQ(document["kind"], "falseshare");
-  ASSERT_EQ(document["strides"].size(), 3u);
-  EXPECT_EQ(document["strides"][0]["stride_bytes"], 8);
-  EXPECT_EQ(document["strides"][0]["share_line"], true);
-  EXPECT_EQ(document["strides"][1]["share_line"], false);
-  EXPECT_EQ(document["strides"][1]["share_line_pair"], true);
-  EXPECT_EQ(document["strides"][2]["share_line_pair"], false);
-  for (const auto& stride : document["strides"]) EXPECT_TRUE(stride["ns_per_write"].contains("p50"));
+  EXPECT_EQ(document["answer"].get<std::string>() + "\n", last_line);
+  // Every pattern: plain stores swept over the three strides, the others at
+  // the penalty's two (8 shares a line, 128 nothing), each with its penalty.
+  ASSERT_EQ(document["patterns"].size(), 4u);
+  const auto& plain = document["patterns"][0];
+  EXPECT_EQ(plain["pattern"], "plain_store");
+  ASSERT_EQ(plain["strides"].size(), 3u);
+  EXPECT_EQ(plain["strides"][0]["stride_bytes"], 8);
+  EXPECT_EQ(plain["strides"][0]["share_line"], true);
+  EXPECT_EQ(plain["strides"][1]["share_line"], false);
+  EXPECT_EQ(plain["strides"][1]["share_line_pair"], true);
+  EXPECT_EQ(plain["strides"][2]["share_line_pair"], false);
+  for (std::size_t index = 0; index < document["patterns"].size(); ++index) {
+    const auto& pattern = document["patterns"][index];
+    SCOPED_TRACE(pattern["pattern"].get<std::string>());
+    for (const auto& stride : pattern["strides"]) EXPECT_TRUE(stride["ns_per_access"].contains("p50"));
+    if (index > 0) {
+      ASSERT_EQ(pattern["strides"].size(), 2u);
+      EXPECT_EQ(pattern["strides"][0]["stride_bytes"], 8);
+      EXPECT_EQ(pattern["strides"][1]["stride_bytes"], 128);
+    }
+    ASSERT_TRUE(pattern.contains("penalty"));
+    EXPECT_EQ(pattern["penalty"]["a_stride_bytes"], 8);
+    EXPECT_EQ(pattern["penalty"]["b_stride_bytes"], 128);
+  }
 }
 
 TEST(MigrateCommand, BadInputExitsTwoWithOneLine) {

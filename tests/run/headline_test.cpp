@@ -10,6 +10,7 @@
 #include <map>
 #include <set>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -247,6 +248,156 @@ TEST(Headline, StaysWithinItsLinesForAManyThreadMatrix) {
   EXPECT_EQ(headline.lines.size(), bench::kHeadlineLines);
   EXPECT_NE(bench::headline_text(headline).find("more lines of choices"), std::string::npos);
   EXPECT_EQ(headline.choices.size(), 64u);
+}
+
+// The known answers of a run whose probe measured each access pattern:
+// `figures` holds (pattern name, median, low, high) in any order.
+bench::known_answers false_sharing_answers(const std::vector<std::tuple<std::string, double, double, double>>& figures,
+                                           const std::string& relation = "shared L3") {
+  bench::known_answers answers;
+  answers.false_sharing_relation = relation;
+  for (const auto& [pattern, median, low, high] : figures) {
+    const bench::ratio_estimate estimate{median, low, high};
+    answers.false_sharing.push_back({pattern, "0,1", 8, 128, estimate, bench::verdict_of(estimate), 9});
+  }
+  return answers;
+}
+
+// A book with one false-sharing pair: packed against padded64 for one primitive.
+bench::run_book false_sharing_book(double packed_over_padded) {
+  bench::run_book book;
+  add_step(book, "futex_spin", "packed", "compact", 2, 1000.0 * packed_over_padded);
+  add_step(book, "futex_spin", "padded64", "compact", 2, 1000.0);
+  measure(book, [&](const std::string& a, const std::string&) {
+    return a.find("packed") != std::string::npos ? packed_over_padded : 1.0 / packed_over_padded;
+  });
+  return book;
+}
+
+std::vector<std::string> lines_from(const std::string& first_words, const bench::run_headline& headline) {
+  std::vector<std::string> lines;
+  bool in = false;
+  for (const auto& line : headline.lines) {
+    if (line.rfind(first_words, 0) == 0) in = true;
+    else if (in && line.rfind("  ", 0) != 0) break;
+    if (in) lines.push_back(line);
+  }
+  return lines;
+}
+
+// The lines as one text, each without its indent, joined by spaces (a
+// fact's lines continue one another).
+std::string as_text(const std::vector<std::string>& lines) {
+  std::string text;
+  for (const auto& line : lines) {
+    if (!text.empty()) text += ' ';
+    text += line.substr(line.find_first_not_of(' '));
+  }
+  return text;
+}
+
+TEST(Headline, StatesFalseSharingPerPatternAndWhichTheStepsLayoutsExercise) {
+  const bench::run_book book = false_sharing_book(1.0);
+  const bench::run_headline headline = bench::make_headline(
+      book,
+      false_sharing_answers({{"plain_store", 1.01, 0.97, 1.04},
+                             {"atomic_rmw", 4.61, 4.12, 4.90},
+                             {"seq_cst_store", 4.43, 4.10, 4.71},
+                             {"writer_beside_reader", 1.02, 0.98, 1.04}}),
+      2, "results/x.json");
+  const std::vector<std::string> lines = lines_from("False sharing", headline);
+  std::string joined;
+  for (const auto& line : lines) {
+    EXPECT_FALSE(line.ends_with("...")) << line;
+    joined += line + "\n";
+  }
+  // The terminal wraps each line within its width, never inside an
+  // interval; its pieces, put back together, are the line.
+  std::string terminal;
+  for (const auto& line : lines) {
+    const std::string text = bench::wrapped(line, 120);
+    std::string rejoined;
+    for (std::size_t start = 0; start < text.size();) {
+      const std::size_t end = text.find('\n', start);
+      EXPECT_LE(end - start, 120u) << text.substr(start, end - start);
+      // A continuation's indent is the wrap's, not the line's.
+      const std::size_t words = rejoined.empty() ? start : text.find_first_not_of(' ', start);
+      if (!rejoined.empty()) rejoined += ' ';
+      rejoined.append(text, words, end - words);
+      start = end + 1;
+    }
+    EXPECT_EQ(rejoined, line);
+    terminal += text;
+  }
+  // Each figure whole on one line of the file, the paying ones first; on the
+  // terminal each interval whole on one line.
+  const std::vector<std::string> in_order{"atomic read-modify-writes 4.61x [4.12, 4.90] penalty",
+                                          "seq_cst stores 4.43x [4.10, 4.71] penalty",
+                                          "plain stores 1.01x [0.97, 1.04] within noise",
+                                          "a writer beside a reader 1.02x [0.98, 1.04] within noise"};
+  std::size_t previous = 0;
+  for (const auto& figure : in_order) {
+    const std::size_t at = joined.find(figure);
+    ASSERT_NE(at, std::string::npos) << figure << "\n" << joined;
+    const std::string interval = figure.substr(figure.find('['), figure.find(']') - figure.find('[') + 1);
+    EXPECT_NE(terminal.find(interval), std::string::npos) << interval << "\n" << terminal;
+    EXPECT_GE(at, previous) << figure;
+    previous = at;
+  }
+  const std::string text = as_text(lines);
+  EXPECT_NE(text.find("this core hides it for plain stores and a writer beside a reader"), std::string::npos) << text;
+  EXPECT_NE(text.find("the step's layouts exercise plain stores and a writer beside a reader"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("in the step: 0 of 1 primitive/placement/thread groups showed a penalty"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("(words 8 B against 128 B apart, per access; CPUs 0,1, shared L3, 9 pairs):"), std::string::npos) << text;
+  // The file: every pattern, and the plain stores' figure where older files had the only one.
+  const nlohmann::json json = bench::headline_json(headline);
+  ASSERT_EQ(json["false_sharing_patterns"].size(), 4u);
+  EXPECT_EQ(json["false_sharing_probe"]["median"], 1.01);
+  EXPECT_EQ(json["false_sharing_probe"]["verdict"], "within noise");
+  EXPECT_EQ(json["false_sharing_patterns"][1]["pattern"], "atomic_rmw");
+  EXPECT_EQ(json["false_sharing_patterns"][1]["verdict"], "penalty");
+  EXPECT_EQ(json["false_sharing_patterns"][1]["words"], "atomic read-modify-writes");
+  EXPECT_EQ(json["false_sharing_patterns"][1]["in_step_layouts"], false);
+  EXPECT_EQ(json["false_sharing_patterns"][1]["cpus_relation"], "shared L3");
+}
+
+TEST(Headline, WhenNoPatternPaysItSaysWhatThatMeansWithTheEvidence) {
+  bench::run_book book = false_sharing_book(1.0);
+  const bench::run_headline headline = bench::make_headline(
+      book,
+      false_sharing_answers({{"plain_store", 1.0, 0.98, 1.02},
+                             {"atomic_rmw", 1.01, 0.99, 1.03},
+                             {"seq_cst_store", 0.99, 0.97, 1.02},
+                             {"writer_beside_reader", 1.0, 0.97, 1.03}}),
+      2, "results/x.json");
+  const std::string text = as_text(lines_from("False sharing", headline));
+  EXPECT_NE(text.find("no pattern pays: the two CPUs act as if they shared one core's cache"), std::string::npos)
+      << text;
+  EXPECT_NE(text.find("hwloc calls CPUs 0,1 shared L3"), std::string::npos) << text;
+}
+
+TEST(Headline, NamesThePatternsAFileDidNotMeasure) {
+  // A file from before the patterns: the plain stores' figure only.
+  const bench::run_headline headline = bench::make_headline(
+      false_sharing_book(1.0), false_sharing_answers({{"plain_store", 3.24, 1.25, 3.61}}, ""), 2, "results/x.json");
+  const std::string text = as_text(lines_from("False sharing", headline));
+  EXPECT_NE(text.find("plain stores 3.24x [1.25, 3.61] penalty: every pattern measured pays; not measured: atomic "
+                      "read-modify-writes, seq_cst stores and a writer beside a reader"),
+            std::string::npos)
+      << text;
+}
+
+TEST(Headline, SaysWhyFalseSharingWasNotMeasured) {
+  bench::known_answers answers;
+  answers.false_sharing_unavailable = "fewer than two CPUs to pin two threads on";
+  const bench::run_headline headline = bench::make_headline(false_sharing_book(1.0), answers, 2, "results/x.json");
+  EXPECT_NE(bench::headline_text(headline).find(
+                "False sharing: probe unavailable (fewer than two CPUs to pin two threads on)"),
+            std::string::npos);
+  EXPECT_TRUE(bench::headline_json(headline)["false_sharing_probe"].is_null());
+  EXPECT_TRUE(bench::headline_json(headline)["false_sharing_patterns"].empty());
 }
 
 }  // namespace

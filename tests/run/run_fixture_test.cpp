@@ -28,6 +28,7 @@
 #include <tuple>
 #include <vector>
 
+#include "bench/probes/falseshare.hpp"
 #include "bench/run/headline.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/results/paired_ratio.hpp"
@@ -233,7 +234,12 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
         figure(inverted.median, inverted.low, inverted.high, bench::to_string(bench::inverse(result.verdict))));
   }
   const auto& headline = fixture().at("lockstep_headline");
-  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+  // The probe's figures: the plain stores' (false_sharing_probe) and, in
+  // files that have them, every pattern's.
+  std::vector<nlohmann::json> probe_figures;
+  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) probe_figures.push_back(probe);
+  for (const auto& probe : headline.value("false_sharing_patterns", nlohmann::json::array())) probe_figures.push_back(probe);
+  for (const auto& probe : probe_figures) {
     const double low = probe.at("ci_low").get<double>();
     const double high = probe.at("ci_high").get<double>();
     EXPECT_EQ(platform::to_string(platform::verdict_of(low, high, bench::kDefaultNoise)),
@@ -253,21 +259,35 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
   EXPECT_GT(found, 0u);
 }
 
-// The probes of the file's headline, as the run measured them.
+// The probes of the file's headline, as the run measured them: every access
+// pattern's false sharing where the file has them, else (a file from before
+// the patterns) the plain stores' figure, false_sharing_probe.
+bench::false_sharing_probe false_sharing_of(const nlohmann::json& probe, const std::string& pattern) {
+  bench::false_sharing_probe figure;
+  figure.pattern = pattern;
+  figure.cpus = probe.at("cpus").get<std::string>();
+  figure.sharing_stride = probe.at("sharing_stride_bytes").get<std::size_t>();
+  figure.apart_stride = probe.at("apart_stride_bytes").get<std::size_t>();
+  figure.estimate = {probe.at("median").get<double>(), probe.at("ci_low").get<double>(),
+                     probe.at("ci_high").get<double>()};
+  figure.verdict = bench::verdict_of(figure.estimate, bench::kDefaultNoise);
+  figure.pairs = probe.at("pairs").get<std::size_t>();
+  return figure;
+}
+
 bench::known_answers probes_of(const nlohmann::json& file) {
   bench::known_answers probes;
   const auto& headline = file.at("lockstep_headline");
-  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
-    bench::false_sharing_probe fs;
-    fs.cpus = probe.at("cpus").get<std::string>();
-    fs.sharing_stride = probe.at("sharing_stride_bytes").get<std::size_t>();
-    fs.apart_stride = probe.at("apart_stride_bytes").get<std::size_t>();
-    fs.estimate = {probe.at("median").get<double>(), probe.at("ci_low").get<double>(),
-                   probe.at("ci_high").get<double>()};
-    fs.verdict = bench::verdict_of(fs.estimate, bench::kDefaultNoise);
-    fs.pairs = probe.at("pairs").get<std::size_t>();
-    probes.false_sharing = fs;
+  if (headline.contains("false_sharing_patterns")) {
+    for (const auto& probe : headline.at("false_sharing_patterns")) {
+      probes.false_sharing.push_back(false_sharing_of(probe, probe.at("pattern").get<std::string>()));
+      probes.false_sharing_relation = probe.value("cpus_relation", std::string());
+    }
+  } else if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+    for (const auto& info : lockstep::bench::probes::all_access_patterns)
+      if (info.older_files_figure) probes.false_sharing.push_back(false_sharing_of(probe, std::string(info.name)));
   }
+  probes.false_sharing_unavailable = headline.value("false_sharing_probe_unavailable", std::string());
   if (const auto& probe = headline.at("migration_probe"); !probe.is_null()) {
     bench::migration_probe migration;
     migration.cpus = probe.at("cpus").get<std::string>();
