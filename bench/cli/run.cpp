@@ -124,17 +124,6 @@ int execute(const run_options& options) {
     }
   }();
 
-  // The result file first: a destination that cannot be written fails here,
-  // in a millisecond, before anything is measured. A plan writes nothing.
-  std::optional<bench::atomic_result_file> result_file;
-  if (!options.plan) {
-    try {
-      result_file.emplace(options.out.empty() ? bench::default_result_path() : options.out);
-    } catch (const bench::result_path_error& error) {
-      throw usage_error(std::string("--out: ") + error.what());
-    }
-  }
-
   bench::run_selection selection;
   selection.syncs = select_names(options.syncs, sync_names(), "--sync");
   // The scaling sweep holds the placement still (compact unless --pin says).
@@ -159,6 +148,23 @@ int execute(const run_options& options) {
   request.pairs = options.pairs;
   request.noise = options.noise_pct / 100.0;
   request.benchmark_flags = options.benchmark_flags;
+
+  // Every option is read; now the result file, before anything is measured:
+  // a destination that cannot be written fails here, in a millisecond. A
+  // plan writes nothing. The default destination's directory (results/) is
+  // made only now, and removed again if the run ends without a file, so a
+  // refused run leaves nothing behind.
+  std::optional<bench::atomic_result_file> result_file;
+  if (!options.plan) {
+    try {
+      if (options.out.empty())
+        result_file.emplace(bench::default_result_path(), bench::make_directory::when_missing);
+      else
+        result_file.emplace(options.out);
+    } catch (const bench::result_path_error& error) {
+      throw usage_error(std::string("--out: ") + error.what());
+    }
+  }
   try {
     if (options.plan) {
       fmt::print("{}", bench::plan_text(request, machine));

@@ -3,6 +3,9 @@
 // measured (nothing on stdout, no progress line), and leaves no file behind.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -135,5 +138,63 @@ const bad_input kBadInputs[] = {
 };
 
 INSTANTIATE_TEST_SUITE_P(EveryCommand, BadInput, ::testing::ValuesIn(kBadInputs));
+
+// A run without --out writes to results/ in the working directory, which
+// lockstep makes: a refused run makes nothing there, whether lockstep's own
+// options refuse it or Google Benchmark's flags (read after the result file
+// is opened).
+class RefusedRun : public ::testing::TestWithParam<std::vector<std::string>> {};
+
+TEST_P(RefusedRun, CreatesNothingInTheWorkingDirectory) {
+  scratch_directory scratch("lockstep-refused-run");
+  std::vector<std::string> argv{"/usr/bin/env", "-C", scratch.path().string(), LOCKSTEP_BINARY, "run"};
+  argv.insert(argv.end(), GetParam().begin(), GetParam().end());
+  const command_result result = run_command(argv);
+  EXPECT_EQ(result.exit_status, 2) << result.err;
+  EXPECT_EQ(count_lines(result.err), 1u) << result.err;
+  EXPECT_EQ(result.out, "");
+  EXPECT_TRUE(scratch.entries().empty()) << "left " << scratch.entries().front();
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    BadInput, RefusedRun,
+    ::testing::Values(std::vector<std::string>{"--sync", "mailbx"}, std::vector<std::string>{"--threads", "0"},
+                      std::vector<std::string>{"--min-time", "40"}, std::vector<std::string>{"--pin", "compakt"},
+                      std::vector<std::string>{"--quik"},
+                      std::vector<std::string>{"--", "--benchmark_no_such_flag=1"}));
+
+// scripts/run.sh names the result file itself (so that it can write the
+// report beside it) and makes results/ for it: a run that lockstep refuses
+// leaves no results/ either. The script runs in a copy of the tree whose
+// setup and build steps are stubs and whose release binary is this one.
+TEST(RunScript, ARefusedRunLeavesNoResultsDirectory) {
+  namespace fs = std::filesystem;
+  scratch_directory scratch("lockstep-run-script");
+  const fs::path tree = scratch.path();
+  fs::create_directories(tree / "scripts");
+  fs::create_directories(tree / "bin");
+  fs::create_directories(tree / "build/release/bench");
+  fs::copy_file(fs::path(LOCKSTEP_SOURCE_DIR) / "scripts/run.sh", tree / "scripts/run.sh");
+  for (const fs::path& stub : {tree / "scripts/setup.sh", tree / "bin/cmake"}) {
+    std::ofstream(stub) << "#!/bin/sh\nexit 0\n";
+    fs::permissions(stub, fs::perms::owner_all);
+  }
+  fs::create_symlink(LOCKSTEP_BINARY, tree / "build/release/bench/lockstep");
+  const std::vector<std::string> before = scratch.entries();
+  for (const std::vector<std::string>& input : std::vector<std::vector<std::string>>{
+           {"--sync", "mailbx"}, {"--threads", "0"}, {"--min-time", "40"}}) {
+    std::vector<std::string> argv{"/usr/bin/env", "PATH=" + (tree / "bin").string() + ":/usr/bin:/bin", "bash",
+                                  (tree / "scripts/run.sh").string()};
+    argv.insert(argv.end(), input.begin(), input.end());
+    const command_result result = run_command(argv);
+    EXPECT_EQ(result.exit_status, 2) << input.front() << "\n" << result.err;
+    EXPECT_EQ(count_lines(result.err), 1u) << input.front() << "\n" << result.err;
+    std::vector<std::string> after = scratch.entries();
+    std::sort(after.begin(), after.end());
+    std::vector<std::string> expected = before;
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(after, expected) << input.front();
+  }
+}
 
 }  // namespace
