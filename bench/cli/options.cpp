@@ -41,6 +41,19 @@ long long whole_number(const std::string& text, const std::string& option) {
 
 namespace {
 
+// The units a time takes, the largest first, and how many nanoseconds each is.
+constexpr std::pair<const char*, std::int64_t> kTimeUnits[] = {
+    {"s", 1'000'000'000}, {"ms", 1'000'000}, {"us", 1'000}, {"ns", 1}};
+constexpr const char* kTimeUnitNames = "ns, us, ms or s";
+
+// "1ms", "60s", "1500us", "0": `ns` in the largest unit that divides it.
+std::string duration_text(std::int64_t ns) {
+  if (ns == 0) return "0";
+  for (const auto& [unit, ns_per_unit] : kTimeUnits)
+    if (ns % ns_per_unit == 0) return fmt::format("{}{}", ns / ns_per_unit, unit);
+  return fmt::format("{}ns", ns);
+}
+
 // The time `text` names, in nanoseconds (not rounded).
 double duration_in_ns(const std::string& text, const std::string& option) {
   std::size_t digits_end = 0;
@@ -52,16 +65,10 @@ double duration_in_ns(const std::string& text, const std::string& option) {
   }
   const std::string unit = text.substr(digits_end);
   double scale = 0;
-  if (unit == "ns")
-    scale = 1;
-  else if (unit == "us")
-    scale = 1e3;
-  else if (unit == "ms")
-    scale = 1e6;
-  else if (unit == "s")
-    scale = 1e9;
-  else
-    throw usage_error(fmt::format("{}: '{}' needs a unit: ns, us, ms or s (example: 1ms)", option, text));
+  for (const auto& [name, ns_per_unit] : kTimeUnits)
+    if (unit == name) scale = static_cast<double>(ns_per_unit);
+  if (scale == 0)
+    throw usage_error(fmt::format("{}: '{}' needs a unit: {} (example: 1ms)", option, text, kTimeUnitNames));
   const double ns = value * scale;
   if (!std::isfinite(ns)) throw usage_error(fmt::format("{}: '{}' is not a finite time", option, text));
   return ns;
@@ -77,7 +84,8 @@ std::int64_t parse_duration_ns(const std::string& text, const std::string& optio
                                std::int64_t max_ns) {
   const double ns = duration_in_ns(text, option);
   if (!std::isfinite(ns) || ns < static_cast<double>(min_ns) || ns > static_cast<double>(max_ns))
-    throw usage_error(fmt::format("{}: '{}' is out of range ({}ns to {}ns)", option, text, min_ns, max_ns));
+    throw usage_error(fmt::format("{}: '{}' is out of range ({} to {})", option, text, duration_text(min_ns),
+                                  duration_text(max_ns)));
   return static_cast<std::int64_t>(std::llround(ns));
 }
 

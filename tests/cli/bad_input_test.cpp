@@ -110,7 +110,14 @@ const bad_input kBadInputs[] = {
     {{"--quick", "run"}, "unknown option --quick"},
     // Durations: zero, no unit, not a time.
     {{"run", "--min-time", "0", "--out", "@/r.json"}, "--min-time"},
-    {{"run", "--min-time", "0ms", "--out", "@/r.json"}, "--min-time"},
+    {{"run", "--min-time", "0ms", "--out", "@/r.json"}, "--min-time: '0ms' is out of range (1ms to 60s)"},
+    // A range is said in units, each bound in the largest unit that divides it.
+    {{"run", "--min-time", "61s", "--out", "@/r.json"}, "(1ms to 60s)"},
+    {{"falseshare", "--window", "500us"}, "--window: '500us' is out of range (1ms to 60s)"},
+    {{"delay", "--find-period", "--miss-rate", "1e-3", "--search-budget", "10ms"}, "(1s to 86400s)"},
+    {{"delay", "--histogram-bound", "200ms"}, "(1us to 100ms)"},
+    {{"delay", "--dma-latency", "3000s"}, "(0 to 2000s)"},
+    {{"mpi", "--ranks", "2", "--watchdog", "1ms"}, "--watchdog: '1ms' is out of range (100ms to 3600s)"},
     {{"run", "--min-time", "0.04", "--out", "@/r.json"}, "--min-time"},
     {{"delay", "--period", "1000"}, "--period"},
     {{"delay", "--duration", "soon"}, "--duration"},
