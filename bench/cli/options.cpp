@@ -67,8 +67,10 @@ double duration_in_ns(const std::string& text, const std::string& option) {
   double scale = 0;
   for (const auto& [name, ns_per_unit] : kTimeUnits)
     if (unit == name) scale = static_cast<double>(ns_per_unit);
+  if (scale == 0 && unit.empty())
+    throw usage_error(fmt::format("{}: '{}' needs a unit ({}; example: 1ms)", option, text, kTimeUnitNames));
   if (scale == 0)
-    throw usage_error(fmt::format("{}: '{}' needs a unit: {} (example: 1ms)", option, text, kTimeUnitNames));
+    throw usage_error(fmt::format("{}: '{}': unknown unit '{}' ({})", option, text, unit, kTimeUnitNames));
   const double ns = value * scale;
   if (!std::isfinite(ns)) throw usage_error(fmt::format("{}: '{}' is not a finite time", option, text));
   return ns;
@@ -158,8 +160,8 @@ std::uint64_t parse_size_bytes(const std::string& text, const std::string& optio
                                   option, text, unit, text.substr(0, number_end),
                                   static_cast<char>(std::toupper(static_cast<unsigned char>(lower[0])))));
   else
-    throw usage_error(
-        fmt::format("{}: '{}' needs a unit B, KiB, MiB or GiB, or none for bytes (example: 256KiB)", option, text));
+    throw usage_error(fmt::format("{}: '{}': unknown unit '{}' (B, KiB, MiB or GiB, or none for bytes)", option,
+                                  text, unit));
   const double bytes = decimal_value(text.substr(0, number_end)) * scale;
   if (bytes != std::floor(bytes))
     throw usage_error(fmt::format("{}: '{}' is not a whole number of bytes", option, text));

@@ -29,8 +29,9 @@
 namespace lockstep::cli {
 
 // "1ms", "250us", "1000000ns", "2s", "0.5s": a time in nanoseconds, at least
-// `min_ns` and at most `max_ns`. A number without a unit is refused; a time
-// out of range is refused with its range in units, each bound in the largest
+// `min_ns` and at most `max_ns`. A number without a unit is refused ("'40'
+// needs a unit (ns, us, ms or s; ...)"), and so is a unit it does not know
+// ("'40sec': unknown unit 'sec' (ns, us, ms or s)"); a time out of range is refused with its range in units, each bound in the largest
 // unit that divides it ("out of range (1ms to 60s)").
 std::int64_t parse_duration_ns(const std::string& text, const std::string& option, std::int64_t min_ns = 1,
                                std::int64_t max_ns = 10'000'000'000'000);

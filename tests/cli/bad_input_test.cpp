@@ -119,6 +119,12 @@ const bad_input kBadInputs[] = {
     {{"delay", "--dma-latency", "3000s"}, "(0 to 2000s)"},
     {{"mpi", "--ranks", "2", "--watchdog", "1ms"}, "--watchdog: '1ms' is out of range (100ms to 3600s)"},
     {{"run", "--min-time", "0.04", "--out", "@/r.json"}, "--min-time"},
+    // No unit, and a unit not known, each said as it is, with the units taken.
+    {{"run", "--min-time", "40", "--out", "@/r.json"}, "--min-time: '40' needs a unit (ns, us, ms or s"},
+    {{"run", "--min-time", "40sec", "--out", "@/r.json"}, "--min-time: '40sec': unknown unit 'sec' (ns, us, ms or s)"},
+    {{"delay", "--period", "1msec"}, "unknown unit 'msec' (ns, us, ms or s)"},
+    {{"verify", "--dt", "1 ms"}, "unknown unit ' ms' (ns, us, ms or s)"},
+    {{"migrate", "--bytes", "4XiB"}, "--bytes: '4XiB': unknown unit 'XiB' (B, KiB, MiB or GiB, or none for bytes)"},
     {{"delay", "--period", "1000"}, "--period"},
     {{"delay", "--duration", "soon"}, "--duration"},
     {{"falseshare", "--window", "100"}, "--window"},
