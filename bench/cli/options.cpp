@@ -11,6 +11,9 @@
 #include <utility>
 
 #include "bench/results/result_file.hpp"
+#include "layouts/registry.hpp"
+#include "platform/placement.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
@@ -209,16 +212,41 @@ std::string joined(const std::vector<std::string>& names) {
   return list;
 }
 
+const std::string& check_name(const std::string& name, const std::vector<std::string>& valid,
+                              const std::string& unknown) {
+  if (std::find(valid.begin(), valid.end(), name) != valid.end()) return name;
+  if (const auto nearest = nearest_name(name, valid))
+    throw usage_error(fmt::format("{} '{}' (did you mean {}?)", unknown, name, *nearest));
+  throw usage_error(fmt::format("{} '{}' (valid: {})", unknown, name, joined(valid)));
+}
+
 std::vector<std::string> select_names(const std::optional<std::string>& wanted, const std::vector<std::string>& valid,
                                       const std::string& option) {
   if (!wanted) return valid;
   std::vector<std::string> chosen;
   for (const std::string& name : items_of(*wanted, option)) {
-    if (std::find(valid.begin(), valid.end(), name) == valid.end())
-      throw usage_error(fmt::format("{}: unknown value '{}' (valid: {})", option, name, joined(valid)));
+    check_name(name, valid, option + ": unknown value");
     if (std::find(chosen.begin(), chosen.end(), name) == chosen.end()) chosen.push_back(name);
   }
   return chosen;
+}
+
+std::vector<std::string> sync_names() {
+  std::vector<std::string> names;
+  for (const auto& info : sync::all_primitive_info) names.emplace_back(info.name);
+  return names;
+}
+
+std::vector<std::string> layout_names() {
+  std::vector<std::string> names;
+  for (const auto& info : layouts::all_layout_info) names.emplace_back(info.name);
+  return names;
+}
+
+std::vector<std::string> placement_names() {
+  std::vector<std::string> names;
+  for (const auto& description : platform::placements()) names.emplace_back(description.name);
+  return names;
 }
 
 void check_out(const std::string& path) {

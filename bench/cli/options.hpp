@@ -64,11 +64,27 @@ double parse_percent(const std::string& text, const std::string& option);
 std::vector<long long> parse_number_list(const std::string& text, const std::string& option, long long min,
                                          long long max);
 
-// Every name in the comma list `wanted` must be in `valid` (repeats dropped,
-// the order kept); `wanted` not given: all of `valid`. An empty list, an
-// empty item, or a list of nothing but commas, is refused.
+// `name`, when it is one of `valid`; else throws usage_error, one line that
+// says what was looked for (`unknown`: "--pin: unknown value", "unknown
+// list") and the valid name nearest it ("--pin: unknown value 'compakt' (did
+// you mean compact?)", by nearest_name) or, with none near, every valid one
+// ("(valid: none, compact, scatter, migrate)"). Every name a command takes
+// from a list of names is matched here, select_names' too.
+const std::string& check_name(const std::string& name, const std::vector<std::string>& valid,
+                              const std::string& unknown);
+
+// Every name in the comma list `wanted` must be in `valid` (check_name; repeats
+// dropped, the order kept); `wanted` not given: all of `valid`. An empty list,
+// an empty item, or a list of nothing but commas, is refused.
 std::vector<std::string> select_names(const std::optional<std::string>& wanted, const std::vector<std::string>& valid,
                                       const std::string& option);
+
+// The names --sync, --layout and --pin take, in `lockstep list`'s order: the
+// registries the benchmark matrix iterates (sync/registry.hpp,
+// layouts/registry.hpp, platform/placement.hpp).
+std::vector<std::string> sync_names();
+std::vector<std::string> layout_names();
+std::vector<std::string> placement_names();
 
 // "a, b, c": for messages that list the valid names.
 std::string joined(const std::vector<std::string>& names);

@@ -25,10 +25,8 @@
 #include "bench/run/summary.hpp"
 #include "bench/run/run_plan.hpp"
 #include "kernels/model_choice.hpp"
-#include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
-#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
@@ -94,24 +92,6 @@ platform::topology machine_for(bool plan) {
     throw usage_error("HWLOC_SYNTHETIC or HWLOC_XMLFILE is set, so hwloc describes another machine: only --plan "
                       "can use it (unset it to measure this one)");
   return machine;
-}
-
-std::vector<std::string> sync_names() {
-  std::vector<std::string> names;
-  for (const auto& info : sync::all_primitive_info) names.emplace_back(info.name);
-  return names;
-}
-
-std::vector<std::string> layout_names() {
-  std::vector<std::string> names;
-  for (const auto& info : layouts::all_layout_info) names.emplace_back(info.name);
-  return names;
-}
-
-std::vector<std::string> placement_names() {
-  std::vector<std::string> names;
-  for (const auto& description : platform::placements()) names.emplace_back(description.name);
-  return names;
 }
 
 int execute(const run_options& options) {
