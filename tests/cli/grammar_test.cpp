@@ -146,6 +146,16 @@ TEST(Help, HelpCommandIsTheCommandsOwnHelp) {
   }
 }
 
+// `lockstep help` alone is the overview, `lockstep --help`: every command, not
+// the help of `help`.
+TEST(Help, HelpAloneIsTheOverview) {
+  const command_result help = run_command({LOCKSTEP_BINARY, "help"});
+  const command_result flag = run_command({LOCKSTEP_BINARY, "--help"});
+  EXPECT_EQ(help.exit_status, 0) << help.err;
+  EXPECT_EQ(help.out, flag.out);
+  for (const std::string& command : kCommands) EXPECT_NE(help.out.find(command), std::string::npos) << command;
+}
+
 TEST(Help, OldNamesAreMarkedOld) {
   for (const auto& [command, old_name] : std::vector<std::pair<std::string, std::string>>{
            {"falseshare", "--repeats"}, {"migrate", "--repeats"}, {"mpi", "--rounds"}}) {
