@@ -281,7 +281,7 @@ void add_delay(CLI::App& app, int& result) {
       ->option_text("FILE");
   auto* per_cpu = command->add_flag("--per-cpu", options->per_cpu,
                                     "One paced thread per CPU of the affinity set (cyclictest -S), side by side");
-  auto* masses = add_masses_option(*command, options->masses);
+  auto* masses = add_masses_option(*command, options->masses, "thread");
   per_cpu->excludes(threads)->excludes(pin)->excludes(compare)->excludes(masses);
   auto* stop_above = command->add_option("--stop-above", options->stop_above,
                                          "End the run at the first wake-up later than this (cyclictest -b)")

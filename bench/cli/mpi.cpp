@@ -370,7 +370,7 @@ void add_mpi(CLI::App& app, int& result) {
       ->capture_default_str();
   command->add_option("--pin", options->pin, "Placement of a host's ranks: none, compact, scatter")
       ->capture_default_str();
-  add_masses_option(*command, options->masses);
+  add_masses_option(*command, options->masses, "rank");
   command->add_option("--watchdog", options->watchdog,
                       "A rank that makes no progress for this long ends the job with a message")
       ->capture_default_str();

@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "bench/results/result_file.hpp"
+#include "kernels/model_choice.hpp"
 #include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "sync/registry.hpp"
@@ -436,11 +437,14 @@ std::string unknown_word_message(const CLI::App& app) {
   return "";
 }
 
-CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses) {
-  return command
-      .add_option("--masses", masses,
-                  "Integrate an S-mass chain (eq. (1), 2S equations) whatever the threads (default: the paper's "
-                  "two masses up to 4 threads, else a chain of one equation per thread)")
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses, const std::string& member) {
+  const std::string description =
+      member.empty()
+          ? std::string("Integrate the uniform S-mass chain (eq. (1), 2S equations) instead of the paper's two masses")
+          : fmt::format("Integrate an S-mass chain (eq. (1), 2S equations) whatever the {0}s (default: the paper's "
+                        "two masses up to {1} {0}s, else a chain of one equation per {0})",
+                        member, kernels::kPaperThreadsMax);
+  return command.add_option("--masses", masses, description)
       ->check(CLI::Range(std::size_t{1}, kMassesMax))
       ->option_text("S");
 }

@@ -104,9 +104,12 @@ std::vector<int> restrict_to(const std::vector<int>& usable, const std::vector<i
 
 // --masses S, the same words and range in every command that integrates the
 // model (kernels/model_choice.hpp: which oscillator T threads integrate).
+// `member` is what the command splits the model among, "thread" (run, delay)
+// or "rank" (mpi), and the help says how its count picks the default; empty
+// (verify) when nothing is split: the default is the paper's two masses.
 // `masses` stays empty when not given.
 inline constexpr std::size_t kMassesMax = 4096;
-CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses);
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses, const std::string& member);
 
 // The --out option, the same words in every command that writes a result.
 CLI::Option* add_out_option(CLI::App& command, std::string& path, const std::string& what = "the result as JSON");

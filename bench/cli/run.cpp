@@ -174,7 +174,7 @@ void add_run(CLI::App& app, int& result) {
   run->add_option("--threads", options->threads,
                   "Thread counts, a comma list (default: the paper's 4, this machine's core count, and up to three "
                   "counts between; beyond 4 threads the model is a chain of one equation per thread)");
-  add_masses_option(*run, options->masses);
+  add_masses_option(*run, options->masses, "thread");
   auto* plan = run->add_flag("--plan", options->plan,
                              "Print the entries the run would measure and its estimated time, measure nothing; "
                              "HWLOC_SYNTHETIC or HWLOC_XMLFILE plan for another machine");
