@@ -385,9 +385,26 @@ std::vector<std::string> command_names(const CLI::App& app) {
   return names;
 }
 
+// The name `command` gives the option another command of `root` takes as
+// `bare` (run's --repetitions for falseshare's old --repeats), when it has one.
+std::optional<std::string> sibling_name(const CLI::App& root, const CLI::App& command, const std::string& bare) {
+  for (const CLI::App* sibling : root.get_subcommands([](const CLI::App*) { return true; })) {
+    for (const CLI::Option* option : sibling->get_options()) {
+      const auto& long_names = option->get_lnames();
+      if (std::find(long_names.begin(), long_names.end(), bare) == long_names.end()) continue;
+      for (const CLI::Option* own : command.get_options())
+        if (!own->get_lnames().empty() && own->get_lnames().front() == long_names.front())
+          return "--" + long_names.front();
+    }
+  }
+  return std::nullopt;
+}
+
 // "--quik", "--quik=1", "-quick": an option no one took, named beside the
-// nearest option of `command` (its first long name, an old alias's too).
-std::string unknown_option_message(const CLI::App& command, const std::string& word, const std::string& help) {
+// nearest option of `command` (its first long name, an old alias's too), or
+// the option of `command` another command takes under this name.
+std::string unknown_option_message(const CLI::App& root, const CLI::App& command, const std::string& word,
+                                   const std::string& help) {
   const std::string option = word.substr(0, word.find('='));
   std::vector<std::string> spellings;  // without the dashes, as typed after them
   std::vector<std::string> primary;    // the name the help leads with, for each spelling
@@ -404,6 +421,8 @@ std::string unknown_option_message(const CLI::App& command, const std::string& w
     const auto at = std::find(spellings.begin(), spellings.end(), *nearest) - spellings.begin();
     return fmt::format("unknown option {}; did you mean {}?", option, primary[static_cast<std::size_t>(at)]);
   }
+  if (const auto name = sibling_name(root, command, bare))
+    return fmt::format("unknown option {}; did you mean {}?", option, *name);
   return fmt::format("unknown option {} (`{} --help` lists the options)", option, help);
 }
 
@@ -418,7 +437,7 @@ std::string unknown_command_message(const CLI::App& app, const std::string& word
 std::string unknown_word_message(const CLI::App& app) {
   // Before the command: an option of no one's, or a command that is not one.
   for (const std::string& word : app.remaining()) {
-    if (word.rfind('-', 0) == 0) return unknown_option_message(app, word, app.get_name());
+    if (word.rfind('-', 0) == 0) return unknown_option_message(app, app, word, app.get_name());
     return unknown_command_message(app, word);
   }
   const std::vector<const CLI::App*> parsed = app.get_subcommands([](const CLI::App* command) {
@@ -430,7 +449,7 @@ std::string unknown_word_message(const CLI::App& app) {
     if (command->get_allow_extras() || command->get_prefix_command()) continue;
     const std::string help = app.get_name() + " " + command->get_name();
     for (const std::string& word : command->remaining()) {
-      if (word.rfind('-', 0) == 0) return unknown_option_message(*command, word, help);
+      if (word.rfind('-', 0) == 0) return unknown_option_message(app, *command, word, help);
       return fmt::format("unexpected argument '{}' (`{} --help` lists the options)", word, help);
     }
   }

@@ -3,8 +3,9 @@
 //  * a result is written with --out FILE (checked before any measurement:
 //    a missing or unwritable directory fails at once, exit 2);
 //  * how many times the whole measurement is repeated is --repetitions N in
-//    every command that repeats one (run, falseshare, migrate, mpi); an
-//    older name stays as an alias that the help marks as old;
+//    every command that repeats one (run, falseshare, migrate, mpi); a
+//    command's older name (falseshare's and migrate's --repeats, mpi's
+//    --rounds) stays as an alias that the help marks as old;
 //  * durations and periods take a unit (ns, us, ms, s): --period 1ms,
 //    --min-time 40ms, --window 100ms, --duration 10s;
 //  * sizes take a binary unit or none (bytes): --bytes 256KiB, 4MiB, 65536;
@@ -142,7 +143,8 @@ std::optional<std::string> nearest_name(const std::string& word, const std::vect
 std::string unknown_command_message(const CLI::App& app, const std::string& word);
 
 // After CLI11 refused a command line (main.cpp): the one line that names the
-// first word no command or option took and, when one is near, the valid
+// first word no command or option took and, when one is near (or another
+// command takes the word as an old name of an option this one has), the valid
 // spelling: "unknown option --quik; did you mean --quick?", "unknown command
 // 'runn'; did you mean 'run'?", "no command given; ...". Empty when every
 // word was taken (the refusal was about something else).

@@ -103,6 +103,10 @@ const bad_input kBadInputs[] = {
     {{"run", "--nosie=5"}, "unknown option --nosie; did you mean --noise?"},
     {{"falseshare", "--repeat", "3"}, "unknown option --repeat; did you mean --repetitions?"},
     {{"mpi", "--round", "3"}, "unknown option --round; did you mean --repetitions?"},
+    // run never had --repeats (README.md says whose old name it is): refused,
+    // with the name run gives what falseshare's --repeats is.
+    {{"run", "--repeats", "3"}, "unknown option --repeats; did you mean --repetitions?"},
+    {{"c2c", "--repeats", "3"}, "unknown option --repeats (`lockstep c2c --help` lists the options)"},
     {{"c2c", "--sample", "5"}, "unknown option --sample; did you mean --samples?"},
     {{"migrate", "--byte", "4KiB"}, "unknown option --byte; did you mean --bytes?"},
     {{"verify", "--zzz"}, "unknown option --zzz (`lockstep verify --help` lists the options)"},
