@@ -28,7 +28,14 @@ for argument in "$@"; do
 done
 arguments=("$@")
 if [ -z "$out" ]; then
-  mkdir -p results
+  # results/ is made here only when missing, and removed again if the run
+  # leaves it empty (input refused, a failure, a signal): as `lockstep run`
+  # does with its own default destination, a run that wrote nothing leaves
+  # nothing behind.
+  if [ ! -d results ]; then
+    mkdir results
+    trap 'rmdir results 2>/dev/null || true' EXIT
+  fi
   out="results/$(hostname)-$(date -u +%Y%m%dT%H%M%SZ).json"
   arguments+=(--out "$out")
 fi

@@ -40,10 +40,10 @@ struct c2c_options {
 
 
 std::vector<method> parse_methods(const std::string& text) {
-  if (text == "both") return {method::cas, method::store_load};
+  check_name(text, {"cas", "store_load", "both"}, "--method: unknown value");
   if (text == "cas") return {method::cas};
   if (text == "store_load") return {method::store_load};
-  throw usage_error("--method: '" + text + "' is not one of cas, store_load, both");
+  return {method::cas, method::store_load};
 }
 
 platform::topology load_machine(const std::string& synthetic) {

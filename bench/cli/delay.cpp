@@ -118,6 +118,7 @@ probes::delay_settings check_input(const delay_options& options) {
     if (plan.periods > 100'000'000) throw usage_error("--duration / --period exceeds 100000000 periods");
   }
   if (!options.per_cpu) {
+    check_name(options.pin, placement_names(), "--pin: unknown value");
     try {
       plan.kind = platform::parse_placement(options.pin);
     } catch (const std::invalid_argument& e) {
@@ -159,6 +160,8 @@ probes::delay_settings check_input(const delay_options& options) {
   if (!options.per_cpu) plan.model = kernels::model_for(options.threads, options.masses);
   // Names and applicability before permissions: the first error is the input's
   // (more threads than the model's equations among them, possible with --masses).
+  check_name(options.sync, sync_names(), "--sync: unknown value");
+  check_name(options.layout, layout_names(), "--layout: unknown value");
   const std::string problem =
       options.per_cpu ? probes::paced_per_cpu_problem(options.sync, options.layout)
                       : probes::paced_step_problem(options.sync, options.layout, options.threads, plan.model);
@@ -278,7 +281,7 @@ void add_delay(CLI::App& app, int& result) {
       ->option_text("FILE");
   auto* per_cpu = command->add_flag("--per-cpu", options->per_cpu,
                                     "One paced thread per CPU of the affinity set (cyclictest -S), side by side");
-  auto* masses = add_masses_option(*command, options->masses);
+  auto* masses = add_masses_option(*command, options->masses, "thread");
   per_cpu->excludes(threads)->excludes(pin)->excludes(compare)->excludes(masses);
   auto* stop_above = command->add_option("--stop-above", options->stop_above,
                                          "End the run at the first wake-up later than this (cyclictest -b)")

@@ -6,8 +6,10 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "bench/cli/command.hpp"
+#include "bench/cli/options.hpp"
 #include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "sync/registry.hpp"
@@ -41,6 +43,9 @@ std::string futex_waits_note() {
       "  futex waits unavailable (inside the library; the counter is omitted): {}\n",
       counted.empty() ? "none" : counted, hidden.empty() ? "none" : hidden);
 }
+
+// The groups `lockstep list WHAT` shows one of.
+const std::vector<std::string> kGroups{"sync", "layout", "placement", "exchange"};
 
 void print_list(const std::string& what) {
   if (what.empty() || what == "sync") {
@@ -77,9 +82,9 @@ void print_list(const std::string& what) {
 void add_list(CLI::App& app, int& result) {
   auto what = std::make_shared<std::string>();
   CLI::App* list = app.add_subcommand("list", "List every synchronisation primitive, layout, placement and MPI exchange");
-  list->add_option("what", *what, "Only one group: sync, layout, placement, exchange")
-      ->check(CLI::IsMember({"sync", "layout", "placement", "exchange"}));
+  list->add_option("what", *what, "Only one group: " + joined(kGroups));
   list->callback([what, &result] {
+    if (!what->empty()) check_name(*what, kGroups, "unknown list");
     print_list(*what);
     result = kExitOk;
   });

@@ -12,7 +12,8 @@
 
 namespace {
 
-// `lockstep help [COMMAND]`: the same text as `lockstep COMMAND --help`.
+// `lockstep help [COMMAND]`: the same text as `lockstep COMMAND --help`;
+// `lockstep help` alone, the same as `lockstep --help`.
 // compare and report are CLI11 prefix commands (bench/cli/reports.cpp) whose
 // help is their Python tool's, so theirs is that tool's --help.
 void add_help(CLI::App& app, int& result) {
@@ -21,7 +22,9 @@ void add_help(CLI::App& app, int& result) {
   help->add_option("command", *command, "The command to describe");
   help->callback([&app, command, &result] {
     if (command->empty()) {
-      fmt::print("{}", app.help());
+      // The overview, as `lockstep --help` prints it: app.help() would hand
+      // over to the selected subcommand, this one.
+      fmt::print("{}", app.get_formatter()->make_help(&app, app.get_name(), CLI::AppFormatMode::Normal));
       result = lockstep::cli::kExitOk;
       return;
     }

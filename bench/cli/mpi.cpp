@@ -92,10 +92,8 @@ struct checked_options {
 
 checked_options check(const mpi_options& options, unsigned ranks) {
   checked_options checked;
-  if (options.transport == "tcp")
-    checked.how = dist::transport::tcp;
-  else if (options.transport != "shm")
-    throw usage_error("--transport: '" + options.transport + "' is not one of shm, tcp");
+  check_name(options.transport, {"shm", "tcp"}, "--transport: unknown value");
+  if (options.transport == "tcp") checked.how = dist::transport::tcp;
   checked.exchange_names = select_names(options.exchanges, dist::exchange_names(), "--exchange");
   checked.sync_names = select_names(options.syncs, dist::exchange_syncs(), "--sync");
   checked.exchanges_named = options.exchanges.has_value() || options.syncs.has_value();
@@ -106,6 +104,7 @@ checked_options check(const mpi_options& options, unsigned ranks) {
     throw usage_error("--ranks " + std::to_string(ranks) + " cannot split " + checked.model.description() +
                       ": at most one rank per equation (" + std::to_string(checked.model.equations()) +
                       "); give --masses " + std::to_string((ranks + 1) / 2) + " or more");
+  check_name(options.pin, placement_names(), "--pin: unknown value");
   try {
     checked.pin = platform::parse_placement(options.pin);
   } catch (const std::invalid_argument& e) {
@@ -371,7 +370,7 @@ void add_mpi(CLI::App& app, int& result) {
       ->capture_default_str();
   command->add_option("--pin", options->pin, "Placement of a host's ranks: none, compact, scatter")
       ->capture_default_str();
-  add_masses_option(*command, options->masses);
+  add_masses_option(*command, options->masses, "rank");
   command->add_option("--watchdog", options->watchdog,
                       "A rank that makes no progress for this long ends the job with a message")
       ->capture_default_str();

@@ -11,6 +11,10 @@
 #include <utility>
 
 #include "bench/results/result_file.hpp"
+#include "kernels/model_choice.hpp"
+#include "layouts/registry.hpp"
+#include "platform/placement.hpp"
+#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
@@ -41,6 +45,19 @@ long long whole_number(const std::string& text, const std::string& option) {
 
 namespace {
 
+// The units a time takes, the largest first, and how many nanoseconds each is.
+constexpr std::pair<const char*, std::int64_t> kTimeUnits[] = {
+    {"s", 1'000'000'000}, {"ms", 1'000'000}, {"us", 1'000}, {"ns", 1}};
+constexpr const char* kTimeUnitNames = "ns, us, ms or s";
+
+// "1ms", "60s", "1500us", "0": `ns` in the largest unit that divides it.
+std::string duration_text(std::int64_t ns) {
+  if (ns == 0) return "0";
+  for (const auto& [unit, ns_per_unit] : kTimeUnits)
+    if (ns % ns_per_unit == 0) return fmt::format("{}{}", ns / ns_per_unit, unit);
+  return fmt::format("{}ns", ns);
+}
+
 // The time `text` names, in nanoseconds (not rounded).
 double duration_in_ns(const std::string& text, const std::string& option) {
   std::size_t digits_end = 0;
@@ -52,16 +69,12 @@ double duration_in_ns(const std::string& text, const std::string& option) {
   }
   const std::string unit = text.substr(digits_end);
   double scale = 0;
-  if (unit == "ns")
-    scale = 1;
-  else if (unit == "us")
-    scale = 1e3;
-  else if (unit == "ms")
-    scale = 1e6;
-  else if (unit == "s")
-    scale = 1e9;
-  else
-    throw usage_error(fmt::format("{}: '{}' needs a unit: ns, us, ms or s (example: 1ms)", option, text));
+  for (const auto& [name, ns_per_unit] : kTimeUnits)
+    if (unit == name) scale = static_cast<double>(ns_per_unit);
+  if (scale == 0 && unit.empty())
+    throw usage_error(fmt::format("{}: '{}' needs a unit ({}; example: 1ms)", option, text, kTimeUnitNames));
+  if (scale == 0)
+    throw usage_error(fmt::format("{}: '{}': unknown unit '{}' ({})", option, text, unit, kTimeUnitNames));
   const double ns = value * scale;
   if (!std::isfinite(ns)) throw usage_error(fmt::format("{}: '{}' is not a finite time", option, text));
   return ns;
@@ -77,7 +90,8 @@ std::int64_t parse_duration_ns(const std::string& text, const std::string& optio
                                std::int64_t max_ns) {
   const double ns = duration_in_ns(text, option);
   if (!std::isfinite(ns) || ns < static_cast<double>(min_ns) || ns > static_cast<double>(max_ns))
-    throw usage_error(fmt::format("{}: '{}' is out of range ({}ns to {}ns)", option, text, min_ns, max_ns));
+    throw usage_error(fmt::format("{}: '{}' is out of range ({} to {})", option, text, duration_text(min_ns),
+                                  duration_text(max_ns)));
   return static_cast<std::int64_t>(std::llround(ns));
 }
 
@@ -150,8 +164,8 @@ std::uint64_t parse_size_bytes(const std::string& text, const std::string& optio
                                   option, text, unit, text.substr(0, number_end),
                                   static_cast<char>(std::toupper(static_cast<unsigned char>(lower[0])))));
   else
-    throw usage_error(
-        fmt::format("{}: '{}' needs a unit B, KiB, MiB or GiB, or none for bytes (example: 256KiB)", option, text));
+    throw usage_error(fmt::format("{}: '{}': unknown unit '{}' (B, KiB, MiB or GiB, or none for bytes)", option,
+                                  text, unit));
   const double bytes = decimal_value(text.substr(0, number_end)) * scale;
   if (bytes != std::floor(bytes))
     throw usage_error(fmt::format("{}: '{}' is not a whole number of bytes", option, text));
@@ -199,16 +213,41 @@ std::string joined(const std::vector<std::string>& names) {
   return list;
 }
 
+const std::string& check_name(const std::string& name, const std::vector<std::string>& valid,
+                              const std::string& unknown) {
+  if (std::find(valid.begin(), valid.end(), name) != valid.end()) return name;
+  if (const auto nearest = nearest_name(name, valid))
+    throw usage_error(fmt::format("{} '{}' (did you mean {}?)", unknown, name, *nearest));
+  throw usage_error(fmt::format("{} '{}' (valid: {})", unknown, name, joined(valid)));
+}
+
 std::vector<std::string> select_names(const std::optional<std::string>& wanted, const std::vector<std::string>& valid,
                                       const std::string& option) {
   if (!wanted) return valid;
   std::vector<std::string> chosen;
   for (const std::string& name : items_of(*wanted, option)) {
-    if (std::find(valid.begin(), valid.end(), name) == valid.end())
-      throw usage_error(fmt::format("{}: unknown value '{}' (valid: {})", option, name, joined(valid)));
+    check_name(name, valid, option + ": unknown value");
     if (std::find(chosen.begin(), chosen.end(), name) == chosen.end()) chosen.push_back(name);
   }
   return chosen;
+}
+
+std::vector<std::string> sync_names() {
+  std::vector<std::string> names;
+  for (const auto& info : sync::all_primitive_info) names.emplace_back(info.name);
+  return names;
+}
+
+std::vector<std::string> layout_names() {
+  std::vector<std::string> names;
+  for (const auto& info : layouts::all_layout_info) names.emplace_back(info.name);
+  return names;
+}
+
+std::vector<std::string> placement_names() {
+  std::vector<std::string> names;
+  for (const auto& description : platform::placements()) names.emplace_back(description.name);
+  return names;
 }
 
 void check_out(const std::string& path) {
@@ -346,9 +385,26 @@ std::vector<std::string> command_names(const CLI::App& app) {
   return names;
 }
 
+// The name `command` gives the option another command of `root` takes as
+// `bare` (run's --repetitions for falseshare's old --repeats), when it has one.
+std::optional<std::string> sibling_name(const CLI::App& root, const CLI::App& command, const std::string& bare) {
+  for (const CLI::App* sibling : root.get_subcommands([](const CLI::App*) { return true; })) {
+    for (const CLI::Option* option : sibling->get_options()) {
+      const auto& long_names = option->get_lnames();
+      if (std::find(long_names.begin(), long_names.end(), bare) == long_names.end()) continue;
+      for (const CLI::Option* own : command.get_options())
+        if (!own->get_lnames().empty() && own->get_lnames().front() == long_names.front())
+          return "--" + long_names.front();
+    }
+  }
+  return std::nullopt;
+}
+
 // "--quik", "--quik=1", "-quick": an option no one took, named beside the
-// nearest option of `command` (its first long name, an old alias's too).
-std::string unknown_option_message(const CLI::App& command, const std::string& word, const std::string& help) {
+// nearest option of `command` (its first long name, an old alias's too), or
+// the option of `command` another command takes under this name.
+std::string unknown_option_message(const CLI::App& root, const CLI::App& command, const std::string& word,
+                                   const std::string& help) {
   const std::string option = word.substr(0, word.find('='));
   std::vector<std::string> spellings;  // without the dashes, as typed after them
   std::vector<std::string> primary;    // the name the help leads with, for each spelling
@@ -365,6 +421,8 @@ std::string unknown_option_message(const CLI::App& command, const std::string& w
     const auto at = std::find(spellings.begin(), spellings.end(), *nearest) - spellings.begin();
     return fmt::format("unknown option {}; did you mean {}?", option, primary[static_cast<std::size_t>(at)]);
   }
+  if (const auto name = sibling_name(root, command, bare))
+    return fmt::format("unknown option {}; did you mean {}?", option, *name);
   return fmt::format("unknown option {} (`{} --help` lists the options)", option, help);
 }
 
@@ -379,7 +437,7 @@ std::string unknown_command_message(const CLI::App& app, const std::string& word
 std::string unknown_word_message(const CLI::App& app) {
   // Before the command: an option of no one's, or a command that is not one.
   for (const std::string& word : app.remaining()) {
-    if (word.rfind('-', 0) == 0) return unknown_option_message(app, word, app.get_name());
+    if (word.rfind('-', 0) == 0) return unknown_option_message(app, app, word, app.get_name());
     return unknown_command_message(app, word);
   }
   const std::vector<const CLI::App*> parsed = app.get_subcommands([](const CLI::App* command) {
@@ -391,18 +449,21 @@ std::string unknown_word_message(const CLI::App& app) {
     if (command->get_allow_extras() || command->get_prefix_command()) continue;
     const std::string help = app.get_name() + " " + command->get_name();
     for (const std::string& word : command->remaining()) {
-      if (word.rfind('-', 0) == 0) return unknown_option_message(*command, word, help);
+      if (word.rfind('-', 0) == 0) return unknown_option_message(app, *command, word, help);
       return fmt::format("unexpected argument '{}' (`{} --help` lists the options)", word, help);
     }
   }
   return "";
 }
 
-CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses) {
-  return command
-      .add_option("--masses", masses,
-                  "Integrate an S-mass chain (eq. (1), 2S equations) whatever the threads (default: the paper's "
-                  "two masses up to 4 threads, else a chain of one equation per thread)")
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses, const std::string& member) {
+  const std::string description =
+      member.empty()
+          ? std::string("Integrate the uniform S-mass chain (eq. (1), 2S equations) instead of the paper's two masses")
+          : fmt::format("Integrate an S-mass chain (eq. (1), 2S equations) whatever the {0}s (default: the paper's "
+                        "two masses up to {1} {0}s, else a chain of one equation per {0})",
+                        member, kernels::kPaperThreadsMax);
+  return command.add_option("--masses", masses, description)
       ->check(CLI::Range(std::size_t{1}, kMassesMax))
       ->option_text("S");
 }

@@ -3,8 +3,9 @@
 //  * a result is written with --out FILE (checked before any measurement:
 //    a missing or unwritable directory fails at once, exit 2);
 //  * how many times the whole measurement is repeated is --repetitions N in
-//    every command that repeats one (run, falseshare, migrate, mpi); an
-//    older name stays as an alias that the help marks as old;
+//    every command that repeats one (run, falseshare, migrate, mpi); a
+//    command's older name (falseshare's and migrate's --repeats, mpi's
+//    --rounds) stays as an alias that the help marks as old;
 //  * durations and periods take a unit (ns, us, ms, s): --period 1ms,
 //    --min-time 40ms, --window 100ms, --duration 10s;
 //  * sizes take a binary unit or none (bytes): --bytes 256KiB, 4MiB, 65536;
@@ -29,7 +30,10 @@
 namespace lockstep::cli {
 
 // "1ms", "250us", "1000000ns", "2s", "0.5s": a time in nanoseconds, at least
-// `min_ns` and at most `max_ns`. A number without a unit is refused.
+// `min_ns` and at most `max_ns`. A number without a unit is refused ("'40'
+// needs a unit (ns, us, ms or s; ...)"), and so is a unit it does not know
+// ("'40sec': unknown unit 'sec' (ns, us, ms or s)"); a time out of range is refused with its range in units, each bound in the largest
+// unit that divides it ("out of range (1ms to 60s)").
 std::int64_t parse_duration_ns(const std::string& text, const std::string& option, std::int64_t min_ns = 1,
                                std::int64_t max_ns = 10'000'000'000'000);
 
@@ -61,11 +65,27 @@ double parse_percent(const std::string& text, const std::string& option);
 std::vector<long long> parse_number_list(const std::string& text, const std::string& option, long long min,
                                          long long max);
 
-// Every name in the comma list `wanted` must be in `valid` (repeats dropped,
-// the order kept); `wanted` not given: all of `valid`. An empty list, an
-// empty item, or a list of nothing but commas, is refused.
+// `name`, when it is one of `valid`; else throws usage_error, one line that
+// says what was looked for (`unknown`: "--pin: unknown value", "unknown
+// list") and the valid name nearest it ("--pin: unknown value 'compakt' (did
+// you mean compact?)", by nearest_name) or, with none near, every valid one
+// ("(valid: none, compact, scatter, migrate)"). Every name a command takes
+// from a list of names is matched here, select_names' too.
+const std::string& check_name(const std::string& name, const std::vector<std::string>& valid,
+                              const std::string& unknown);
+
+// Every name in the comma list `wanted` must be in `valid` (check_name; repeats
+// dropped, the order kept); `wanted` not given: all of `valid`. An empty list,
+// an empty item, or a list of nothing but commas, is refused.
 std::vector<std::string> select_names(const std::optional<std::string>& wanted, const std::vector<std::string>& valid,
                                       const std::string& option);
+
+// The names --sync, --layout and --pin take, in `lockstep list`'s order: the
+// registries the benchmark matrix iterates (sync/registry.hpp,
+// layouts/registry.hpp, platform/placement.hpp).
+std::vector<std::string> sync_names();
+std::vector<std::string> layout_names();
+std::vector<std::string> placement_names();
 
 // "a, b, c": for messages that list the valid names.
 std::string joined(const std::vector<std::string>& names);
@@ -85,9 +105,12 @@ std::vector<int> restrict_to(const std::vector<int>& usable, const std::vector<i
 
 // --masses S, the same words and range in every command that integrates the
 // model (kernels/model_choice.hpp: which oscillator T threads integrate).
+// `member` is what the command splits the model among, "thread" (run, delay)
+// or "rank" (mpi), and the help says how its count picks the default; empty
+// (verify) when nothing is split: the default is the paper's two masses.
 // `masses` stays empty when not given.
 inline constexpr std::size_t kMassesMax = 4096;
-CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses);
+CLI::Option* add_masses_option(CLI::App& command, std::optional<std::size_t>& masses, const std::string& member);
 
 // The --out option, the same words in every command that writes a result.
 CLI::Option* add_out_option(CLI::App& command, std::string& path, const std::string& what = "the result as JSON");
@@ -120,7 +143,8 @@ std::optional<std::string> nearest_name(const std::string& word, const std::vect
 std::string unknown_command_message(const CLI::App& app, const std::string& word);
 
 // After CLI11 refused a command line (main.cpp): the one line that names the
-// first word no command or option took and, when one is near, the valid
+// first word no command or option took and, when one is near (or another
+// command takes the word as an old name of an option this one has), the valid
 // spelling: "unknown option --quik; did you mean --quick?", "unknown command
 // 'runn'; did you mean 'run'?", "no command given; ...". Empty when every
 // word was taken (the refusal was about something else).

@@ -25,10 +25,8 @@
 #include "bench/run/summary.hpp"
 #include "bench/run/run_plan.hpp"
 #include "kernels/model_choice.hpp"
-#include "layouts/registry.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
-#include "sync/registry.hpp"
 
 namespace lockstep::cli {
 
@@ -96,24 +94,6 @@ platform::topology machine_for(bool plan) {
   return machine;
 }
 
-std::vector<std::string> sync_names() {
-  std::vector<std::string> names;
-  for (const auto& info : sync::all_primitive_info) names.emplace_back(info.name);
-  return names;
-}
-
-std::vector<std::string> layout_names() {
-  std::vector<std::string> names;
-  for (const auto& info : layouts::all_layout_info) names.emplace_back(info.name);
-  return names;
-}
-
-std::vector<std::string> placement_names() {
-  std::vector<std::string> names;
-  for (const auto& description : platform::placements()) names.emplace_back(description.name);
-  return names;
-}
-
 int execute(const run_options& options) {
   // The topology first: it reads the affinity set before anything pins.
   platform::topology machine = [&] {
@@ -123,17 +103,6 @@ int execute(const run_options& options) {
       throw usage_error(std::string("--plan: ") + error.what());
     }
   }();
-
-  // The result file first: a destination that cannot be written fails here,
-  // in a millisecond, before anything is measured. A plan writes nothing.
-  std::optional<bench::atomic_result_file> result_file;
-  if (!options.plan) {
-    try {
-      result_file.emplace(options.out.empty() ? bench::default_result_path() : options.out);
-    } catch (const bench::result_path_error& error) {
-      throw usage_error(std::string("--out: ") + error.what());
-    }
-  }
 
   bench::run_selection selection;
   selection.syncs = select_names(options.syncs, sync_names(), "--sync");
@@ -159,6 +128,23 @@ int execute(const run_options& options) {
   request.pairs = options.pairs;
   request.noise = options.noise_pct / 100.0;
   request.benchmark_flags = options.benchmark_flags;
+
+  // Every option is read; now the result file, before anything is measured:
+  // a destination that cannot be written fails here, in a millisecond. A
+  // plan writes nothing. The default destination's directory (results/) is
+  // made only now, and removed again if the run ends without a file, so a
+  // refused run leaves nothing behind.
+  std::optional<bench::atomic_result_file> result_file;
+  if (!options.plan) {
+    try {
+      if (options.out.empty())
+        result_file.emplace(bench::default_result_path(), bench::make_directory::when_missing);
+      else
+        result_file.emplace(options.out);
+    } catch (const bench::result_path_error& error) {
+      throw usage_error(std::string("--out: ") + error.what());
+    }
+  }
   try {
     if (options.plan) {
       fmt::print("{}", bench::plan_text(request, machine));
@@ -188,7 +174,7 @@ void add_run(CLI::App& app, int& result) {
   run->add_option("--threads", options->threads,
                   "Thread counts, a comma list (default: the paper's 4, this machine's core count, and up to three "
                   "counts between; beyond 4 threads the model is a chain of one equation per thread)");
-  add_masses_option(*run, options->masses);
+  add_masses_option(*run, options->masses, "thread");
   auto* plan = run->add_flag("--plan", options->plan,
                              "Print the entries the run would measure and its estimated time, measure nothing; "
                              "HWLOC_SYNTHETIC or HWLOC_XMLFILE plan for another machine");

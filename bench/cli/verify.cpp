@@ -50,7 +50,7 @@ void add_verify(CLI::App& app, int& result) {
   auto* c2 = command->add_option("--c2", settings.params.c2, "spring 2, mass 1 to mass 2 (N/m)")->capture_default_str();
   // The chain is the uniform one (the paper's masses and springs): the
   // two-mass parameters do not describe it.
-  add_masses_option(*command, options->masses)->excludes(m1)->excludes(m2)->excludes(c1)->excludes(c2);
+  add_masses_option(*command, options->masses, "")->excludes(m1)->excludes(m2)->excludes(c1)->excludes(c2);
   command->add_option("--dt", options->step, "RK4 step, with a unit (e.g. 1ms); the ladder also runs dt/2, dt/4, dt/8")
       ->capture_default_str();
   command->add_option("--t-end", options->end_time, "end time, with a unit (e.g. 1s), a whole number of steps")

@@ -33,10 +33,11 @@ std::string temporary_for(const std::string& destination) {
 }
 
 // What the signal handler knows. It may only use async-signal-safe calls
-// (unlink, write, nanosleep, _exit) and lock-free atomics, so the paths sit
-// in fixed arrays and the file's state in one atomic word.
+// (unlink, rmdir, write, nanosleep, _exit) and lock-free atomics, so the
+// paths sit in fixed arrays and the file's state in one atomic word.
 std::array<char, 4096> g_temporary_path{};
 std::array<char, 4096> g_destination_path{};
+std::array<char, 4096> g_made_directory{};  // empty: the file made no directory
 
 // The life of the one result file in flight. Transitions:
 //   idle -> writing      the constructor, before the handlers are installed;
@@ -87,6 +88,7 @@ extern "C" void end_on_signal(int signal_number) {
     say(" was written\n");
   } else {
     if (g_temporary_path[0] != '\0') ::unlink(g_temporary_path.data());
+    if (g_made_directory[0] != '\0') ::rmdir(g_made_directory.data());  // only when empty
     say("\nlockstep: interrupted; no result file was written\n");
   }
   ::_exit(128 + signal_number);
@@ -114,20 +116,32 @@ void check_result_path(const std::string& destination) {
   ::unlink(probe.c_str());
 }
 
-atomic_result_file::atomic_result_file(std::string destination) : destination_(std::move(destination)) {
-  check_result_path(destination_);
-  temporary_ = temporary_for(destination_);
-  if (temporary_.size() >= g_temporary_path.size() || destination_.size() >= g_destination_path.size())
-    throw result_path_error("cannot write " + destination_ + ": the path is too long");
-  // Exclusive and not through a link: a name planted since the probe (a
-  // symlink to somebody's file) makes this fail instead of writing there.
-  descriptor_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (descriptor_ < 0)
-    throw result_path_error(fmt::format("cannot write {}: {}", destination_, std::strerror(errno)));
+atomic_result_file::atomic_result_file(std::string destination, make_directory directory)
+    : destination_(std::move(destination)) {
+  // One level, and only a missing one: a directory that exists is not ours
+  // to remove.
+  if (directory == make_directory::when_missing && ::mkdir(directory_of(destination_).c_str(), 0777) == 0)
+    made_directory_ = directory_of(destination_);
+  try {
+    check_result_path(destination_);
+    temporary_ = temporary_for(destination_);
+    if (temporary_.size() >= g_temporary_path.size() || destination_.size() >= g_destination_path.size() ||
+        made_directory_.size() >= g_made_directory.size())
+      throw result_path_error("cannot write " + destination_ + ": the path is too long");
+    // Exclusive and not through a link: a name planted since the probe (a
+    // symlink to somebody's file) makes this fail instead of writing there.
+    descriptor_ = ::open(temporary_.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
+    if (descriptor_ < 0)
+      throw result_path_error(fmt::format("cannot write {}: {}", destination_, std::strerror(errno)));
+  } catch (...) {
+    if (!made_directory_.empty()) ::rmdir(made_directory_.c_str());
+    throw;
+  }
   through_descriptor_ = fmt::format("/proc/self/fd/{}", descriptor_);
   if (::access(through_descriptor_.c_str(), W_OK) != 0) through_descriptor_ = temporary_;
   std::memcpy(g_temporary_path.data(), temporary_.c_str(), temporary_.size() + 1);
   std::memcpy(g_destination_path.data(), destination_.c_str(), destination_.size() + 1);
+  std::memcpy(g_made_directory.data(), made_directory_.c_str(), made_directory_.size() + 1);
   g_ending.store(false, std::memory_order_relaxed);  // no handler runs yet: none is installed
   g_state.store(writing, std::memory_order_release);  // (1)
 
@@ -144,10 +158,12 @@ atomic_result_file::atomic_result_file(std::string destination) : destination_(s
 
 atomic_result_file::~atomic_result_file() {
   if (!committed_) ::unlink(temporary_.c_str());
+  if (!committed_ && !made_directory_.empty()) ::rmdir(made_directory_.c_str());  // only when empty
   for (std::size_t i = 0; i < std::size(kEndingSignals); ++i)
     if (g_installed[i]) ::sigaction(kEndingSignals[i], &g_previous[i], nullptr);
   g_state.store(idle, std::memory_order_release);  // (1)
   g_temporary_path[0] = '\0';
+  g_made_directory[0] = '\0';
   if (descriptor_ >= 0) ::close(descriptor_);
 }
 
@@ -217,8 +233,6 @@ std::string default_result_path() {
   ::gmtime_r(&now, &utc);
   std::array<char, 32> stamp{};
   std::strftime(stamp.data(), stamp.size(), "%Y%m%dT%H%M%SZ", &utc);
-  std::error_code ignored;  // a failure shows in check_result_path, with its reason
-  fs::create_directories("results", ignored);
   return fmt::format("results/{}-{}.json", host.data(), stamp.data());
 }
 

@@ -46,9 +46,17 @@ void check_result_path(const std::string& destination);
 // handler on another thread waits for the rename's outcome before it
 // speaks. A signal the process inherited as ignored (SIGHUP under nohup,
 // SIGINT in a background job of a script) stays ignored.
+//
+// The destination's directory: one the user names must exist. The default
+// destination's (default_result_path) is lockstep's to make: with
+// make_directory::when_missing it is created here when missing, and removed
+// again, if still empty, when no file was committed (a failure, a refusal
+// after this point, a signal), so a run that wrote nothing leaves nothing.
+enum class make_directory { never, when_missing };
+
 class atomic_result_file {
  public:
-  explicit atomic_result_file(std::string destination);
+  explicit atomic_result_file(std::string destination, make_directory directory = make_directory::never);
   ~atomic_result_file();  // removes the temporary file unless committed
   atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path and the descriptor
   atomic_result_file& operator=(const atomic_result_file&) = delete;
@@ -70,6 +78,7 @@ class atomic_result_file {
   std::string destination_;
   std::string temporary_;
   std::string through_descriptor_;
+  std::string made_directory_;  // the directory this file created, or empty
   int descriptor_ = -1;
   bool committed_ = false;
 };
@@ -77,9 +86,9 @@ class atomic_result_file {
 // check + write + commit in one call: the whole file or nothing.
 void write_result_file(const std::string& destination, std::string_view text);
 
-// results/<host>-<UTC timestamp>.json, its directory created if missing (the
-// default destination is lockstep's to make; a destination the user names
-// must exist).
+// results/<host>-<UTC timestamp>.json. Nothing is created: the result file
+// opened on it with make_directory::when_missing makes the directory, and
+// only then.
 std::string default_result_path();
 
 }  // namespace lockstep::bench

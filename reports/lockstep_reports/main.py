@@ -200,7 +200,8 @@ def run_compare(argv: list[str]) -> int:
         check_file_target(options.json)
         if os.path.exists(options.json) and any(os.path.exists(path) and os.path.samefile(path, options.json)
                                                 for path in options.files):
-            raise UsageError(f"--json {options.json} is one of the result files: give another file")
+            raise UsageError(f"{typed_option(argv, ('--out', '--json'))} {options.json} is one of the result "
+                             f"files: give another file")
     labels = unique_labels(options.files)
     files = [load_for_compare(path, label) for path, label in zip(options.files, labels)]
     # `lockstep run` files are compared, the first against each later one; the other kinds (c2c, delay, ...)
@@ -242,6 +243,19 @@ def run_compare(argv: list[str]) -> int:
                                  f"{shown.interval[1]:.3f}] beyond the {options.noise:g}% noise band{q})\n")
             return EXIT_REGRESSION
     return EXIT_OK
+
+
+def typed_option(argv: list[str], spellings: tuple[str, ...]) -> str:
+    """Which of an option's spellings the user typed (the last given wins, as in argparse): messages name the
+    option as it was typed. The first spelling when none is in argv."""
+    typed = spellings[0]
+    for word in argv:
+        if word == "--":
+            break
+        name = word.split("=", 1)[0]
+        if name in spellings:
+            typed = name
+    return typed
 
 
 def same_bytes(paths: list[str]) -> str:

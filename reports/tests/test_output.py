@@ -62,6 +62,15 @@ class CompareJson(Scratch):
         with open(fixture("machine_a_rerun.json"), encoding="utf-8") as stream:
             self.assertEqual(stream.read(), before)
 
+    def test_an_input_is_refused_under_the_name_the_option_was_given(self):
+        target = fixture("machine_a_rerun.json")
+        for spelling in ("--out", "--json"):
+            for argv in ((spelling, target), (f"{spelling}={target}",)):
+                status, out, err = self.compare(*argv)
+                self.assert_one_line(status, out, err, f"{spelling} {target} is one of the result files")
+                other = "--json" if spelling == "--out" else "--out"
+                self.assertNotIn(other, err)
+
     def test_the_file_is_whole_with_the_usual_permissions_and_nothing_beside_it(self):
         target = self.path("c.json")
         status, _, err = self.compare("--json", target)

@@ -146,12 +146,40 @@ TEST(Help, HelpCommandIsTheCommandsOwnHelp) {
   }
 }
 
+// `lockstep help` alone is the overview, `lockstep --help`: every command, not
+// the help of `help`.
+TEST(Help, HelpAloneIsTheOverview) {
+  const command_result help = run_command({LOCKSTEP_BINARY, "help"});
+  const command_result flag = run_command({LOCKSTEP_BINARY, "--help"});
+  EXPECT_EQ(help.exit_status, 0) << help.err;
+  EXPECT_EQ(help.out, flag.out);
+  for (const std::string& command : kCommands) EXPECT_NE(help.out.find(command), std::string::npos) << command;
+}
+
 TEST(Help, OldNamesAreMarkedOld) {
   for (const auto& [command, old_name] : std::vector<std::pair<std::string, std::string>>{
            {"falseshare", "--repeats"}, {"migrate", "--repeats"}, {"mpi", "--rounds"}}) {
     const command_result help = run_command({LOCKSTEP_BINARY, "help", command});
     EXPECT_NE(help.out.find("--repetitions"), std::string::npos) << command;
     EXPECT_NE(help.out.find(old_name + " is the old name"), std::string::npos) << command << "\n" << help.out;
+  }
+}
+
+// --masses says what each command splits the model among: threads in run and
+// delay, ranks in mpi, nothing in verify (which has neither).
+TEST(Help, MassesSpeaksOfWhatTheCommandSplits) {
+  for (const auto& [command, member] : std::vector<std::pair<std::string, std::string>>{
+           {"run", "thread"}, {"delay", "thread"}, {"mpi", "rank"}, {"verify", ""}}) {
+    const command_result help = run_command({LOCKSTEP_BINARY, command, "--help"});
+    const auto at = help.out.find("\n  --masses S ");  // the option, not a mention in the description
+    ASSERT_NE(at, std::string::npos) << command << "\n" << help.out;
+    const std::string line = help.out.substr(at + 1, help.out.find('\n', at + 1) - at - 1);
+    for (const std::string word : {"thread", "rank"}) {
+      if (word == member)
+        EXPECT_NE(line.find(word + "s (default: "), std::string::npos) << command << ": " << line;
+      else
+        EXPECT_EQ(line.find(word), std::string::npos) << command << ": " << line;
+    }
   }
 }
 
