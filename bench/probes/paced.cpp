@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <type_traits>
@@ -68,6 +69,186 @@ void finish_record(step_record& record, std::size_t kept,
     }
     previous = &now;
   }
+}
+
+paced_run_state::paced_run_state(unsigned participants, const paced_settings& settings)
+    : settings_(settings),
+      participants_(participants),
+      periods_(static_cast<std::size_t>(settings.periods)),
+      keep_record_(settings.recording != step_recording::off &&
+                   settings.periods * participants <= kMaxRecordedParticipantPeriods),
+      first_snapshot_(participants),
+      periods_ended_(keep_record_ ? periods_ : 0),
+      counter_readers_(keep_record_ ? participants : 0),
+      wake_(periods_ * participants, 0),
+      end_(periods_ * participants, 0),
+      cpus_(participants),
+      deltas_(participants),
+      errors_(participants) {
+  if (settings.recording == step_recording::off) return;
+  record_.emplace();
+  step_record& record = *record_;
+  record.participants = participants;
+  record.period_ns = settings.period_ns;
+  record.mode = settings.recording;
+  record.block_periods = std::max<std::int64_t>(settings.recording_block_periods, 1);
+  record.interrupt_every = std::max<std::int64_t>(settings.interrupt_every_periods, 1);
+  if (!keep_record_) {
+    record.not_kept = "the run has " + std::to_string(settings.periods * participants) +
+                      " participant-periods, more than the record keeps (" +
+                      std::to_string(kMaxRecordedParticipantPeriods) + ")";
+  } else {
+    record.periods = settings.periods;
+    record.steps.resize(periods_ * participants);
+    interrupt_reads_.resize(periods_);
+  }
+  record.snapshot_cost_ns = platform::snapshot_cost_ns(101);
+  record.interrupt_read_cost_ns = platform::interrupt_read_cost_ns(11);
+}
+
+void paced_run_state::start() noexcept { start_ns_ = platform::now_ns() + settings_.lead_ns; }
+
+void paced_run_state::failed(unsigned participant, std::string what) { errors_[participant] = std::move(what); }
+
+void paced_run_state::open(paced_participant& self) {
+  const unsigned id = self.id;
+  if (!keep_record_) return;
+  std::optional<platform::thread_counter_reader>& counters = counter_readers_[id];
+  counters.emplace();
+  if (counters->schedstat_available()) schedstat_seen_.store(true, std::memory_order_relaxed);
+  self.interrupts.emplace();
+  if (self.interrupts->available()) interrupts_seen_.store(true, std::memory_order_relaxed);
+  first_snapshot_[id] = counters->read();
+  if (id == 0 && self.interrupts->available()) interrupt_start_ = self.interrupts->read();
+}
+
+bool paced_run_state::runs_period(std::size_t k) const noexcept {
+  // (2) relaxed: a team's sync edges order (1) before this read (paced.hpp);
+  // independent participants only need to see it eventually.
+  return k < periods_ && static_cast<std::int64_t>(k) < leave_before_.load(std::memory_order_relaxed);
+}
+
+bool paced_run_state::records_period(std::size_t k) const noexcept {
+  if (!keep_record_) return false;
+  if (settings_.recording == step_recording::every_period) return true;
+  return (static_cast<std::int64_t>(k) / record_->block_periods) % 2 == 0;
+}
+
+void paced_run_state::leave_before_period(std::int64_t period) {
+  // (1) relaxed, sequenced before this participant's next publication: see
+  // (2). The minimum wins when two participants ask at once.
+  fetch_min(leave_before_, period, std::memory_order_relaxed);
+}
+
+void paced_run_state::wake(paced_participant& self, std::size_t k, stage_recorder* recorder) {
+  const unsigned id = self.id;
+  self.target_ns = start_ns_ + static_cast<std::int64_t>(k) * settings_.period_ns;
+  sleep_until(self.target_ns);
+  const std::int64_t latency = platform::now_ns() - self.target_ns;
+  wake_[k * participants_ + id] = latency;
+  if (k == 0) cpus_[id] = platform::current_cpu();
+  self.row = records_period(k) ? &record_->at(static_cast<std::int64_t>(k), id) : nullptr;
+  if (self.row != nullptr) {
+    const auto cpu = platform::current_cpu();
+    self.row->wake_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
+  }
+  if (recorder != nullptr) recorder->begin_period(id, k, self.target_ns, self.row);
+  if (!settings_.stop_above_ns || latency <= *settings_.stop_above_ns || self.reported_late) return;
+  self.reported_late = true;
+  const std::lock_guard lock(stop_mutex_);
+  if (stop_ && stop_->period <= static_cast<std::int64_t>(k)) return;
+  stop_ = paced_stop{static_cast<std::int64_t>(k),
+                     id,
+                     platform::current_cpu(),
+                     latency,
+                     static_cast<std::int64_t>(k) * settings_.period_ns + latency,
+                     k == 0 ? std::nullopt : std::optional<std::int64_t>(end_[(k - 1) * participants_ + id])};
+  if (settings_.stop_margin_periods > 0) leave_before_period(static_cast<std::int64_t>(k) + settings_.stop_margin_periods);
+}
+
+void paced_run_state::end(paced_participant& self, std::size_t k) {
+  const std::int64_t ended = platform::now_ns() - self.target_ns;
+  end_[k * participants_ + self.id] = ended;
+  if (self.row != nullptr) {
+    // After the end was read: outside the completion time. Nothing slower
+    // than a CPU read here: a participant sharing a CPU with one still
+    // stepping would delay it.
+    self.row->recorded = true;
+    const auto cpu = platform::current_cpu();
+    self.row->end_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
+    // acq_rel: each participant's increment releases its row of this period
+    // (and its reader), and the last one's acquires every other's, so its
+    // reads come after every end of the period and its writes into the
+    // others' rows after theirs.
+    if (periods_ended_[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants_) read_counters(self, k);
+  }
+  if (settings_.stop_after_misses && settings_.stop_margin_periods > 0 && ended > settings_.period_ns)
+    count_miss(static_cast<std::int64_t>(k));
+}
+
+void paced_run_state::read_counters(paced_participant& self, std::size_t k) {
+  // Everyone's counters, then the interrupt tables, by the last to end:
+  // nobody still stepping waits behind them. Then its own again: its next
+  // window starts after the reading.
+  const auto period = static_cast<std::int64_t>(k);
+  for (unsigned other = 0; other < participants_; ++other)
+    record_->at(period, other).counters = counter_readers_[other]->read();
+  if (self.interrupts->available() && period % record_->interrupt_every == 0)
+    interrupt_reads_[k] = self.interrupts->read();
+  self.row->resumed = counter_readers_[self.id]->read();
+}
+
+void paced_run_state::count_miss(std::int64_t period) {
+  // The first to report a period counts it (relaxed, see last_counted_miss_);
+  // the count that reaches the limit asks for the end (1).
+  const std::int64_t counted = fetch_min(last_counted_miss_, period, std::memory_order_relaxed, std::greater<>{});
+  if (counted < period && counted_misses_.fetch_add(1, std::memory_order_relaxed) + 1 >= *settings_.stop_after_misses)
+    leave_before_period(period + 1 + settings_.stop_margin_periods);
+}
+
+void paced_run_state::left(unsigned participant, const platform::thread_counters& delta) {
+  deltas_[participant] = delta;
+}
+
+paced_result paced_run_state::result(const platform::thread_counters& main_delta) {
+  paced_result result;
+  result.participants = participants_;
+  const std::int64_t agreed_end = leave_before_.load(std::memory_order_relaxed);  // the team has joined
+  std::size_t kept = periods_;
+  if (stop_) {
+    kept = static_cast<std::size_t>(stop_->period) + 1;
+  } else if (agreed_end < static_cast<std::int64_t>(periods_)) {
+    kept = static_cast<std::size_t>(agreed_end);
+    result.stopped_after_misses = true;
+  }
+  result.periods = static_cast<std::int64_t>(kept);
+  result.stop = stop_;
+  result.cpus = cpus_;
+  result.wakeup_ns.assign(wake_.begin(), wake_.begin() + static_cast<std::ptrdiff_t>(kept * participants_));
+  result.end_ns.assign(end_.begin(), end_.begin() + static_cast<std::ptrdiff_t>(kept * participants_));
+  if (settings_.independent) {
+    result.completion_ns = result.end_ns;
+  } else {
+    result.completion_ns.reserve(kept);
+    for (std::size_t k = 0; k < kept; ++k) {
+      const auto first = end_.begin() + static_cast<std::ptrdiff_t>(k * participants_);
+      result.completion_ns.push_back(static_cast<double>(*std::max_element(first, first + participants_)));
+    }
+  }
+  for (double completion : result.completion_ns)
+    if (completion > static_cast<double>(settings_.period_ns)) ++result.deadline_misses;
+  result.figure5.add("main", "main", main_delta);
+  for (unsigned id = 0; id < participants_; ++id)
+    result.figure5.add("worker " + std::to_string(id), "worker", deltas_[id]);
+  for (unsigned id = 0; id < participants_; ++id)
+    if (!errors_[id].empty()) result.errors.push_back("worker " + std::to_string(id) + ": " + errors_[id]);
+  if (record_) {
+    if (keep_record_) finish_record(*record_, kept, first_snapshot_, interrupt_start_, interrupt_reads_);
+    record_->schedstat_available = schedstat_seen_.load(std::memory_order_relaxed);
+    record_->interrupts_available = interrupts_seen_.load(std::memory_order_relaxed);
+    result.record = std::move(record_);
+  }
+  return result;
 }
 
 namespace {

@@ -34,8 +34,8 @@
 // must agree on the last period, or one would wait forever in a sync for a
 // participant that has left. The late participant p, at period k, before it
 // begins that period's step, stores S = k + stop_margin_periods into a shared
-// word (1, in run_paced); every participant reads it at the top of each
-// period (2) and leaves before period S. That is safe when no participant can
+// word (1, paced_run_state::leave_before_period in paced.cpp); every
+// participant reads it at the top of each period (2, runs_period) and leaves before period S. That is safe when no participant can
 // finish period S - 1 without a publication p makes in period k or later:
 // then nobody has begun S when (1) happens, and everybody sees (1) before it
 // would begin S (the sync's release/acquire edges order (1) before the read).
@@ -87,6 +87,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <mutex>
@@ -343,6 +344,122 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
   }
 }
 
+// An atomic fetch-min (C++26 gives std::atomic one): moves `word` to `value`
+// when `value` comes first under `before` (std::less: lowers it to the
+// minimum; std::greater: raises it to the maximum), and returns what `word`
+// held before, so that the caller knows whether it moved it. `order` is the
+// order of the read-modify-write that moves the word; the loads before it
+// take the matching acquire or relaxed order. The caller's comment names the
+// edge `order` pairs with. A compare-and-swap loop: it ends once the word
+// is at `value` or beyond it, whoever moved it there.
+template <class T, class Before = std::less<T>>
+T fetch_min(std::atomic<T>& word, T value, std::memory_order order, Before before = {}) noexcept {
+  const std::memory_order load = order == std::memory_order_release   ? std::memory_order_relaxed
+                                 : order == std::memory_order_acq_rel ? std::memory_order_acquire
+                                                                      : order;
+  T held = word.load(load);
+  while (before(value, held) && !word.compare_exchange_weak(held, value, order, load)) {
+  }
+  return held;
+}
+
+// One participant's part of a paced run, kept on its own thread.
+struct paced_participant {
+  explicit paced_participant(unsigned participant) : id(participant) {}
+  unsigned id = 0;
+  std::int64_t target_ns = 0;  // this period's target
+  participant_period* row = nullptr;  // this period's row of the record, or null
+  // One per participant: two periods' last participants may read at once.
+  std::optional<platform::interrupt_reader> interrupts;
+  bool reported_late = false;
+};
+
+// What run_paced keeps apart from the team and the step (bench/probes/paced.cpp
+// holds the definitions): the samples and the record, set up before the run;
+// each period's wake-up and end as a participant sees them; the agreed end (1)
+// and (2); the reads of the last participant to end a period; the result.
+// Every member a participant calls is called on its own thread, and writes
+// only its own slots, or the shared words named with their orders.
+class paced_run_state {
+ public:
+  // Allocates and touches the samples and the record (settings.recording),
+  // and measures what one read of the counters and the interrupt tables
+  // costs: all before the run.
+  paced_run_state(unsigned participants, const paced_settings& settings);
+  paced_run_state(const paced_run_state&) = delete;
+  paced_run_state& operator=(const paced_run_state&) = delete;
+
+  // The first period starts settings.lead_ns from now.
+  void start() noexcept;
+  // A participant that could not pin or go FIFO (it still runs).
+  void failed(unsigned participant, std::string what);
+  // On the participant's thread, after its prepare: its counters and its
+  // interrupt reader are opened there (/proc/thread-self is the opener).
+  void open(paced_participant& self);
+  // Whether period k runs: (2), the agreed end is later.
+  bool runs_period(std::size_t k) const noexcept;
+  // Sleeps until period k's target and records the wake-up; a wake-up later
+  // than stop_above_ns asks for the end (1).
+  void wake(paced_participant& self, std::size_t k, stage_recorder* recorder);
+  // After the step: records its end; the last participant to end the period
+  // reads everyone's counters; a miss is counted for stop_after_misses.
+  void end(paced_participant& self, std::size_t k);
+  // The participant's Figure 5 counters over its run.
+  void left(unsigned participant, const platform::thread_counters& delta);
+  // After the team has joined: the result (main_delta: the launching thread's counters).
+  paced_result result(const platform::thread_counters& main_delta);
+
+ private:
+  bool records_period(std::size_t k) const noexcept;
+  void read_counters(paced_participant& self, std::size_t k);
+  void leave_before_period(std::int64_t period);
+  void count_miss(std::int64_t period);
+
+  const paced_settings& settings_;
+  unsigned participants_ = 0;
+  std::size_t periods_ = 0;
+  std::int64_t start_ns_ = 0;
+
+  // The per-step record and what turns it into differences after the run.
+  std::optional<step_record> record_;
+  bool keep_record_ = false;
+  std::vector<platform::cpu_interrupt_totals> interrupt_reads_;  // at the last participant's end of period k
+  platform::cpu_interrupt_totals interrupt_start_;                // before its first period
+  std::vector<platform::thread_step_counters> first_snapshot_;
+  // Set by any participant, read after the team is joined: the join orders
+  // them, so relaxed (the flags carry no data of their own).
+  std::atomic<bool> schedstat_seen_{false};
+  std::atomic<bool> interrupts_seen_{false};
+  // How many participants have ended each period: the last one reads
+  // everyone's counters and the interrupt tables, so that nobody's end
+  // waits behind the reads.
+  std::vector<std::atomic<unsigned>> periods_ended_;
+  // Each participant's counters, opened on its own thread (/proc/thread-self
+  // is the opener) before its first period; the last participant to end a
+  // period reads everyone's counters through them (its periods_ended_
+  // acquire orders each emplace before that read).
+  std::vector<std::optional<platform::thread_counter_reader>> counter_readers_;
+
+  // The samples: periods x participants, period-major, each participant its own slots.
+  std::vector<std::int64_t> wake_;
+  std::vector<std::int64_t> end_;
+  std::vector<std::optional<unsigned>> cpus_;
+  std::vector<platform::thread_counters> deltas_;
+  std::vector<std::string> errors_;
+
+  // The agreed end (see the header): lowered by a late wake-up or by the
+  // miss that reaches stop_after_misses, read once per period by everyone.
+  // No stop: never below `periods`, so the read never ends a run early.
+  std::atomic<std::int64_t> leave_before_{std::numeric_limits<std::int64_t>::max()};
+  std::mutex stop_mutex_;  // guards stop_: taken only on a late wake-up
+  std::optional<paced_stop> stop_;
+  // Stop after misses: the last period counted, and how many were. Relaxed:
+  // the count only decides when to ask for the end; the end itself is
+  // agreed by (1) and (2).
+  std::atomic<std::int64_t> last_counted_miss_{-1};
+  std::atomic<std::uint64_t> counted_misses_{0};
+};
+
 // Runs `settings.periods` paced periods on `team` (sync::std_thread_team or
 // sync::omp_team: team.run(body) calls body(id) for every participant).
 //   prepare(id)   on participant id's thread first: pinning (may throw; the
@@ -358,170 +475,26 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
 template <class Team, class Prepare, class StepOne>
 paced_result run_paced(Team& team, unsigned participants, const paced_settings& settings, Prepare&& prepare,
                        StepOne&& step_one, stage_recorder* recorder = nullptr) {
-  const auto periods = static_cast<std::size_t>(settings.periods);
-  paced_result result;
-  result.participants = participants;
-
-  // The per-step record, allocated and touched here, before the run.
-  std::optional<step_record> record;
-  std::vector<platform::cpu_interrupt_totals> interrupt_reads;  // at the last participant's end of period k
-  platform::cpu_interrupt_totals interrupt_start;                // before its first period
-  std::vector<platform::thread_step_counters> first_snapshot(participants);
-  if (settings.recording != step_recording::off) {
-    record.emplace();
-    record->participants = participants;
-    record->period_ns = settings.period_ns;
-    record->mode = settings.recording;
-    record->block_periods = std::max<std::int64_t>(settings.recording_block_periods, 1);
-    record->interrupt_every = std::max<std::int64_t>(settings.interrupt_every_periods, 1);
-    if (settings.periods * participants > kMaxRecordedParticipantPeriods) {
-      record->not_kept = "the run has " + std::to_string(settings.periods * participants) +
-                         " participant-periods, more than the record keeps (" +
-                         std::to_string(kMaxRecordedParticipantPeriods) + ")";
-    } else {
-      record->periods = settings.periods;
-      record->steps.resize(periods * participants);
-      interrupt_reads.resize(periods);
-    }
-    record->snapshot_cost_ns = platform::snapshot_cost_ns(101);
-    record->interrupt_read_cost_ns = platform::interrupt_read_cost_ns(11);
-  }
-  const bool keep_record = record && record->not_kept.empty();
-  const auto records_period = [&](std::size_t k) {
-    if (!keep_record) return false;
-    if (settings.recording == step_recording::every_period) return true;
-    return (static_cast<std::int64_t>(k) / record->block_periods) % 2 == 0;
-  };
-  // Set by any participant, read after the team is joined: the join orders
-  // them, so relaxed (the flags carry no data of their own).
-  std::atomic<bool> schedstat_seen{false};
-  std::atomic<bool> interrupts_seen{false};
-  // How many participants have ended each period: the last one reads
-  // everyone's counters and the interrupt tables, so that nobody's end
-  // waits behind the reads.
-  std::vector<std::atomic<unsigned>> periods_ended(keep_record ? periods : 0);
-  // Each participant's counters, opened on its own thread (/proc/thread-self
-  // is the opener) before its first period; the last participant to end a
-  // period reads everyone's counters through them (its periods_ended
-  // acquire orders each emplace before that read).
-  std::vector<std::optional<platform::thread_counter_reader>> counter_readers(keep_record ? participants : 0);
-  std::vector<std::int64_t> wake(periods * participants, 0);
-  std::vector<std::int64_t> end(periods * participants, 0);
-  std::vector<std::optional<unsigned>> cpus(participants);
-  std::vector<platform::thread_counters> deltas(participants);
-  std::vector<std::string> errors(participants);
-
-  // The agreed end (see the header): lowered by a late wake-up or by the
-  // miss that reaches stop_after_misses, read once per period by everyone.
-  // No stop: never below `periods`, so the read never ends a run early.
-  std::atomic<std::int64_t> leave_before{std::numeric_limits<std::int64_t>::max()};
-  // Lowers the agreed end to `period` (never raises it).
-  const auto leave_before_period = [&leave_before](std::int64_t period) {
-    std::int64_t agreed = leave_before.load(std::memory_order_relaxed);
-    // (1) relaxed, sequenced before this participant's next publication: see
-    // (2). The minimum wins when two participants ask at once.
-    while (period < agreed &&
-           !leave_before.compare_exchange_weak(agreed, period, std::memory_order_relaxed, std::memory_order_relaxed)) {
-    }
-  };
-  std::mutex stop_mutex;  // guards `stop`: taken only on a late wake-up
-  std::optional<paced_stop> stop;
-  // Stop after misses: the last period counted, and how many were. Relaxed:
-  // the count only decides when to ask for the end; the end itself is
-  // agreed by (1) and (2).
-  std::atomic<std::int64_t> last_counted_miss{-1};
-  std::atomic<std::uint64_t> counted_misses{0};
-
+  paced_run_state state(participants, settings);
   const platform::thread_counters main_before = platform::snapshot_current_thread();
-  const std::int64_t start = platform::now_ns() + settings.lead_ns;
+  state.start();
   // Everything written before team.run happens-before every body, and every
-  // body happens-before run returns (sync/team.hpp): the plain vectors need
-  // no atomics, each participant writes only its own slots.
+  // body happens-before run returns (sync/team.hpp): the state's plain
+  // vectors need no atomics, each participant writes only its own slots.
   team.run([&](unsigned id) {
     const platform::thread_counters before = platform::snapshot_current_thread();
     try {
       prepare(id);
       if (settings.fifo_priority) platform::set_current_thread_fifo(*settings.fifo_priority);
     } catch (const std::exception& e) {
-      errors[id] = e.what();
+      state.failed(id, e.what());
     }
-    // Opened on this thread (after the pin): /proc/thread-self is the opener.
-    std::optional<platform::thread_counter_reader>* counters = keep_record ? &counter_readers[id] : nullptr;
-    std::optional<platform::interrupt_reader> interrupts;
-    if (keep_record) {
-      counters->emplace();
-      if ((*counters)->schedstat_available()) schedstat_seen.store(true, std::memory_order_relaxed);
-      interrupts.emplace();  // one per participant: two periods' last participants may read at once
-      if (interrupts->available()) interrupts_seen.store(true, std::memory_order_relaxed);
-      first_snapshot[id] = (*counters)->read();
-      if (id == 0 && interrupts->available()) interrupt_start = interrupts->read();
-    }
-    bool reported_late = false;
-    for (std::size_t k = 0; k < periods; ++k) {
-      // (2) relaxed: a team's sync edges order (1) before this read (header);
-      // independent participants only need to see it eventually.
-      if (static_cast<std::int64_t>(k) >= leave_before.load(std::memory_order_relaxed)) break;
-      const std::int64_t target = start + static_cast<std::int64_t>(k) * settings.period_ns;
-      sleep_until(target);
-      const std::int64_t latency = platform::now_ns() - target;
-      wake[k * participants + id] = latency;
-      if (k == 0) cpus[id] = platform::current_cpu();
-      participant_period* row = records_period(k) ? &record->at(static_cast<std::int64_t>(k), id) : nullptr;
-      if (row != nullptr) {
-        const auto cpu = platform::current_cpu();
-        row->wake_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
-      }
-      if (recorder != nullptr) recorder->begin_period(id, k, target, row);
-      if (settings.stop_above_ns && latency > *settings.stop_above_ns && !reported_late) {
-        reported_late = true;
-        const std::lock_guard lock(stop_mutex);
-        if (!stop || stop->period > static_cast<std::int64_t>(k)) {
-          stop = paced_stop{static_cast<std::int64_t>(k),
-                            id,
-                            platform::current_cpu(),
-                            latency,
-                            static_cast<std::int64_t>(k) * settings.period_ns + latency,
-                            k == 0 ? std::nullopt : std::optional<std::int64_t>(end[(k - 1) * participants + id])};
-          if (settings.stop_margin_periods > 0)
-            leave_before_period(static_cast<std::int64_t>(k) + settings.stop_margin_periods);
-        }
-      }
+    paced_participant self(id);
+    state.open(self);
+    for (std::size_t k = 0; state.runs_period(k); ++k) {
+      state.wake(self, k, recorder);
       step_one(id, static_cast<std::uint64_t>(k));
-      const std::int64_t ended = platform::now_ns() - target;
-      end[k * participants + id] = ended;
-      if (row != nullptr) {
-        // After the end was read: outside the completion time. Nothing
-        // slower than a CPU read here: a participant sharing a CPU with one
-        // still stepping would delay it.
-        row->recorded = true;
-        const auto cpu = platform::current_cpu();
-        row->end_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
-        // acq_rel: each participant's increment releases its row of this
-        // period (and its reader), and the last one's acquires every
-        // other's, so its reads below come after every end of the period
-        // and its writes into the others' rows after theirs.
-        const bool last = periods_ended[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants;
-        if (last) {
-          // Everyone's counters, then the interrupt tables, by the last to
-          // end: nobody still stepping waits behind them. Then its own
-          // again: its next window starts after the reading.
-          for (unsigned other = 0; other < participants; ++other)
-            record->at(static_cast<std::int64_t>(k), other).counters = counter_readers[other]->read();
-          if (interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
-            interrupt_reads[k] = interrupts->read();
-          row->resumed = (*counters)->read();
-        }
-      }
-      if (settings.stop_after_misses && settings.stop_margin_periods > 0 && ended > settings.period_ns) {
-        const auto period = static_cast<std::int64_t>(k);
-        std::int64_t counted = last_counted_miss.load(std::memory_order_relaxed);
-        while (counted < period && !last_counted_miss.compare_exchange_weak(counted, period, std::memory_order_relaxed,
-                                                                            std::memory_order_relaxed)) {
-        }
-        if (counted < period &&
-            counted_misses.fetch_add(1, std::memory_order_relaxed) + 1 >= *settings.stop_after_misses)
-          leave_before_period(period + 1 + settings.stop_margin_periods);
-      }
+      state.end(self, k);
     }
     if (settings.fifo_priority) {
       try {
@@ -529,49 +502,9 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       } catch (const std::exception&) {
       }
     }
-    deltas[id] = platform::snapshot_current_thread() - before;
+    state.left(id, platform::snapshot_current_thread() - before);
   });
-  const platform::thread_counters main_delta = platform::snapshot_current_thread() - main_before;
-
-  const std::int64_t agreed_end = leave_before.load(std::memory_order_relaxed);  // the team has joined
-  std::size_t kept = periods;
-  if (stop) {
-    kept = static_cast<std::size_t>(stop->period) + 1;
-  } else if (agreed_end < static_cast<std::int64_t>(periods)) {
-    kept = static_cast<std::size_t>(agreed_end);
-    result.stopped_after_misses = true;
-  }
-  result.periods = static_cast<std::int64_t>(kept);
-  result.stop = stop;
-  result.cpus = cpus;
-  result.wakeup_ns.reserve(kept * participants);
-  result.end_ns.reserve(kept * participants);
-  for (std::size_t index = 0; index < kept * participants; ++index) {
-    result.wakeup_ns.push_back(static_cast<double>(wake[index]));
-    result.end_ns.push_back(static_cast<double>(end[index]));
-  }
-  if (settings.independent) {
-    result.completion_ns = result.end_ns;
-  } else {
-    result.completion_ns.reserve(kept);
-    for (std::size_t k = 0; k < kept; ++k) {
-      const auto first = end.begin() + static_cast<std::ptrdiff_t>(k * participants);
-      result.completion_ns.push_back(static_cast<double>(*std::max_element(first, first + participants)));
-    }
-  }
-  for (double completion : result.completion_ns)
-    if (completion > static_cast<double>(settings.period_ns)) ++result.deadline_misses;
-  result.figure5.add("main", "main", main_delta);
-  for (unsigned id = 0; id < participants; ++id) result.figure5.add("worker " + std::to_string(id), "worker", deltas[id]);
-  for (unsigned id = 0; id < participants; ++id)
-    if (!errors[id].empty()) result.errors.push_back("worker " + std::to_string(id) + ": " + errors[id]);
-  if (record) {
-    if (keep_record) finish_record(*record, kept, first_snapshot, interrupt_start, interrupt_reads);
-    record->schedstat_available = schedstat_seen.load(std::memory_order_relaxed);
-    record->interrupts_available = interrupts_seen.load(std::memory_order_relaxed);
-    result.record = std::move(record);
-  }
-  return result;
+  return state.result(platform::snapshot_current_thread() - main_before);
 }
 
 // The paced RK4 step of `lockstep delay`: one sync x layout, `threads`
