@@ -79,7 +79,7 @@
 // tables come when nobody is stepping, outside the completion time.
 // recording = alternate_blocks records every other block of periods, so
 // that one run gives its cost as a pair (on against off).
-// bench/delay/delay_report.hpp turns the record into causes.
+// bench/delay/attribution.hpp turns the record into causes.
 #include <time.h>
 
 #include <algorithm>
