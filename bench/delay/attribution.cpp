@@ -489,26 +489,9 @@ std::optional<recording_cost> cost_of(const probes::paced_result& run) {
 
 }  // namespace
 
-std::string cause_words(delay_cause cause) {
-  switch (cause) {
-    case delay_cause::compute: return "compute";
-    case delay_cause::run_queue_wait: return "run-queue wait";
-    case delay_cause::migration: return "migration";
-    case delay_cause::page_faults: return "page faults";
-    case delay_cause::interrupts: return "interrupts";
-    case delay_cause::wakeup_latency: return "wake-up latency";
-    case delay_cause::machine_stall: return "machine stall";
-    case delay_cause::unexplained: return "unexplained";
-  }
-  return "unexplained";
-}
+std::string cause_words(delay_cause cause) { return std::string(kCauseNaming[cause_index(cause)].words); }
 
-std::string cause_key(delay_cause cause) {
-  std::string key = cause_words(cause);
-  std::replace(key.begin(), key.end(), ' ', '_');
-  std::replace(key.begin(), key.end(), '-', '_');
-  return key;
-}
+std::string cause_key(delay_cause cause) { return std::string(kCauseNaming[cause_index(cause)].key); }
 
 late_step attribute_step(const probes::paced_result& run, std::int64_t period) {
   const step_reader reader(run);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -84,6 +85,33 @@ enum class delay_cause {
 };
 inline constexpr std::size_t kDelayCauses = 8;
 using cause_split = std::array<double, kDelayCauses>;  // ns per cause, indexed by delay_cause
+
+// What each cause is called, in delay_cause's order: the one table that the
+// text, the result file's keys and its list of causes (cause_kinds, which
+// the report's figure reads: reports/lockstep_reports/delay_causes.py) take
+// their names from.
+struct cause_naming {
+  delay_cause cause;
+  std::string_view key;     // the result file's: "run_queue_wait"
+  std::string_view words;   // the text's: "run-queue wait"
+  std::string_view column;  // the causes table's column, 8 characters at most: "rq wait"
+};
+inline constexpr std::array<cause_naming, kDelayCauses> kCauseNaming{{
+    {delay_cause::compute, "compute", "compute", "compute"},
+    {delay_cause::run_queue_wait, "run_queue_wait", "run-queue wait", "rq wait"},
+    {delay_cause::migration, "migration", "migration", "migrate"},
+    {delay_cause::page_faults, "page_faults", "page faults", "faults"},
+    {delay_cause::interrupts, "interrupts", "interrupts", "irq"},
+    {delay_cause::wakeup_latency, "wake_up_latency", "wake-up latency", "wake-up"},
+    {delay_cause::machine_stall, "machine_stall", "machine stall", "stall"},
+    {delay_cause::unexplained, "unexplained", "unexplained", "unexpl."},
+}};
+static_assert([] {
+  for (std::size_t index = 0; index < kDelayCauses; ++index)
+    if (static_cast<std::size_t>(kCauseNaming[index].cause) != index || kCauseNaming[index].column.size() > 8)
+      return false;
+  return true;
+}(), "kCauseNaming lists every cause once, in delay_cause's order, each column in 8 characters");
 
 // "compute", "run-queue wait", ... (text) and "compute", "run_queue_wait", ... (JSON).
 std::string cause_words(delay_cause cause);

@@ -114,10 +114,8 @@ std::string causes_text(const delay_causes& causes, const std::string& title, st
       "each late step's excess over the median completion ({:.1f} us), split along its critical path "
       "(share of the excess; stages 0-3)\n",
       causes.median_completion_ns / 1e3);
-  static constexpr const char* kColumns[kDelayCauses] = {"compute", "rq wait", "migrate", "faults",
-                                                         "irq",     "wake-up", "stall",   "unexpl."};
   std::string header = fmt::format("{:<12} {:>6} {:>10}", "steps", "count", "excess ms");
-  for (const char* column : kColumns) header += fmt::format(" {:>8}", column);
+  for (const cause_naming& naming : kCauseNaming) header += fmt::format(" {:>8}", naming.column);
   out += header + fmt::format(" {:>10}\n", "explained");
   for (const cause_row& row : causes.tail) out += cause_table_row(row.label, row.steps, row.excess_ns, row.cause_ns, row.explained_share);
   if (causes.misses) out += cause_table_row("misses", causes.misses->steps, causes.misses->excess_ns, causes.misses->cause_ns,
@@ -208,6 +206,12 @@ nlohmann::json causes_json(const delay_causes& causes) {
   else
     document["recording_cost"] = nullptr;
   return document;
+}
+
+nlohmann::json cause_kinds_json() {
+  nlohmann::json kinds = nlohmann::json::array();
+  for (const cause_naming& naming : kCauseNaming) kinds.push_back({{"key", naming.key}, {"words", naming.words}});
+  return kinds;
 }
 
 std::string ranked_causes(const cause_row& row) {

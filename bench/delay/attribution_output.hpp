@@ -22,6 +22,11 @@ std::string causes_text(const delay_causes& causes, const std::string& title, st
 // The causes object of the result file.
 nlohmann::json causes_json(const delay_causes& causes);
 
+// The causes in delay_cause's order, each {"key", "words"} (kCauseNaming):
+// the result file's cause_kinds, so that a reader takes the order and the
+// words from the file instead of a copy of the table.
+nlohmann::json cause_kinds_json();
+
 // A row's causes above 0.5 % of its excess, largest first: "run-queue wait
 // 97 %, machine stall 3 %".
 std::string ranked_causes(const cause_row& row);

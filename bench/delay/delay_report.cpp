@@ -440,6 +440,7 @@ nlohmann::json delay_json(const delay_measurement& measured, const delay_analysi
   if (settings.stop_above_ns) document["stop"] = stop_json(measured);
   if (analysis.search) document["find_period"] = search_json(measured, *analysis.search);
   document["causes"] = analysis.causes ? causes_json(*analysis.causes) : nlohmann::json(nullptr);
+  document["cause_kinds"] = cause_kinds_json();
   if (analysis.search)
     document["find_period"]["failed_trial_causes"] =
         analysis.trial_causes ? causes_json(*analysis.trial_causes) : nlohmann::json(nullptr);
