@@ -106,7 +106,12 @@ class step_reader {
       if (!record_.at(k, p).recorded) return false;
     return true;
   }
-  double period_ns() const noexcept { return period_ns_; }
+  // How long after step k - 1's target step k's target was: one period, or
+  // more when an overrun made the schedule skip periods (paced.hpp).
+  double gap_ns(std::int64_t k) const {
+    if (k <= 0 || run_.period_index.empty()) return period_ns_;
+    return static_cast<double>(run_.period_index[index(k, 0)] - run_.period_index[index(k - 1, 0)]) * period_ns_;
+  }
 
   double wake(std::int64_t k, unsigned p) const { return run_.wakeup_ns[index(k, p)]; }
   double end(std::int64_t k, unsigned p) const { return run_.end_ns[index(k, p)]; }
@@ -387,7 +392,7 @@ late_step attribute_with(const step_reader& reader, std::int64_t k, const late_s
     }
     // A start its own previous step delayed: that step's causes, in its proportions.
     if (piece.kind == part_kind::timer_wakeup && previous != nullptr && previous->excess_ns > 0 && k > 0 &&
-        reader.end(k - 1, piece.participant) > reader.period_ns()) {
+        reader.end(k - 1, piece.participant) > reader.gap_ns(k)) {
       for (std::size_t cause = 0; cause < kDelayCauses; ++cause)
         split[cause] += excess * previous->cause_ns[cause] / previous->excess_ns;
       if (dominant == &piece) step.inherited = true;
@@ -498,7 +503,7 @@ late_step attribute_step(const probes::paced_result& run, std::int64_t period) {
   std::optional<late_step> previous;
   // The chain of overrunning steps before it, oldest first (each may inherit).
   std::int64_t first = period;
-  while (first > 0 && reader.completion(first - 1) > reader.period_ns() && reader.recorded(first - 1)) --first;
+  while (first > 0 && reader.completion(first - 1) > reader.gap_ns(first) && reader.recorded(first - 1)) --first;
   for (std::int64_t k = first; k < period; ++k) previous = attribute_with(reader, k, previous ? &*previous : nullptr);
   return attribute_with(reader, period, previous ? &*previous : nullptr);
 }

@@ -67,7 +67,10 @@ namespace lockstep::bench {
 // (Blocked time is measured from the wake-up to the end, so that the sleep,
 // whose length moves with the previous step's end, does not blur it.)
 // A step whose timer part is late because the participant's own previous
-// step ended after this period's target inherits that step's causes.
+// step ended after this step's target inherits that step's causes. (A
+// paced run re-anchors its schedule after an overrun, so a team's step never
+// starts before the previous one ended: this applies to records made
+// otherwise.)
 // When the parts' excesses add up to more than the step's excess (other
 // parts ran faster than their median), the causes are scaled to the step's
 // excess, so that a step's causes always add up to its excess.

@@ -115,7 +115,8 @@ nlohmann::json per_cpu_json(const delay_analysis& analysis) {
     rows.push_back({{"cpu", row.cpu ? nlohmann::json(*row.cpu) : nullptr},
                     {"wakeup_latency_ns", distribution_json(row.wakeup_ns)},
                     {"completion_ns", distribution_json(row.completion_ns)},
-                    {"deadline_misses", row.deadline_misses}});
+                    {"deadline_misses", row.deadline_misses},
+                    {"skipped_periods", row.skipped_periods}});
   nlohmann::json noisiest = nullptr;
   if (analysis.noisiest) {
     const per_cpu_row& worst = analysis.per_cpu[*analysis.noisiest];
@@ -153,6 +154,7 @@ nlohmann::json stop_json(const delay_measurement& measured) {
                          {"periods_kept", run.periods}};
   if (run.stop) {
     stop.update({{"period", run.stop->period},
+                 {"step", run.stop->step},
                  {"since_start_ns", run.stop->since_start_ns},
                  {"participant", run.stop->participant},
                  {"thread", thread_name(run, run.stop->participant, measured.settings.per_cpu)},
@@ -168,6 +170,7 @@ nlohmann::json trial_json(const probes::period_trial& trial) {
   return {{"period_ns", trial.period_ns},
           {"periods", trial.outcome.periods},
           {"misses", trial.outcome.misses},
+          {"skipped_periods", trial.outcome.skipped},
           {"miss_rate", trial.miss_rate},
           {"upper_bound", trial.upper_bound},
           {"holds", trial.holds},
@@ -298,7 +301,7 @@ delay_analysis analyse_delay(const delay_measurement& measured) {
   if (!run.wakeup_ns.empty())
     for (unsigned id = 0; id < run.participants; ++id)
       analysis.histogram.columns.push_back(probes::histogram_column(
-          probes::participant_samples(run.wakeup_ns, run.participants, id), measured.settings.histogram_bound_us,
+          probes::samples_of(run, run.wakeup_ns, id), measured.settings.histogram_bound_us,
           thread_name(run, id, per_cpu), run.cpus[id]));
 
   if (per_cpu && !run.wakeup_ns.empty()) {
@@ -308,9 +311,10 @@ delay_analysis analyse_delay(const delay_measurement& measured) {
       per_cpu_row row;
       row.cpu = run.cpus[id];
       row.shown_cpu = run.cpus[id].value_or(id);
-      row.wakeup_ns = probes::participant_samples(run.wakeup_ns, run.participants, id);
-      row.completion_ns = probes::participant_samples(run.end_ns, run.participants, id);
+      row.wakeup_ns = probes::samples_of(run, run.wakeup_ns, id);
+      row.completion_ns = probes::samples_of(run, run.end_ns, id);
       for (double end : row.completion_ns) row.deadline_misses += end > static_cast<double>(measured.period_ns) ? 1 : 0;
+      if (id < run.skipped_by_participant.size()) row.skipped_periods = run.skipped_by_participant[id];
       if (!row.wakeup_ns.empty()) {
         row.wakeup = platform::summarize(row.wakeup_ns);
         latencies.push_back({row.shown_cpu, row.wakeup.p99, row.wakeup.max});
@@ -368,7 +372,7 @@ std::string delay_text(const delay_measurement& measured, const delay_analysis& 
   std::vector<labelled_samples> series;
   if (settings.per_cpu) {
     for (unsigned id = 0; id < pinned.participants; ++id)
-      series.push_back({thread_name(pinned, id, true), probes::participant_samples(pinned.wakeup_ns, pinned.participants, id)});
+      series.push_back({thread_name(pinned, id, true), probes::samples_of(pinned, pinned.wakeup_ns, id)});
   } else {
     series.push_back({"count", pinned.wakeup_ns});
   }
@@ -429,6 +433,8 @@ nlohmann::json delay_json(const delay_measurement& measured, const delay_analysi
         {"placement", measured.placement}}},
       {"idle", idle_json(idle)},
       {"periods_measured", pinned.periods},
+      {"periods_scheduled", pinned.periods_scheduled},
+      {"skipped_periods", pinned.skipped_periods},
       {"wakeup_latency_ns", distribution_json(pinned.wakeup_ns)},
       {"completion_ns", distribution_json(pinned.completion_ns)},
       {"deadline_misses", pinned.deadline_misses},
@@ -448,7 +454,8 @@ nlohmann::json delay_json(const delay_measurement& measured, const delay_analysi
     document["figure5_unpinned"] = figure5_json(measured.unpinned->figure5);
     document["unpinned"] = {{"wakeup_latency_ns", distribution_json(measured.unpinned->wakeup_ns)},
                             {"completion_ns", distribution_json(measured.unpinned->completion_ns)},
-                            {"deadline_misses", measured.unpinned->deadline_misses}};
+                            {"deadline_misses", measured.unpinned->deadline_misses},
+                            {"skipped_periods", measured.unpinned->skipped_periods}};
   }
   return document;
 }

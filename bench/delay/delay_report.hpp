@@ -34,6 +34,7 @@ struct per_cpu_row {
   platform::distribution wakeup;  // of wakeup_ns (empty: count 0)
   std::vector<double> completion_ns;
   std::uint64_t deadline_misses = 0;  // its completions above the period
+  std::uint64_t skipped_periods = 0;  // periods of the schedule its thread skipped after its overruns
 };
 
 // The search's conclusions (--find-period).
