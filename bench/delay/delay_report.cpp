@@ -79,14 +79,22 @@ std::string distribution_line(const std::string& what, const std::vector<double>
                      d.p50 / 1e3, d.p99 / 1e3, d.p999 / 1e3, d.max / 1e3, d.count);
 }
 
-std::string result_text(const std::string& title, const paced_result& run, std::int64_t period_ns) {
+// The run's result: the overrun first, when steps overran, then the
+// distributions and the misses.
+std::string result_text(const std::string& title, const paced_result& run, std::int64_t period_ns,
+                        const std::optional<overrun_reading>& overrun) {
   std::string out = fmt::format("\n{}\n", title);
+  if (overrun) out += overrun_line(*overrun) + "\n";
   out += fmt::format("{:<22} {:>10} {:>10} {:>10} {:>10} {:>10} {:>9}\n", "us", "min", "p50", "p99", "p99.9", "max",
                      "count");
   out += distribution_line("wake-up latency", run.wakeup_ns);
   out += distribution_line("completion (deadline)", run.completion_ns);
-  out += fmt::format("deadline misses: {} of {} (deadline = period = {} us)\n", run.deadline_misses,
-                     run.completion_ns.size(), microseconds_text(period_ns));
+  out += fmt::format("deadline misses: {} of {}{} (deadline = period = {} us)\n", run.deadline_misses,
+                     run.completion_ns.size(),
+                     run.skipped_periods == 0
+                         ? std::string()
+                         : fmt::format(" steps, and {} periods skipped after them", run.skipped_periods),
+                     microseconds_text(period_ns));
   for (const auto& error : run.errors) out += fmt::format("warning: {}\n", error);
   return out;
 }
@@ -107,6 +115,20 @@ std::string per_cpu_text(const delay_analysis& analysis, std::int64_t period_ns)
                        kNoisiestRule);
   }
   return out;
+}
+
+nlohmann::json overrun_json(const std::optional<overrun_reading>& overrun) {
+  if (!overrun) return nullptr;
+  return {{"steps", overrun->steps},
+          {"overran", overrun->overran},
+          {"skipped_periods", overrun->skipped_periods},
+          {"periods", overrun->periods},
+          {"schedules", overrun->schedules},
+          {"period_ns", overrun->period_ns},
+          {"completion_p50_ns", overrun->completion_p50_ns},
+          {"completion_max_ns", overrun->completion_max_ns},
+          {"step_exceeds_period", overrun->step_exceeds_period},
+          {"line", overrun_line(*overrun)}};
 }
 
 nlohmann::json per_cpu_json(const delay_analysis& analysis) {
@@ -282,6 +304,41 @@ std::string misses_line(const delay_analysis& analysis) {
 
 }  // namespace
 
+std::optional<overrun_reading> overrun_of(const paced_result& run, std::int64_t period_ns) {
+  if (run.deadline_misses == 0 || run.completion_ns.empty()) return std::nullopt;
+  const platform::distribution completion = platform::summarize(run.completion_ns);
+  overrun_reading overrun;
+  overrun.steps = static_cast<std::int64_t>(run.completion_ns.size());
+  overrun.overran = run.deadline_misses;
+  overrun.skipped_periods = run.skipped_periods;
+  overrun.periods = overrun.steps + static_cast<std::int64_t>(run.skipped_periods);
+  overrun.schedules = run.independent ? run.participants : 1U;
+  overrun.period_ns = period_ns;
+  overrun.completion_p50_ns = completion.p50;
+  overrun.completion_max_ns = completion.max;
+  overrun.step_exceeds_period = completion.p50 > static_cast<double>(period_ns);
+  return overrun;
+}
+
+std::string overrun_line(const overrun_reading& overrun) {
+  const std::string period = microseconds_text(overrun.period_ns);
+  const std::string skipped =
+      fmt::format("{} of the {} periods{} were skipped (after an overrun the next step waits for the next period "
+                  "boundary, as a real-time loop does",
+                  overrun.skipped_periods, overrun.periods,
+                  overrun.schedules > 1 ? fmt::format(" of the {} participants' own schedules", overrun.schedules)
+                                        : std::string());
+  if (overrun.step_exceeds_period)
+    return fmt::format(
+        "overrun: the step does not fit the period: its completion p50 is {:.1f} us against a period of {} us ({:.1f} "
+        "periods); {} of {} steps overran, and {}: each latency below is of its own period)",
+        overrun.completion_p50_ns / 1e3, period,
+        overrun.completion_p50_ns / static_cast<double>(overrun.period_ns), overrun.overran, overrun.steps, skipped);
+  return fmt::format("overrun: {} of {} steps overran the {} us period (the longest completed {:.1f} us after its "
+                     "period's start); {})",
+                     overrun.overran, overrun.steps, period, overrun.completion_max_ns / 1e3, skipped);
+}
+
 std::string search_rule(const probes::period_search_settings& search, std::int64_t trial_periods) {
   return fmt::format(
       "a period holds when the one-sided {:g} % Clopper-Pearson upper bound on its miss rate is at most {:g}; "
@@ -297,6 +354,8 @@ delay_analysis analyse_delay(const delay_measurement& measured) {
   delay_analysis analysis;
   const paced_result& run = measured.pinned;
   const bool per_cpu = measured.settings.per_cpu;
+  analysis.overrun = overrun_of(run, measured.period_ns);
+  if (measured.unpinned) analysis.unpinned_overrun = overrun_of(*measured.unpinned, measured.period_ns);
   analysis.histogram.bound_us = measured.settings.histogram_bound_us;
   if (!run.wakeup_ns.empty())
     for (unsigned id = 0; id < run.participants; ++id)
@@ -353,7 +412,7 @@ std::string delay_text(const delay_measurement& measured, const delay_analysis& 
   const paced_result& pinned = measured.pinned;
   const auto& settings = measured.settings;
   const bool measured_any = !pinned.wakeup_ns.empty();
-  std::string out = fmt::format("{}: {} periods of {} us{}\n", measured.name, pinned.periods,
+  std::string out = fmt::format("{}: {} periods of {} us{}\n", measured.name, pinned.periods_scheduled,
                                 microseconds_text(measured.period_ns), measured.policy);
   out += idle_line(measured.idle) + "\n";
   out += fmt::format("view: {}\n", measured.view);
@@ -366,7 +425,7 @@ std::string delay_text(const delay_measurement& measured, const delay_analysis& 
   out += result_text(measured.searched          ? fmt::format("confirming run at {} us", microseconds_text(measured.period_ns))
                      : settings.compare_pinning ? "pinned (--pin " + settings.pin + ")"
                                                 : std::string("result"),
-                     pinned, measured.period_ns);
+                     pinned, measured.period_ns, analysis.overrun);
   if (settings.per_cpu) out += per_cpu_text(analysis, measured.period_ns);
   if (settings.stop_above_ns) out += stop_text(measured);
   std::vector<labelled_samples> series;
@@ -392,7 +451,7 @@ std::string delay_text(const delay_measurement& measured, const delay_analysis& 
                                          : std::string("why the late steps were late"),
                        10);
   if (measured.unpinned) {
-    out += result_text("unpinned (--pin none)", *measured.unpinned, measured.period_ns);
+    out += result_text("unpinned (--pin none)", *measured.unpinned, measured.period_ns, analysis.unpinned_overrun);
     out += fmt::format("\nFigure 5, unpinned\n{}", measured.unpinned->figure5.render());
   }
   return out;
@@ -435,6 +494,7 @@ nlohmann::json delay_json(const delay_measurement& measured, const delay_analysi
       {"periods_measured", pinned.periods},
       {"periods_scheduled", pinned.periods_scheduled},
       {"skipped_periods", pinned.skipped_periods},
+      {"overrun", overrun_json(analysis.overrun)},
       {"wakeup_latency_ns", distribution_json(pinned.wakeup_ns)},
       {"completion_ns", distribution_json(pinned.completion_ns)},
       {"deadline_misses", pinned.deadline_misses},

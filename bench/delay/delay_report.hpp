@@ -37,6 +37,35 @@ struct per_cpu_row {
   std::uint64_t skipped_periods = 0;  // periods of the schedule its thread skipped after its overruns
 };
 
+// Steps that outgrew their period. The paced run re-anchors its schedule
+// after each (bench/probes/paced.hpp): the next step waits for the next
+// period boundary and the periods between are skipped, so the latencies stay
+// per period; this says how far the step and the period are apart.
+struct overrun_reading {
+  std::int64_t steps = 0;             // steps kept (independent participants: all of theirs)
+  std::uint64_t overran = 0;          // of them, those whose completion passed the period
+  std::uint64_t skipped_periods = 0;  // periods no step ran in
+  std::int64_t periods = 0;           // periods of the schedule: steps + skipped
+  // 1 for a team (one schedule); independent participants (--per-cpu) keep
+  // a schedule each, and steps, overran, skipped and periods add theirs up.
+  unsigned schedules = 1;
+  std::int64_t period_ns = 0;
+  double completion_p50_ns = 0;
+  double completion_max_ns = 0;
+  // The median completion is longer than the period: the step does not fit
+  // (rather than some steps that overran now and then).
+  bool step_exceeds_period = false;
+};
+
+// The run's overruns, or empty when no step overran.
+std::optional<overrun_reading> overrun_of(const probes::paced_result& run, std::int64_t period_ns);
+
+// The line that names them, the first of the run's result: "overrun: the
+// step does not fit the period: its completion p50 is 6612.3 us against a
+// period of 1000 us (6.6 periods); 2143 of 2143 steps overran, and 12857 of
+// the 15000 periods were skipped (...)".
+std::string overrun_line(const overrun_reading& overrun);
+
 // The search's conclusions (--find-period).
 struct search_reading {
   double largest_completion_p99_ns = 0;  // over every trial
@@ -49,6 +78,8 @@ struct search_reading {
 };
 
 struct delay_analysis {
+  std::optional<overrun_reading> overrun;           // the run's (pinned, or the confirming run)
+  std::optional<overrun_reading> unpinned_overrun;  // --compare-pinning's unpinned run's
   probes::latency_histogram histogram;  // 1 us buckets per participant
   std::vector<per_cpu_row> per_cpu;     // --per-cpu only
   std::optional<std::size_t> noisiest;  // index into per_cpu, by kNoisiestRule

@@ -420,21 +420,20 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
   }
 }
 
-// An atomic fetch-min (C++26 gives std::atomic one): moves `word` to `value`
-// when `value` comes first under `before` (std::less: lowers it to the
-// minimum; std::greater: raises it to the maximum), and returns what `word`
-// held before, so that the caller knows whether it moved it. `order` is the
-// order of the read-modify-write that moves the word; the loads before it
-// take the matching acquire or relaxed order. The caller's comment names the
-// edge `order` pairs with. A compare-and-swap loop: it ends once the word
-// is at `value` or beyond it, whoever moved it there.
-template <class T, class Before = std::less<T>>
-T fetch_min(std::atomic<T>& word, T value, std::memory_order order, Before before = {}) noexcept {
+// An atomic fetch-min (C++26 gives std::atomic one): lowers `word` to
+// `value` when `value` is below it, and returns what `word` held before, so
+// that the caller knows whether it lowered it. `order` is the order of the
+// read-modify-write that lowers the word; the loads before it take the
+// matching acquire or relaxed order. The caller's comment names the edge
+// `order` pairs with. A compare-and-swap loop: it ends once the word is at
+// `value` or below, whoever lowered it there.
+template <class T>
+T fetch_min(std::atomic<T>& word, T value, std::memory_order order) noexcept {
   const std::memory_order load = order == std::memory_order_release   ? std::memory_order_relaxed
                                  : order == std::memory_order_acq_rel ? std::memory_order_acquire
                                                                       : order;
   T held = word.load(load);
-  while (before(value, held) && !word.compare_exchange_weak(held, value, order, load)) {
+  while (value < held && !word.compare_exchange_weak(held, value, order, load)) {
   }
   return held;
 }
