@@ -3,10 +3,13 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <stop_token>
+#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -20,17 +23,26 @@ namespace lockstep::bench::probes {
 namespace {
 
 // Long runs say how far they are, every 5 s, from a thread that sleeps
-// otherwise (it is not a participant and does not pace anything).
-std::jthread progress_reporter(std::int64_t total_ns, const delay_progress& progress) {
-  if (total_ns < 10'000'000'000) return {};
-  return std::jthread([total_s = static_cast<double>(total_ns) / 1e9, &progress](std::stop_token stop) {
+// otherwise (it is not a participant and does not pace anything): the
+// periods of the schedule behind the run, in seconds (never past the
+// duration), and the overruns so far.
+std::jthread progress_reporter(std::int64_t periods, std::int64_t period_ns, const paced_progress& run,
+                               const delay_progress& progress) {
+  if (periods * period_ns < 10'000'000'000) return {};
+  return std::jthread([periods, period_ns, &run, &progress](std::stop_token stop) {
     std::mutex mutex;
     std::condition_variable_any tick;
     std::unique_lock lock(mutex);
-    const std::int64_t began = platform::now_ns();
-    while (!tick.wait_for(lock, stop, std::chrono::seconds(5), [] { return false; }) && !stop.stop_requested())
-      progress(fmt::format("delay: {:.0f} s of {:.0f} s", static_cast<double>(platform::now_ns() - began) / 1e9,
-                           total_s));
+    const auto seconds = [period_ns](std::int64_t count) { return static_cast<double>(count * period_ns) / 1e9; };
+    while (!tick.wait_for(lock, stop, std::chrono::seconds(5), [] { return false; }) && !stop.stop_requested()) {
+      // Relaxed: see paced_progress.
+      const std::int64_t behind = std::min(run.periods.load(std::memory_order_relaxed), periods);
+      const std::uint64_t overran = run.overran.load(std::memory_order_relaxed);
+      progress(fmt::format("delay: {:.0f} s of {:.0f} s{}", seconds(behind), seconds(periods),
+                           overran == 0 ? std::string()
+                                        : fmt::format(" ({} steps overran the period, {} periods skipped)", overran,
+                                                      run.skipped.load(std::memory_order_relaxed))));
+    }
   });
 }
 
@@ -45,18 +57,10 @@ delay_search run_search(const delay_settings& settings, paced_step_settings step
     step.pacing.stop_after_misses = stop_after_misses;
     const std::int64_t began = platform::now_ns();
     paced_result run = run_paced_step(step, placement);
-    trial_outcome trial;
-    trial.elapsed_ns = platform::now_ns() - began;
-    trial.periods = run.periods;
-    trial.misses = run.deadline_misses;
-    if (!run.completion_ns.empty()) {
-      const auto d = platform::summarize(run.completion_ns);
-      trial.completion_p50_ns = d.p50;
-      trial.completion_p99_ns = d.p99;
-    }
+    const trial_outcome trial = trial_of(run, platform::now_ns() - began);
     if (confirming)
       outcome.confirm = std::move(run);
-    else if (run.deadline_misses > 0)
+    else if (trial.misses > 0)
       failed_runs.emplace_back(period_ns, std::move(run));
     return trial;
   };
@@ -85,6 +89,20 @@ std::string view_of(const delay_settings& settings, unsigned threads) {
 }
 
 }  // namespace
+
+trial_outcome trial_of(const paced_result& run, std::int64_t elapsed_ns) {
+  trial_outcome trial;
+  trial.elapsed_ns = elapsed_ns;
+  trial.periods = run.periods_scheduled;
+  trial.skipped = run.skipped_periods;
+  trial.misses = run.deadline_misses + run.skipped_periods;
+  if (!run.completion_ns.empty()) {
+    const auto d = platform::summarize(run.completion_ns);
+    trial.completion_p50_ns = d.p50;
+    trial.completion_p99_ns = d.p99;
+  }
+  return trial;
+}
 
 std::string microseconds_text(std::int64_t ns) { return fmt::format("{:g}", static_cast<double>(ns) / 1e3); }
 
@@ -159,15 +177,20 @@ delay_measurement measure_delay(const delay_settings& requested, const platform:
                          microseconds_text(settings.period_ns), settings.periods,
                          static_cast<double>(settings.periods * settings.period_ns) / 1e9, result.policy));
     {
-      const std::jthread reporter = progress_reporter(settings.periods * settings.period_ns, progress);
+      paced_progress so_far;
+      step.pacing.progress = &so_far;
+      const std::jthread reporter = progress_reporter(settings.periods, settings.period_ns, so_far, progress);
       result.pinned = settings.per_cpu ? run_paced_per_cpu(step, cpus) : run_paced_step(step, pinned_plan);
     }
     if (settings.compare_pinning) {
       progress("delay: the same run unpinned (pin:none) for comparison");
       step.pacing.recording = step_recording::off;
-      const std::jthread reporter = progress_reporter(settings.periods * settings.period_ns, progress);
+      paced_progress so_far;
+      step.pacing.progress = &so_far;
+      const std::jthread reporter = progress_reporter(settings.periods, settings.period_ns, so_far, progress);
       result.unpinned = run_paced_step(step, unpinned_plan);
     }
+    step.pacing.progress = nullptr;
   }
   return result;  // the hold ends here: the PM QoS request lasts the measurements
 }

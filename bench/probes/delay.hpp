@@ -85,6 +85,12 @@ struct delay_measurement {
   std::optional<delay_search> searched;  // with find_period
 };
 
+// What a run tells the period search (period_search.hpp): the periods of its
+// schedule, and its misses, the steps that overran their period and the
+// periods skipped after them (each a period whose deadline passed without its
+// step done: paced.hpp); the completion's p50 and p99.
+trial_outcome trial_of(const paced_result& run, std::int64_t elapsed_ns);
+
 // A whole number of nanoseconds as microseconds, as delay prints them
 // ("1000", "12.5"): the one rule of the command's text and progress lines.
 std::string microseconds_text(std::int64_t ns);

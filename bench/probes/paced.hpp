@@ -4,21 +4,44 @@
 // cyclictest paces its threads; the paper's "simple benchmark for determining
 // delay in multi-core systems", with distributions instead of one number.
 //
-// Per period k (start = first period's start, target_k = start + k * period),
+// The schedule: period j starts at target_j = start + j * period, for j in
+// 0..periods-1. Step k (0, 1, ...) runs in a period j_k (j_0 = 0); in it
 // every participant p:
-//   sleeps with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, target_k),
-//   reads the clock:            wake-up latency = now - target_k
+//   sleeps with clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, target_j),
+//   reads the clock:            wake-up latency = now - target_j
 //                               (cyclictest's measure, on its clock),
 //   runs one step (step_one(p, k): its share of the RK4 step, syncs included),
 //   reads the clock again:      end_p.
-// The period's completion time is max_p end_p - target_k, against the
-// deadline target_k + period: a period whose step ends later is a deadline
-// miss. A period that overran makes the next sleep return at once; its late
-// start is then counted as that period's wake-up latency, as cyclictest does.
+// The step's completion time is max_p end_p - target_j, against the deadline
+// target_j + period: a step that ends later overran its period, a deadline
+// miss. The next step runs in the first period that starts at or after the
+// step's end, and never before the next one:
+//   j_(k+1) = j_k + max(1, ceil(completion / period))      (next_period)
+// and the periods between are skipped (counted: paced_result::skipped_periods).
+// That is how a real-time loop re-anchors after an overrun (cyclictest moves
+// its next wake-up past `now` the same way): a wake-up latency is always of
+// its own period, never the backlog of a schedule that fell behind, and a run
+// of `periods` periods lasts their length whatever its steps take. The run
+// ends when the next period would be the `periods`-th or later.
+//
+// A team agrees on each j_k: after its step, each participant counts itself
+// ended (steps_ended, acq_rel: (3) in paced.cpp); the last to end reads every
+// end of the step, decides j_(k+1) from the latest and stores it (4); the
+// others sleep until the period after their own end (its start is never
+// later than the decided one's: the decision takes the latest end), read the
+// decision (5), and sleep on to it when it is later. One that finds no
+// decision yet (the last participant has not ended: its step overran, or it
+// was preempted between its end and its count) waits for it (an atomic wait
+// that the decision's notify ends); its wake-up latency stays the one it
+// read after its sleep. So every participant runs step k in period j_k, and
+// none begins step k + 1 before all have ended step k. Independent (per-CPU)
+// participants decide alone, each from its own end.
 //
 // Every participant sleeps on its own (no hand-off from a pacer thread), so a
 // wake-up latency is the kernel's and the scheduler's alone, and a pinned
-// single participant is measured exactly as `cyclictest -t1 -a CPU`.
+// single participant is measured exactly as `cyclictest -t1 -a CPU`. Each
+// shared word below is indexed by step, and "period" in the settings' names
+// is the schedule's.
 //
 // Two shapes of run:
 //  * a team (run_paced_step): the participants share one step and sync
@@ -31,55 +54,57 @@
 //
 // Stop on a threshold (paced_settings::stop_above_ns, cyclictest's -b): the
 // first wake-up later than the threshold ends the run. Participants of a team
-// must agree on the last period, or one would wait forever in a sync for a
-// participant that has left. The late participant p, at period k, before it
-// begins that period's step, stores S = k + stop_margin_periods into a shared
-// word (1, in run_paced); every participant reads it at the top of each
-// period (2) and leaves before period S. That is safe when no participant can
-// finish period S - 1 without a publication p makes in period k or later:
-// then nobody has begun S when (1) happens, and everybody sees (1) before it
-// would begin S (the sync's release/acquire edges order (1) before the read).
-// In the composed step a participant q finishes a step only after its four
-// stage syncs; a publication by p reaches q through d(p, q) syncs (d: the
-// distance in the producer -> consumer graph; 1 for a barrier), one stage
-// each, so q's end of period k + m - 1 needs p's period-k publications when
-// 4 m >= d: stop_margin_periods = max(1, ceil(d_max / 4)), which
-// run_paced_step computes from the step's graph. Per-CPU participants share
-// nothing and stop on their own. Either way the result keeps periods 0..k
-// (every participant ran them): the late wake-up is the last sample.
+// must agree on the last step, or one would wait forever in a sync for a
+// participant that has left. The late participant p, at step k, before it
+// begins that step, stores S = k + stop_margin_periods into a shared word
+// (1, paced_run_state::leave_before in paced.cpp); every participant reads
+// it at the top of each step (2, runs_step) and leaves before step S. That
+// is safe when no participant can finish step S - 1 without a publication p
+// makes in step k or later: then nobody has begun S when (1) happens, and
+// everybody sees (1) before it would begin S (the sync's release/acquire
+// edges order (1) before the read). In the composed step a participant q
+// finishes a step only after its four stage syncs; a publication by p
+// reaches q through d(p, q) syncs (d: the distance in the producer ->
+// consumer graph; 1 for a barrier), one stage each, so q's end of step
+// k + m - 1 needs p's step-k publications when 4 m >= d: stop_margin_periods
+// = max(1, ceil(d_max / 4)), which run_paced_step computes from the step's
+// graph. Per-CPU participants share nothing and stop on their own; there S
+// is a period of the schedule (the late one's + 1), since each runs its
+// steps in periods of its own. Either way the result keeps the steps up to
+// the late one (every participant ran them): the late wake-up is the last
+// sample.
 //
 // Stop after misses (paced_settings::stop_after_misses, for the period
-// search: once a trial has failed, running it on cannot change its verdict):
-// a participant whose step ends after its period's deadline has seen that
-// period miss (the period's completion is the latest end); the first to
-// record a period counts it (a high-water mark of counted periods, so a
-// period is counted at most once; one reported out of order may go
-// uncounted, which only delays the stop). When the count reaches the limit
-// after period k's step, that participant stores S = k + 1 + margin before
-// its next publication, the same protocol as above from period k + 1; the
-// result keeps the S periods every participant ran.
+// search: once a trial has failed, running it on cannot change its verdict;
+// a team only): a miss is a period whose deadline passed without its step
+// done, so a step that overran counts one, and each period it made the
+// schedule skip one more. The last participant to end step k, who decides
+// j_(k+1), counts them (each step once, by one participant). When the count
+// reaches the limit, it stores S = k + 1 + margin before its next
+// publication, the same protocol as above from step k + 1; the result keeps
+// the S steps every participant ran.
 //
 // Per thread, the paper's Figure 5 counters (platform/thread_accounting.hpp):
 // context switches and the share that crossed cores, from the run's start to
 // its end, for each participant and for the thread that launched the team.
 //
 // The per-step record (paced_settings::recording; a team run only): for
-// every period and participant, the arrival at and the departure from each
-// stage's synchronisation (ns from the period's target, with the CPU read at
+// every step and participant, the arrival at and the departure from each
+// stage's synchronisation (ns from the step's target, with the CPU read at
 // each), the CPU it woke on and ended on, and its counters
-// (platform/step_counters.hpp) over the window from the previous period's
-// end to this one's (so a period's window holds its sleep, its wake-up and
-// its step); and per CPU the interrupts and softirqs of the window between
-// two reads. The last participant to end a period reads the counters of
+// (platform/step_counters.hpp) over the window from the previous step's
+// end to this one's (so a step's window holds its sleep, its wake-up and
+// the step); and per CPU the interrupts and softirqs of the window between
+// two reads. The last participant to end a step reads the counters of
 // every participant, the interrupt tables, and its own counters again: its
 // next window starts there, so that the reading lies in no window. What it
 // costs on the measured path: per stage two clock reads and two
 // sched_getcpu calls in the sync (stage_recorder, around the primitive's
 // wait), and a CPU read after each step's end; the reads of the counters and
 // tables come when nobody is stepping, outside the completion time.
-// recording = alternate_blocks records every other block of periods, so
+// recording = alternate_blocks records every other block of steps, so
 // that one run gives its cost as a pair (on against off).
-// bench/delay/delay_report.hpp turns the record into causes.
+// bench/delay/attribution.hpp turns the record into causes.
 #include <time.h>
 
 #include <algorithm>
@@ -87,6 +112,7 @@
 #include <atomic>
 #include <cerrno>
 #include <cstdint>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <mutex>
@@ -118,6 +144,15 @@ enum class step_recording {
 // participant's own part of the stage). A test hook: injected causes.
 using stage_hook = std::function<void(unsigned participant, std::uint64_t period, unsigned stage)>;
 
+// How far a run is, for a progress line written by another thread while it
+// goes on. Relaxed, each word: a figure of its own, read on its own; nothing
+// else is read on its strength.
+struct paced_progress {
+  std::atomic<std::int64_t> periods{0};    // periods of the schedule behind the run (before its latest step's)
+  std::atomic<std::uint64_t> overran{0};   // steps that overran their period
+  std::atomic<std::uint64_t> skipped{0};   // periods skipped after them
+};
+
 struct paced_settings {
   std::int64_t period_ns = 1'000'000;
   std::int64_t periods = 1000;
@@ -142,6 +177,7 @@ struct paced_settings {
   std::int64_t recording_block_periods = 250;  // alternate_blocks: periods per block
   std::int64_t interrupt_every_periods = 1;    // the interrupt tables are read every N periods
   stage_hook hook;                             // empty: none
+  paced_progress* progress = nullptr;          // where the run says how far it is (null: nowhere)
 };
 
 // The record keeps at most this many participant-periods (about 200 bytes
@@ -289,25 +325,43 @@ class stage_recorder {
 
 // The first wake-up later than stop_above_ns, and what the step was doing.
 struct paced_stop {
-  std::int64_t period = 0;          // index of the late period (0-based)
+  std::int64_t period = 0;          // the late step's period of the schedule (0-based)
+  std::int64_t step = 0;            // and its index among the participant's steps
   unsigned participant = 0;         // who woke late
   std::optional<unsigned> cpu;      // the CPU it woke on
   std::int64_t wakeup_ns = 0;       // how late it woke
   std::int64_t since_start_ns = 0;  // from the first period's start to that wake-up
-  // The same participant's step in the period before: how long after that
-  // period's start it ended (empty for period 0).
+  // The same participant's step before: how long after its own period's
+  // start it ended (empty for the first step).
   std::optional<std::int64_t> previous_end_ns;
 };
 
 struct paced_result {
   unsigned participants = 0;
-  std::int64_t periods = 0;           // periods kept: all, or up to and including a stop
-  std::vector<double> wakeup_ns;      // periods x participants, period-major: [k * participants + p]
+  // Steps kept: a team's, every step run or up to and including a stop;
+  // independent participants: the most any one kept (steps_run has each).
+  std::int64_t periods = 0;
+  // The samples. A team: steps x participants, step-major, [k * participants
+  // + p]. Independent participants, who may run different numbers of steps:
+  // participant-major, participant p's steps_run[p] one after another.
+  // samples_of takes one participant's either way.
+  std::vector<double> wakeup_ns;
   std::vector<double> end_ns;         // each participant's step end from its period's start, same order
-  // A team: one per period, the latest end. Independent participants: the
+  std::vector<std::int64_t> period_index;  // the period of the schedule each sample's step ran in, same order
+  // A team: one per step, the latest end. Independent participants: the
   // same as end_ns (each its own deadline).
   std::vector<double> completion_ns;
-  std::uint64_t deadline_misses = 0;  // completion_ns above the period
+  std::uint64_t deadline_misses = 0;  // completion_ns above the period: the steps that overran
+  bool independent = false;
+  std::vector<std::int64_t> steps_run;  // per participant, the steps kept
+  // The periods of the schedule the kept steps span, from period 0 to the
+  // one the next step would have run in (a run to its end: all of them), and
+  // how many of them no step ran in: after an overrun the schedule re-anchors
+  // at the next period boundary (see the header). Independent participants:
+  // the longest span, and the skipped periods of all of them.
+  std::int64_t periods_scheduled = 0;
+  std::uint64_t skipped_periods = 0;
+  std::vector<std::uint64_t> skipped_by_participant;  // each one's (a team: the same for all)
   std::vector<std::optional<unsigned>> cpus;  // where each participant woke for its first period
   std::optional<paced_stop> stop;
   bool stopped_after_misses = false;  // stop_after_misses ended the run early
@@ -316,14 +370,37 @@ struct paced_result {
   std::optional<step_record> record;  // with paced_settings::recording (a team run)
 };
 
-// One participant's samples out of a period-major vector (wakeup_ns, end_ns).
-inline std::vector<double> participant_samples(const std::vector<double>& samples, unsigned participants,
-                                               unsigned participant) {
-  std::vector<double> mine;
+// One participant's samples out of a step-major vector (a team's wakeup_ns, end_ns).
+template <class T>
+std::vector<T> participant_samples(const std::vector<T>& samples, unsigned participants, unsigned participant) {
+  std::vector<T> mine;
   if (participants == 0) return mine;
   mine.reserve(samples.size() / participants);
   for (std::size_t index = participant; index < samples.size(); index += participants) mine.push_back(samples[index]);
   return mine;
+}
+
+// Participant p's samples of `run` (its wakeup_ns, end_ns, period_index, or
+// an independent run's completion_ns), in the order of its steps.
+template <class T>
+std::vector<T> samples_of(const paced_result& run, const std::vector<T>& samples, unsigned participant) {
+  if (!run.independent) return participant_samples(samples, run.participants, participant);
+  std::size_t first = 0;
+  for (unsigned before = 0; before < participant && before < run.steps_run.size(); ++before)
+    first += static_cast<std::size_t>(run.steps_run[before]);
+  if (participant >= run.steps_run.size() || first >= samples.size()) return {};
+  const std::size_t last = std::min(samples.size(), first + static_cast<std::size_t>(run.steps_run[participant]));
+  return std::vector<T>(samples.begin() + static_cast<std::ptrdiff_t>(first),
+                        samples.begin() + static_cast<std::ptrdiff_t>(last));
+}
+
+// The period of the schedule the next step runs in, after a step that ran in
+// `period` and completed `completion_ns` after that period's start: the
+// first period that starts at or after the step's end, and never before the
+// next one (the periods between are skipped). See the header.
+constexpr std::int64_t next_period(std::int64_t period, std::int64_t completion_ns, std::int64_t period_ns) noexcept {
+  if (completion_ns <= period_ns) return period + 1;
+  return period + (completion_ns + period_ns - 1) / period_ns;
 }
 
 // After a run: keeps the record's first `kept` periods, turns each
@@ -343,13 +420,148 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
   }
 }
 
-// Runs `settings.periods` paced periods on `team` (sync::std_thread_team or
-// sync::omp_team: team.run(body) calls body(id) for every participant).
+// An atomic fetch-min (C++26 gives std::atomic one): lowers `word` to
+// `value` when `value` is below it, and returns what `word` held before, so
+// that the caller knows whether it lowered it. `order` is the order of the
+// read-modify-write that lowers the word; the loads before it take the
+// matching acquire or relaxed order. The caller's comment names the edge
+// `order` pairs with. A compare-and-swap loop: it ends once the word is at
+// `value` or below, whoever lowered it there.
+template <class T>
+T fetch_min(std::atomic<T>& word, T value, std::memory_order order) noexcept {
+  const std::memory_order load = order == std::memory_order_release   ? std::memory_order_relaxed
+                                 : order == std::memory_order_acq_rel ? std::memory_order_acquire
+                                                                      : order;
+  T held = word.load(load);
+  while (value < held && !word.compare_exchange_weak(held, value, order, load)) {
+  }
+  return held;
+}
+
+// One participant's part of a paced run, kept on its own thread.
+struct paced_participant {
+  explicit paced_participant(unsigned participant) : id(participant) {}
+  unsigned id = 0;
+  std::int64_t period = 0;     // the period of the schedule its current step runs in
+  std::int64_t target_ns = 0;  // that period's start
+  std::int64_t woke_ns = 0;    // when its sleep to it returned
+  std::int64_t ended_ns = 0;   // its current step's end, from target_ns
+  participant_period* row = nullptr;  // this step's row of the record, or null
+  // One per participant: two steps' last participants may read at once.
+  std::optional<platform::interrupt_reader> interrupts;
+  bool reported_late = false;
+  std::int64_t steps = 0;  // steps it ran
+};
+
+// What run_paced keeps apart from the team and the step (bench/probes/paced.cpp
+// holds the definitions): the samples and the record, set up before the run;
+// the schedule a team agrees on, step by step (3), (4), (5); each step's
+// wake-up and end as a participant sees them; the agreed end (1) and (2);
+// the reads of the last participant to end a step; the result. Every member
+// a participant calls is called on its own thread, and writes only its own
+// slots, or the shared words named with their orders.
+class paced_run_state {
+ public:
+  // Allocates and touches the samples, the schedule's words and the record
+  // (settings.recording), and measures what one read of the counters and the
+  // interrupt tables costs: all before the run.
+  paced_run_state(unsigned participants, const paced_settings& settings);
+  paced_run_state(const paced_run_state&) = delete;
+  paced_run_state& operator=(const paced_run_state&) = delete;
+
+  // The first period starts settings.lead_ns from now.
+  void start() noexcept;
+  // A participant that could not pin or go FIFO (it still runs).
+  void failed(unsigned participant, std::string what);
+  // On the participant's thread, after its prepare: its counters and its
+  // interrupt reader are opened there (/proc/thread-self is the opener).
+  void open(paced_participant& self);
+  // Whether step k runs, and if so the participant asleep until its period:
+  // false once the team agreed to leave (2) or the schedule has no period
+  // left for it. Records the wake-up; a wake-up later than stop_above_ns
+  // asks for the end (1).
+  bool wake(paced_participant& self, std::size_t k, stage_recorder* recorder);
+  // After the step: records its end; the last participant to end the step
+  // decides the next period (4) and reads everyone's counters.
+  void end(paced_participant& self, std::size_t k);
+  // The participant's Figure 5 counters over its run.
+  void left(const paced_participant& self, const platform::thread_counters& delta);
+  // After the team has joined: the result (main_delta: the launching thread's counters).
+  paced_result result(const platform::thread_counters& main_delta);
+
+ private:
+  bool runs_step(std::size_t k) const noexcept;
+  std::optional<std::int64_t> next_team_period(paced_participant& self, std::size_t k);
+  std::int64_t decided_period(std::size_t step);
+  void sleep_to(paced_participant& self, std::int64_t period);
+  void record_wake(paced_participant& self, std::size_t k, stage_recorder* recorder);
+  void check_late(paced_participant& self, std::size_t k, std::int64_t latency);
+  void decide(paced_participant& self, std::size_t k);
+  void count(const paced_participant& self, std::size_t k, std::int64_t next, std::int64_t completion_ns);
+  bool records_step(std::size_t k) const noexcept;
+  void read_counters(paced_participant& self, std::size_t k);
+  void leave_before(std::int64_t index);
+  void keep_team_samples(paced_result& result);
+  void keep_independent_samples(paced_result& result);
+
+  const paced_settings& settings_;
+  unsigned participants_ = 0;
+  std::size_t periods_ = 0;  // of the schedule; no participant runs more steps
+  std::int64_t start_ns_ = 0;
+
+  // The per-step record and what turns it into differences after the run.
+  bool keep_record_ = false;
+  std::optional<step_record> record_;
+  std::vector<platform::cpu_interrupt_totals> interrupt_reads_;  // at the last participant's end of step k
+  platform::cpu_interrupt_totals interrupt_start_;                // before its first step
+  std::vector<platform::thread_step_counters> first_snapshot_;
+  // Set by any participant, read after the team is joined: the join orders
+  // them, so relaxed (the flags carry no data of their own).
+  std::atomic<bool> schedstat_seen_{false};
+  std::atomic<bool> interrupts_seen_{false};
+  // Each participant's counters, opened on its own thread (/proc/thread-self
+  // is the opener) before its first step; the last participant to end a
+  // step reads everyone's counters through them (its steps_ended_ acquire
+  // orders each emplace before that read).
+  std::vector<std::optional<platform::thread_counter_reader>> counter_readers_;
+
+  // The schedule a team agrees on (the header, and (3) to (5) in paced.cpp):
+  // per step, how many participants have ended it, and the period the next
+  // step runs in (0 until the last to end it decides).
+  std::vector<std::atomic<unsigned>> steps_ended_;
+  std::vector<std::atomic<std::int64_t>> next_period_;
+
+  // The samples: steps x participants, step-major, each participant its own
+  // slots (independent participants' own next period too).
+  std::vector<std::int64_t> wake_;
+  std::vector<std::int64_t> end_;
+  std::vector<std::int64_t> period_;
+  std::vector<std::int64_t> own_next_;
+  std::vector<std::int64_t> steps_;
+  std::vector<std::optional<unsigned>> cpus_;
+  std::vector<platform::thread_counters> deltas_;
+  std::vector<std::string> errors_;
+
+  // The agreed end (see the header): a step of a team, a period of the
+  // schedule for independent participants; lowered by a late wake-up or by
+  // the miss that reaches stop_after_misses, read once per step by everyone.
+  // No stop: never below `periods`, so the read never ends a run early.
+  std::atomic<std::int64_t> leave_before_{std::numeric_limits<std::int64_t>::max()};
+  std::mutex stop_mutex_;  // guards stop_: taken only on a late wake-up
+  std::optional<paced_stop> stop_;
+  // Stop after misses: how many periods missed so far, counted by each
+  // step's decider. Relaxed: the count only decides when to ask for the
+  // end; the end itself is agreed by (1) and (2).
+  std::atomic<std::uint64_t> counted_misses_{0};
+};
+
+// Runs paced steps on `team` (sync::std_thread_team or sync::omp_team:
+// team.run(body) calls body(id) for every participant) over the
+// `settings.periods` periods of the schedule (see the header).
 //   prepare(id)   on participant id's thread first: pinning (may throw; the
 //                 error is reported and the participant runs where it is,
 //                 since leaving the team would strand the others in a sync);
-//   step_one(id, k)  participant id's share of the step of period k (must
-//                 not throw).
+//   step_one(id, k)  participant id's share of step k (must not throw).
 // Throws nothing itself; FIFO failures land in errors too, so check the
 // permission before (platform::set_current_thread_fifo on the caller).
 //   recorder      where the step's synchronisations report their passages
@@ -358,170 +570,25 @@ inline void sleep_until(std::int64_t target_ns) noexcept {
 template <class Team, class Prepare, class StepOne>
 paced_result run_paced(Team& team, unsigned participants, const paced_settings& settings, Prepare&& prepare,
                        StepOne&& step_one, stage_recorder* recorder = nullptr) {
-  const auto periods = static_cast<std::size_t>(settings.periods);
-  paced_result result;
-  result.participants = participants;
-
-  // The per-step record, allocated and touched here, before the run.
-  std::optional<step_record> record;
-  std::vector<platform::cpu_interrupt_totals> interrupt_reads;  // at the last participant's end of period k
-  platform::cpu_interrupt_totals interrupt_start;                // before its first period
-  std::vector<platform::thread_step_counters> first_snapshot(participants);
-  if (settings.recording != step_recording::off) {
-    record.emplace();
-    record->participants = participants;
-    record->period_ns = settings.period_ns;
-    record->mode = settings.recording;
-    record->block_periods = std::max<std::int64_t>(settings.recording_block_periods, 1);
-    record->interrupt_every = std::max<std::int64_t>(settings.interrupt_every_periods, 1);
-    if (settings.periods * participants > kMaxRecordedParticipantPeriods) {
-      record->not_kept = "the run has " + std::to_string(settings.periods * participants) +
-                         " participant-periods, more than the record keeps (" +
-                         std::to_string(kMaxRecordedParticipantPeriods) + ")";
-    } else {
-      record->periods = settings.periods;
-      record->steps.resize(periods * participants);
-      interrupt_reads.resize(periods);
-    }
-    record->snapshot_cost_ns = platform::snapshot_cost_ns(101);
-    record->interrupt_read_cost_ns = platform::interrupt_read_cost_ns(11);
-  }
-  const bool keep_record = record && record->not_kept.empty();
-  const auto records_period = [&](std::size_t k) {
-    if (!keep_record) return false;
-    if (settings.recording == step_recording::every_period) return true;
-    return (static_cast<std::int64_t>(k) / record->block_periods) % 2 == 0;
-  };
-  // Set by any participant, read after the team is joined: the join orders
-  // them, so relaxed (the flags carry no data of their own).
-  std::atomic<bool> schedstat_seen{false};
-  std::atomic<bool> interrupts_seen{false};
-  // How many participants have ended each period: the last one reads
-  // everyone's counters and the interrupt tables, so that nobody's end
-  // waits behind the reads.
-  std::vector<std::atomic<unsigned>> periods_ended(keep_record ? periods : 0);
-  // Each participant's counters, opened on its own thread (/proc/thread-self
-  // is the opener) before its first period; the last participant to end a
-  // period reads everyone's counters through them (its periods_ended
-  // acquire orders each emplace before that read).
-  std::vector<std::optional<platform::thread_counter_reader>> counter_readers(keep_record ? participants : 0);
-  std::vector<std::int64_t> wake(periods * participants, 0);
-  std::vector<std::int64_t> end(periods * participants, 0);
-  std::vector<std::optional<unsigned>> cpus(participants);
-  std::vector<platform::thread_counters> deltas(participants);
-  std::vector<std::string> errors(participants);
-
-  // The agreed end (see the header): lowered by a late wake-up or by the
-  // miss that reaches stop_after_misses, read once per period by everyone.
-  // No stop: never below `periods`, so the read never ends a run early.
-  std::atomic<std::int64_t> leave_before{std::numeric_limits<std::int64_t>::max()};
-  // Lowers the agreed end to `period` (never raises it).
-  const auto leave_before_period = [&leave_before](std::int64_t period) {
-    std::int64_t agreed = leave_before.load(std::memory_order_relaxed);
-    // (1) relaxed, sequenced before this participant's next publication: see
-    // (2). The minimum wins when two participants ask at once.
-    while (period < agreed &&
-           !leave_before.compare_exchange_weak(agreed, period, std::memory_order_relaxed, std::memory_order_relaxed)) {
-    }
-  };
-  std::mutex stop_mutex;  // guards `stop`: taken only on a late wake-up
-  std::optional<paced_stop> stop;
-  // Stop after misses: the last period counted, and how many were. Relaxed:
-  // the count only decides when to ask for the end; the end itself is
-  // agreed by (1) and (2).
-  std::atomic<std::int64_t> last_counted_miss{-1};
-  std::atomic<std::uint64_t> counted_misses{0};
-
+  paced_run_state state(participants, settings);
   const platform::thread_counters main_before = platform::snapshot_current_thread();
-  const std::int64_t start = platform::now_ns() + settings.lead_ns;
+  state.start();
   // Everything written before team.run happens-before every body, and every
-  // body happens-before run returns (sync/team.hpp): the plain vectors need
-  // no atomics, each participant writes only its own slots.
+  // body happens-before run returns (sync/team.hpp): the state's plain
+  // vectors need no atomics, each participant writes only its own slots.
   team.run([&](unsigned id) {
     const platform::thread_counters before = platform::snapshot_current_thread();
     try {
       prepare(id);
       if (settings.fifo_priority) platform::set_current_thread_fifo(*settings.fifo_priority);
     } catch (const std::exception& e) {
-      errors[id] = e.what();
+      state.failed(id, e.what());
     }
-    // Opened on this thread (after the pin): /proc/thread-self is the opener.
-    std::optional<platform::thread_counter_reader>* counters = keep_record ? &counter_readers[id] : nullptr;
-    std::optional<platform::interrupt_reader> interrupts;
-    if (keep_record) {
-      counters->emplace();
-      if ((*counters)->schedstat_available()) schedstat_seen.store(true, std::memory_order_relaxed);
-      interrupts.emplace();  // one per participant: two periods' last participants may read at once
-      if (interrupts->available()) interrupts_seen.store(true, std::memory_order_relaxed);
-      first_snapshot[id] = (*counters)->read();
-      if (id == 0 && interrupts->available()) interrupt_start = interrupts->read();
-    }
-    bool reported_late = false;
-    for (std::size_t k = 0; k < periods; ++k) {
-      // (2) relaxed: a team's sync edges order (1) before this read (header);
-      // independent participants only need to see it eventually.
-      if (static_cast<std::int64_t>(k) >= leave_before.load(std::memory_order_relaxed)) break;
-      const std::int64_t target = start + static_cast<std::int64_t>(k) * settings.period_ns;
-      sleep_until(target);
-      const std::int64_t latency = platform::now_ns() - target;
-      wake[k * participants + id] = latency;
-      if (k == 0) cpus[id] = platform::current_cpu();
-      participant_period* row = records_period(k) ? &record->at(static_cast<std::int64_t>(k), id) : nullptr;
-      if (row != nullptr) {
-        const auto cpu = platform::current_cpu();
-        row->wake_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
-      }
-      if (recorder != nullptr) recorder->begin_period(id, k, target, row);
-      if (settings.stop_above_ns && latency > *settings.stop_above_ns && !reported_late) {
-        reported_late = true;
-        const std::lock_guard lock(stop_mutex);
-        if (!stop || stop->period > static_cast<std::int64_t>(k)) {
-          stop = paced_stop{static_cast<std::int64_t>(k),
-                            id,
-                            platform::current_cpu(),
-                            latency,
-                            static_cast<std::int64_t>(k) * settings.period_ns + latency,
-                            k == 0 ? std::nullopt : std::optional<std::int64_t>(end[(k - 1) * participants + id])};
-          if (settings.stop_margin_periods > 0)
-            leave_before_period(static_cast<std::int64_t>(k) + settings.stop_margin_periods);
-        }
-      }
+    paced_participant self(id);
+    state.open(self);
+    for (std::size_t k = 0; state.wake(self, k, recorder); ++k) {
       step_one(id, static_cast<std::uint64_t>(k));
-      const std::int64_t ended = platform::now_ns() - target;
-      end[k * participants + id] = ended;
-      if (row != nullptr) {
-        // After the end was read: outside the completion time. Nothing
-        // slower than a CPU read here: a participant sharing a CPU with one
-        // still stepping would delay it.
-        row->recorded = true;
-        const auto cpu = platform::current_cpu();
-        row->end_cpu = cpu ? static_cast<std::int32_t>(*cpu) : -1;
-        // acq_rel: each participant's increment releases its row of this
-        // period (and its reader), and the last one's acquires every
-        // other's, so its reads below come after every end of the period
-        // and its writes into the others' rows after theirs.
-        const bool last = periods_ended[k].fetch_add(1, std::memory_order_acq_rel) + 1 == participants;
-        if (last) {
-          // Everyone's counters, then the interrupt tables, by the last to
-          // end: nobody still stepping waits behind them. Then its own
-          // again: its next window starts after the reading.
-          for (unsigned other = 0; other < participants; ++other)
-            record->at(static_cast<std::int64_t>(k), other).counters = counter_readers[other]->read();
-          if (interrupts->available() && static_cast<std::int64_t>(k) % record->interrupt_every == 0)
-            interrupt_reads[k] = interrupts->read();
-          row->resumed = (*counters)->read();
-        }
-      }
-      if (settings.stop_after_misses && settings.stop_margin_periods > 0 && ended > settings.period_ns) {
-        const auto period = static_cast<std::int64_t>(k);
-        std::int64_t counted = last_counted_miss.load(std::memory_order_relaxed);
-        while (counted < period && !last_counted_miss.compare_exchange_weak(counted, period, std::memory_order_relaxed,
-                                                                            std::memory_order_relaxed)) {
-        }
-        if (counted < period &&
-            counted_misses.fetch_add(1, std::memory_order_relaxed) + 1 >= *settings.stop_after_misses)
-          leave_before_period(period + 1 + settings.stop_margin_periods);
-      }
+      state.end(self, k);
     }
     if (settings.fifo_priority) {
       try {
@@ -529,49 +596,9 @@ paced_result run_paced(Team& team, unsigned participants, const paced_settings& 
       } catch (const std::exception&) {
       }
     }
-    deltas[id] = platform::snapshot_current_thread() - before;
+    state.left(self, platform::snapshot_current_thread() - before);
   });
-  const platform::thread_counters main_delta = platform::snapshot_current_thread() - main_before;
-
-  const std::int64_t agreed_end = leave_before.load(std::memory_order_relaxed);  // the team has joined
-  std::size_t kept = periods;
-  if (stop) {
-    kept = static_cast<std::size_t>(stop->period) + 1;
-  } else if (agreed_end < static_cast<std::int64_t>(periods)) {
-    kept = static_cast<std::size_t>(agreed_end);
-    result.stopped_after_misses = true;
-  }
-  result.periods = static_cast<std::int64_t>(kept);
-  result.stop = stop;
-  result.cpus = cpus;
-  result.wakeup_ns.reserve(kept * participants);
-  result.end_ns.reserve(kept * participants);
-  for (std::size_t index = 0; index < kept * participants; ++index) {
-    result.wakeup_ns.push_back(static_cast<double>(wake[index]));
-    result.end_ns.push_back(static_cast<double>(end[index]));
-  }
-  if (settings.independent) {
-    result.completion_ns = result.end_ns;
-  } else {
-    result.completion_ns.reserve(kept);
-    for (std::size_t k = 0; k < kept; ++k) {
-      const auto first = end.begin() + static_cast<std::ptrdiff_t>(k * participants);
-      result.completion_ns.push_back(static_cast<double>(*std::max_element(first, first + participants)));
-    }
-  }
-  for (double completion : result.completion_ns)
-    if (completion > static_cast<double>(settings.period_ns)) ++result.deadline_misses;
-  result.figure5.add("main", "main", main_delta);
-  for (unsigned id = 0; id < participants; ++id) result.figure5.add("worker " + std::to_string(id), "worker", deltas[id]);
-  for (unsigned id = 0; id < participants; ++id)
-    if (!errors[id].empty()) result.errors.push_back("worker " + std::to_string(id) + ": " + errors[id]);
-  if (record) {
-    if (keep_record) finish_record(*record, kept, first_snapshot, interrupt_start, interrupt_reads);
-    record->schedstat_available = schedstat_seen.load(std::memory_order_relaxed);
-    record->interrupts_available = interrupts_seen.load(std::memory_order_relaxed);
-    result.record = std::move(record);
-  }
-  return result;
+  return state.result(platform::snapshot_current_thread() - main_before);
 }
 
 // The paced RK4 step of `lockstep delay`: one sync x layout, `threads`

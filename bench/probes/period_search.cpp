@@ -136,11 +136,12 @@ period_search_result find_period(const period_search_settings& settings, const t
     trial.holds = trial.upper_bound <= settings.miss_rate;
     return trial;
   };
-  // The slowest step seen so far: a period shorter than the step overruns,
-  // and the trial then lasts n steps, not n periods.
+  // A trial lasts its n periods (a step that overruns makes the schedule
+  // skip periods, not fall behind: paced.hpp), and its last step may end up
+  // to the slowest step seen so far after its period's start.
   double slowest_step_ns = 0;
   const auto estimate = [&](std::int64_t period_ns) {
-    return static_cast<double>(periods) * std::max(static_cast<double>(period_ns), slowest_step_ns) +
+    return static_cast<double>(periods) * static_cast<double>(period_ns) + slowest_step_ns +
            static_cast<double>(settings.lead_ns);
   };
 

@@ -5,7 +5,10 @@
 // placement x threads): what is the shortest period at which it misses its
 // deadline (the end of its period) at most at rate R? The search answers it
 // with trials: a trial runs the paced step for n periods at one period P and
-// counts the misses m.
+// counts the misses m: the periods whose deadline passed without their step
+// done, i.e. each step that overran its period and each period the schedule
+// skipped after it (it re-anchors at the next period boundary: paced.hpp).
+// A period shorter than the step is a miss in every period.
 //
 // Verdict of a trial (the stated confidence): P holds when the one-sided
 // Clopper-Pearson upper confidence bound on the miss rate, at confidence c
@@ -32,9 +35,9 @@
 // it, and both verdicts are reported.
 //
 // Budget: the trials and the confirming run together take at most budget_ns.
-// Before each trial the search estimates its length (n x max(P, the median
-// completion seen so far) + the lead) and the confirming run's (n x the
-// shortest period that held so far, or P), and stops when both would not fit:
+// Before each trial the search estimates its length (n x P + the median
+// completion seen so far + the lead) and the confirming run's (the same at
+// the shortest period that held so far, or P), and stops when both would not fit:
 // the result then says the budget cut the search. The search never goes below
 // floor_period or above ceiling_period, and says when it stopped at either.
 #include <cstdint>
@@ -74,8 +77,11 @@ struct period_search_settings {
 
 // What a trial run reports back to the search.
 struct trial_outcome {
-  std::int64_t periods = 0;  // periods run
-  std::uint64_t misses = 0;  // deadline misses among them
+  std::int64_t periods = 0;  // periods of the schedule run
+  // Periods among them whose deadline passed without their step done: the
+  // steps that overran, and the periods skipped after them (paced.hpp).
+  std::uint64_t misses = 0;
+  std::uint64_t skipped = 0;  // of which skipped
   double completion_p50_ns = 0;
   double completion_p99_ns = 0;
   std::int64_t elapsed_ns = 0;  // the run's own length, counted against the budget

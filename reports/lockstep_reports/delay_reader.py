@@ -110,7 +110,7 @@ class CauseRow:
 @dataclass(frozen=True)
 class DelayCauses:
     """A delay file's `causes` (bench/delay/delay_report.cpp, causes_json): why the late steps were late.
-    names: (key, words) of every cause in the order of the writer's enum (the file's causes.names; a file without
+    names: (key, words) of every cause in the order of the writer's enum (the file's cause_kinds; a file without
     it: words.DELAY_CAUSES)."""
     names: tuple[tuple[str, str], ...]
     rows: tuple[CauseRow, ...]
@@ -256,22 +256,22 @@ def read_delay(path: str, label: str, document: dict) -> DelayFile:
                      causes=read_causes(path, document))
 
 
-def _cause_names(path: str, causes: dict) -> tuple[tuple[str, str], ...]:
-    """The causes' keys and words in the writer's order: causes.names ([{"key", "words"}, ...]) where the file
-    has it; a file written before it gets words.DELAY_CAUSES, a copy of the writer's enum at the time. The schema
-    does not name causes.names yet, so what is read is checked here."""
-    raw = causes.get("names")
+def _cause_names(path: str, document: dict) -> tuple[tuple[str, str], ...]:
+    """The causes' keys and words in the writer's order: the file's cause_kinds ([{"key", "words"}, ...], written
+    by bench/delay/attribution_output.cpp from kCauseNaming in bench/delay/attribution.hpp); a file written before
+    it gets words.DELAY_CAUSES, a copy of the writer's enum at the time. What is read is checked here."""
+    raw = document.get("cause_kinds")
     if raw is None:
         return DELAY_CAUSES
     if not isinstance(raw, list) or not raw:
-        fail(path, ("causes", "names"), f"is {json_kind(raw)}, not a list of causes")
+        fail(path, ("cause_kinds",), f"is {json_kind(raw)}, not a list of causes")
     names = []
     for index, item in enumerate(raw):
         if not isinstance(item, dict) or not all(isinstance(item.get(key), str) and item[key]
                                                  for key in ("key", "words")):
-            fail(path, ("causes", "names", index), "is not an object with the texts key and words")
+            fail(path, ("cause_kinds", index), "is not an object with the texts key and words")
         if any(item["key"] == key for key, _ in names):
-            fail(path, ("causes", "names", index, "key"), f"repeats {shown(item['key'])}: a cause is named once")
+            fail(path, ("cause_kinds", index, "key"), f"repeats {shown(item['key'])}: a cause is named once")
         names.append((item["key"], item["words"]))
     return tuple(names)
 
@@ -286,4 +286,4 @@ def read_causes(path: str, document: dict) -> DelayCauses | None:
             for row in causes.get("tail", [])]
     rows += [CauseRow("above p99", None, int(entry["cpu"]), dict(entry["cause_ns"]))
              for entry in causes.get("per_cpu", [])]
-    return DelayCauses(_cause_names(path, causes), tuple(rows)) if rows else None
+    return DelayCauses(_cause_names(path, document), tuple(rows)) if rows else None

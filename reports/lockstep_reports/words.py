@@ -32,9 +32,8 @@ def placement_move(pin: str) -> str:
 
 # ---------------------------------------------------------------- delay causes (`lockstep delay --out`, causes)
 
-# The causes of a late step, in the order of bench/delay/delay_report.hpp's delay_cause, with their words: the
-# fallback for a delay file without causes.names (delay_reader.read_causes), which a writer that writes the
-# enum's keys and words beside the rows replaces.
+# The causes of a late step, in the order of bench/delay/attribution.hpp's delay_cause, with their words: only for
+# a delay file written before lockstep delay wrote cause_kinds (delay_reader.read_causes reads a file's own list).
 DELAY_CAUSES = (
     ("compute", "compute"),
     ("run_queue_wait", "run-queue wait"),

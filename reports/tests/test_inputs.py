@@ -498,7 +498,7 @@ class LeaderLine(unittest.TestCase):
         self.assertEqual(views, [pair for pair in run_file.pairs if pair.comparison == "against_best_other"])
 
 class DelayCausesNames(Scratch):
-    """The delay causes' order and words come from the file (causes.names, the writer's enum) where it has them;
+    """The delay causes' order and words come from the file (cause_kinds, the writer's enum) where it has them;
     a file written before them reads with words.DELAY_CAUSES."""
 
     def document(self, names=None):
@@ -509,8 +509,9 @@ class DelayCausesNames(Scratch):
                               "tail": [{"label": "above p99", "threshold_ns": 5000.0, "steps": 10, "excess_ns": 280.0,
                                         "cause_ns": split, "explained_share": 1.0, "guest_share": 1.0,
                                         "top": "unexplained"}]}
+        document.pop("cause_kinds", None)
         if names is not None:
-            document["causes"]["names"] = names
+            document["cause_kinds"] = names
         return document
 
     def test_a_file_without_names_reads_the_enum_as_it_was(self):
@@ -525,10 +526,10 @@ class DelayCausesNames(Scratch):
         self.assertEqual(causes.names, tuple((item["key"], item["words"]) for item in names))
 
     def test_names_that_are_not_a_list_of_key_and_words_are_refused_in_one_line(self):
-        for names, problem in (({"compute": "compute"}, "causes.names: is an object, not a list of causes"),
-                               ([{"key": "compute"}], "causes.names[0]: is not an object with the texts key and words"),
+        for names, problem in (({"compute": "compute"}, "cause_kinds: expected a list, not an object"),
+                               ([{"key": "compute"}], "cause_kinds[0].words: is missing"),
                                ([{"key": "compute", "words": "a"}, {"key": "compute", "words": "b"}],
-                                "causes.names[1].key: repeats 'compute'")):
+                                "cause_kinds[1].key: repeats 'compute'")):
             with self.subTest(problem):
                 path = self.write("delay.json", self.document(names))
                 status, _, err = run_tool("report", path, "--out", os.path.join(self.directory.name, "out"))

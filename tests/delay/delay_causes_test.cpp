@@ -1,4 +1,4 @@
-// attribute_delay on constructed records (bench/delay/delay_report.hpp):
+// attribute_delay on constructed records (bench/delay/attribution.hpp):
 // a run of identical periods, with one cause planted in one period; the
 // attribution must name that cause, its participant, CPU and stage, and a
 // step's causes must add up to its excess. No clock is read.
@@ -8,7 +8,8 @@
 #include <numeric>
 #include <string>
 
-#include "bench/delay/delay_report.hpp"
+#include "bench/delay/attribution.hpp"
+#include "bench/delay/attribution_output.hpp"
 #include "bench/probes/paced.hpp"
 
 namespace {

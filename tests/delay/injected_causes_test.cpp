@@ -1,5 +1,5 @@
 // Injected causes on the real paced step (bench/probes/paced.hpp with its
-// per-step record; bench/delay/delay_report.hpp's attribution): each test
+// per-step record; bench/delay/attribution.hpp): each test
 // injects one cause into a two-participant run on two CPUs and checks, in
 // behaviour only, that the cause is the top cause in at least 90 % of the
 // steps it made late, with the participant and the CPU named right. A step
@@ -28,7 +28,8 @@
 #include <thread>
 #include <vector>
 
-#include "bench/delay/delay_report.hpp"
+#include "bench/delay/attribution.hpp"
+#include "bench/delay/attribution_output.hpp"
 #include "bench/probes/paced.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"

@@ -1,7 +1,10 @@
 // The paced engine on a stand-in step: it records one wake-up per participant
-// per period and one completion per period, counts deadline misses against
-// the period, and its Figure 5 table has one row per thread whose sums are
-// the totals. No latency is asserted.
+// per step and one completion per step, counts deadline misses against the
+// period, re-anchors its schedule after an overrun (the periods skipped are
+// counted, the team skips them together), and its Figure 5 table has one row
+// per thread whose sums are the totals. No latency is asserted: where a test
+// needs a step longer than its period, the step sleeps, and sleep_for sleeps
+// at least that long.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,9 +40,14 @@ TEST(PacedRun, RecordsEveryPeriodAndThread) {
       team, kParticipants, settings, [&](unsigned) { prepared.fetch_add(1); },
       [&](unsigned, std::uint64_t) { steps.fetch_add(1); });
   EXPECT_EQ(prepared.load(), 3);
-  EXPECT_EQ(steps.load(), 30);
-  EXPECT_EQ(run.wakeup_ns.size(), 30u);
-  EXPECT_EQ(run.completion_ns.size(), 10u);
+  // Each step is a period of the schedule, or (a step delayed past its
+  // period on a busy machine) skips some: every period is one or the other.
+  EXPECT_EQ(run.periods_scheduled, 10);
+  EXPECT_EQ(run.periods + static_cast<std::int64_t>(run.skipped_periods), 10);
+  EXPECT_EQ(steps.load(), 3 * run.periods);
+  EXPECT_EQ(run.wakeup_ns.size(), 3u * static_cast<std::size_t>(run.periods));
+  EXPECT_EQ(run.period_index.size(), run.wakeup_ns.size());
+  EXPECT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.periods));
   // The count is of the completions above the period, whatever they were.
   EXPECT_EQ(run.deadline_misses,
             static_cast<std::uint64_t>(std::count_if(run.completion_ns.begin(), run.completion_ns.end(),
@@ -52,19 +60,93 @@ TEST(PacedRun, RecordsEveryPeriodAndThread) {
   EXPECT_EQ(run.figure5.rows()[3].role, "worker");
 }
 
-TEST(PacedRun, EveryOverrunIsADeadlineMiss) {
+// The re-anchoring arithmetic: the next step runs in the first period that
+// starts at or after the step's end, never before the next period.
+TEST(NextPeriod, IsTheFirstPeriodBoundaryAfterTheStepsEnd) {
+  constexpr std::int64_t kPeriod = 1'000'000;
+  EXPECT_EQ(probes::next_period(7, 0, kPeriod), 8);
+  EXPECT_EQ(probes::next_period(7, 400'000, kPeriod), 8);
+  EXPECT_EQ(probes::next_period(7, kPeriod, kPeriod), 8);  // ended as period 8 began: no overrun
+  EXPECT_EQ(probes::next_period(7, kPeriod + 1, kPeriod), 9);  // overran: period 8 is skipped
+  EXPECT_EQ(probes::next_period(7, 2 * kPeriod, kPeriod), 9);
+  EXPECT_EQ(probes::next_period(7, 6'600'000, kPeriod), 14);  // 6.6 periods: 8..13 skipped
+  EXPECT_EQ(probes::next_period(0, 15'000'000'000, kPeriod), 15'000);
+  static_assert(probes::next_period(0, 2'500'000, kPeriod) == 3);
+}
+
+// A step that sleeps 0.5 ms in 0.1 ms periods: the first step overruns, the
+// schedule re-anchors past the last of the 5 periods, and the run ends
+// there: one step, one miss, 4 periods skipped, no backlog.
+TEST(PacedRun, AnOverrunSkipsToTheNextPeriodBoundary) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced overrun");
   probes::paced_settings settings;
   settings.period_ns = 100'000;  // 0.1 ms
   settings.periods = 5;
   settings.lead_ns = 1'000'000;
   lockstep::sync::std_thread_team team(1);
-  // A step that sleeps 0.5 ms cannot finish inside a 0.1 ms period.
   const auto run = probes::run_paced(
       team, 1, settings, [](unsigned) {},
       [](unsigned, std::uint64_t) { std::this_thread::sleep_for(std::chrono::microseconds(500)); });
-  EXPECT_EQ(run.deadline_misses, 5u);
-  for (double completion : run.completion_ns) EXPECT_GT(completion, 100'000.0);
+  EXPECT_EQ(run.periods, 1);
+  EXPECT_EQ(run.deadline_misses, 1u);
+  EXPECT_EQ(run.skipped_periods, 4u);
+  EXPECT_EQ(run.periods_scheduled, 5);
+  ASSERT_EQ(run.completion_ns.size(), 1u);
+  EXPECT_GT(run.completion_ns[0], 100'000.0);
+}
+
+// A team whose step outgrows its period (participant 1 sleeps 2.5 periods in
+// every step, the others wait for it in the barrier): every step overruns,
+// the team runs each step in the same period, at least 3 periods after the
+// one before, and every period of the schedule is a step or a skipped one.
+TEST(PacedRun, ATeamWhoseStepOutgrowsThePeriodSkipsPeriodsTogether) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced team overrun");
+  constexpr unsigned kParticipants = 3;
+  probes::paced_settings settings;
+  settings.period_ns = 1'000'000;
+  settings.periods = 30;
+  settings.lead_ns = 1'000'000;
+  lockstep::sync::std_thread_team team(kParticipants);
+  std::array<std::atomic<int>, kParticipants> steps{};
+  std::barrier<> stage(kParticipants);
+  probes::paced_progress progress;
+  settings.progress = &progress;
+  const auto run = probes::run_paced(
+      team, kParticipants, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t) {
+        if (id == 1) std::this_thread::sleep_for(std::chrono::microseconds(2'500));
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  ASSERT_GE(run.periods, 1);
+  EXPECT_LE(run.periods, 10);  // at most one step in every 3 periods
+  EXPECT_EQ(steps[0].load(), run.periods);
+  EXPECT_EQ(steps[1].load(), run.periods);
+  EXPECT_EQ(steps[2].load(), run.periods);
+  EXPECT_EQ(run.deadline_misses, static_cast<std::uint64_t>(run.periods));
+  EXPECT_EQ(run.periods_scheduled, 30);
+  EXPECT_EQ(run.periods + static_cast<std::int64_t>(run.skipped_periods), 30);
+  ASSERT_EQ(run.period_index.size(), static_cast<std::size_t>(run.periods) * kParticipants);
+  for (std::int64_t k = 0; k < run.periods; ++k) {
+    const std::int64_t period = run.period_index[static_cast<std::size_t>(k) * kParticipants];
+    for (unsigned p = 1; p < kParticipants; ++p)
+      EXPECT_EQ(run.period_index[static_cast<std::size_t>(k) * kParticipants + p], period) << "step " << k;
+    if (k == 0) {
+      EXPECT_EQ(period, 0);
+    } else {
+      const std::int64_t before = run.period_index[static_cast<std::size_t>(k - 1) * kParticipants];
+      EXPECT_GE(period - before, 3) << "step " << k;
+      // The next boundary after the previous step's end, exactly.
+      EXPECT_EQ(period, probes::next_period(before, static_cast<std::int64_t>(run.completion_ns[static_cast<std::size_t>(k - 1)]),
+                                            settings.period_ns))
+          << "step " << k;
+    }
+  }
+  // What the progress line reads: the whole schedule behind it, and the
+  // same overruns and skipped periods as the result.
+  EXPECT_EQ(progress.periods.load(), 30);
+  EXPECT_EQ(progress.overran.load(), run.deadline_misses);
+  EXPECT_EQ(progress.skipped.load(), run.skipped_periods);
 }
 
 TEST(PacedRun, AFailedPinIsReportedAndTheRunCompletes) {
@@ -118,11 +200,43 @@ TEST(PacedRun, StopAboveKeepsPeriodsUpToTheLateWakeUp) {
   EXPECT_LT(steps[0].load(), 50);
 }
 
-// A late wake-up made on purpose: participant 1 overruns period 4 by far, so
-// (at the latest) period 5 wakes late. The team syncs every period and
-// leaves together; the result ends at the late period, whichever it was.
+// A team of three with a margin of two: the late wake-up (a threshold of 0
+// makes the first one late) ends the run after one more step, for everyone.
 TEST(PacedRun, StopAboveEndsATeamTogether) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced stop team");
+  constexpr unsigned kParticipants = 3;
+  probes::paced_settings settings;
+  settings.period_ns = 2'000'000;
+  settings.periods = 40;
+  settings.lead_ns = 1'000'000;
+  settings.stop_above_ns = 0;
+  settings.stop_margin_periods = 2;
+  lockstep::sync::std_thread_team team(kParticipants);
+  std::array<std::atomic<int>, kParticipants> steps{};
+  std::barrier<> stage(kParticipants);
+  const auto run = probes::run_paced(
+      team, kParticipants, settings, [](unsigned) {},
+      [&](unsigned id, std::uint64_t) {
+        steps[id].fetch_add(1);
+        stage.arrive_and_wait();
+      });
+  ASSERT_TRUE(run.stop.has_value());
+  EXPECT_EQ(run.stop->step, 0);
+  EXPECT_EQ(run.stop->period, 0);
+  EXPECT_EQ(run.periods, 1);
+  EXPECT_EQ(run.wakeup_ns.size(), static_cast<std::size_t>(run.periods) * kParticipants);
+  EXPECT_EQ(run.end_ns.size(), run.wakeup_ns.size());
+  EXPECT_EQ(steps[0].load(), steps[1].load());
+  EXPECT_EQ(steps[1].load(), steps[2].load());
+  EXPECT_EQ(steps[0].load(), 2);  // the margin: one more step, together
+}
+
+// An overrun is not a late wake-up: participant 1 overruns its fifth step by
+// 250 ms, and the team re-anchors (no wake-up waits out the overrun, so the
+// 100 ms threshold does not end the run): the schedule's 40 periods of 2 ms
+// are over by the time the overrun ends, so that step is the last.
+TEST(PacedRun, AnOverrunIsNoLateWakeUp) {
+  lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced overrun no stop");
   constexpr unsigned kParticipants = 3;
   probes::paced_settings settings;
   settings.period_ns = 2'000'000;
@@ -131,28 +245,19 @@ TEST(PacedRun, StopAboveEndsATeamTogether) {
   settings.stop_above_ns = 100'000'000;  // 100 ms
   settings.stop_margin_periods = 2;
   lockstep::sync::std_thread_team team(kParticipants);
-  std::array<std::atomic<int>, kParticipants> steps{};
   std::barrier<> stage(kParticipants);
   const auto run = probes::run_paced(
       team, kParticipants, settings, [](unsigned) {},
-      [&](unsigned id, std::uint64_t period) {
-        if (id == 1 && period == 4) std::this_thread::sleep_for(std::chrono::milliseconds(250));
-        steps[id].fetch_add(1);
+      [&](unsigned id, std::uint64_t step) {
+        if (id == 1 && step == 4) std::this_thread::sleep_for(std::chrono::milliseconds(250));
         stage.arrive_and_wait();
       });
-  ASSERT_TRUE(run.stop.has_value());
-  EXPECT_LE(run.stop->period, 5);
-  EXPECT_GT(run.stop->wakeup_ns, 100'000'000);
-  EXPECT_EQ(run.periods, run.stop->period + 1);
-  EXPECT_EQ(run.wakeup_ns.size(), static_cast<std::size_t>(run.periods) * kParticipants);
-  EXPECT_EQ(run.end_ns.size(), run.wakeup_ns.size());
-  EXPECT_EQ(steps[0].load(), steps[1].load());
-  EXPECT_EQ(steps[1].load(), steps[2].load());
-  EXPECT_EQ(steps[0].load(), run.stop->period + 2);  // the margin: one more period, together
-  if (run.stop->period > 0) {
-    ASSERT_TRUE(run.stop->previous_end_ns.has_value());
-    EXPECT_GE(*run.stop->previous_end_ns, 0);
-  }
+  EXPECT_FALSE(run.stop.has_value());
+  ASSERT_EQ(run.periods, 5);
+  EXPECT_GT(run.completion_ns[4], 250'000'000.0);
+  EXPECT_EQ(run.periods_scheduled, 40);
+  EXPECT_EQ(run.skipped_periods, static_cast<std::uint64_t>(40 - 5));
+  for (double wake : run.wakeup_ns) EXPECT_LT(wake, 100'000'000.0);
 }
 
 // Stop after misses: a team whose step overruns from period 3 on ends soon
@@ -178,7 +283,11 @@ TEST(PacedRun, StopAfterMissesEndsATeamTogether) {
   EXPECT_TRUE(run.stopped_after_misses);
   EXPECT_FALSE(run.stop.has_value());
   EXPECT_LT(run.periods, 200);
-  EXPECT_GE(run.deadline_misses, 2u);
+  EXPECT_GE(run.deadline_misses, 1u);
+  // A miss is a period past its deadline without its step done: the step
+  // that overran, and each period skipped after it (2 ms in 1 ms periods:
+  // 1 + 2); the run kept every one it counted.
+  EXPECT_GE(run.deadline_misses + run.skipped_periods, 2u);
   EXPECT_EQ(steps[0].load(), steps[1].load());
   EXPECT_EQ(steps[0].load(), run.periods);  // every period run is kept
   EXPECT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.periods));
@@ -194,12 +303,15 @@ TEST(PacedRun, WithoutAStopEveryPeriodIsKept) {
   lockstep::sync::std_thread_team team(1);
   const auto run = probes::run_paced(team, 1, settings, [](unsigned) {}, [](unsigned, std::uint64_t) {});
   EXPECT_FALSE(run.stop.has_value());
-  EXPECT_EQ(run.periods, 5);
+  EXPECT_EQ(run.periods_scheduled, 5);
+  EXPECT_EQ(run.periods + static_cast<std::int64_t>(run.skipped_periods), 5);
   ASSERT_EQ(run.cpus.size(), 1u);
 }
 
-// Independent participants (per CPU): each period's completion is each
-// participant's own, so one that overruns misses alone.
+// Independent participants (per CPU): each step's completion is each
+// participant's own, so one that overruns misses and skips alone: its
+// first step (0.5 ms in 0.1 ms periods) takes it past the schedule's 4
+// periods, while the other runs its own steps.
 TEST(PacedRun, IndependentParticipantsMissAlone) {
   lockstep::testing::watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown), "paced independent");
   probes::paced_settings settings;
@@ -211,12 +323,34 @@ TEST(PacedRun, IndependentParticipantsMissAlone) {
   const auto run = probes::run_paced(team, 2, settings, [](unsigned) {}, [](unsigned id, std::uint64_t) {
     if (id == 1) std::this_thread::sleep_for(std::chrono::microseconds(500));
   });
-  ASSERT_EQ(run.completion_ns.size(), 8u);
-  const auto slow = probes::participant_samples(run.completion_ns, 2, 1);
-  ASSERT_EQ(slow.size(), 4u);
-  for (double completion : slow) EXPECT_GT(completion, 100'000.0);
-  EXPECT_GE(run.deadline_misses, 4u);
-  EXPECT_EQ(probes::participant_samples(run.wakeup_ns, 2, 0).size(), 4u);
+  ASSERT_EQ(run.steps_run.size(), 2u);
+  EXPECT_EQ(run.steps_run[1], 1);
+  EXPECT_GE(run.steps_run[0], 1);
+  ASSERT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.steps_run[0] + run.steps_run[1]));
+  const auto slow = probes::samples_of(run, run.completion_ns, 1);
+  ASSERT_EQ(slow.size(), 1u);
+  EXPECT_GT(slow[0], 100'000.0);
+  EXPECT_GE(run.deadline_misses, 1u);
+  EXPECT_GE(run.skipped_periods, 3u);  // the slow one's periods 1..3
+  EXPECT_EQ(run.periods_scheduled, 4);
+  EXPECT_EQ(probes::samples_of(run, run.wakeup_ns, 0).size(), static_cast<std::size_t>(run.steps_run[0]));
+  EXPECT_EQ(probes::samples_of(run, run.period_index, 1), (std::vector<std::int64_t>{0}));
+}
+
+// samples_of on a result made by hand: a team's samples are step-major, an
+// independent run's participant-major with steps_run each.
+TEST(PacedRun, SamplesOfTakesOneParticipantsSteps) {
+  probes::paced_result team;
+  team.participants = 2;
+  team.wakeup_ns = {0, 1, 10, 11, 20, 21};
+  EXPECT_EQ(probes::samples_of(team, team.wakeup_ns, 1), (std::vector<double>{1, 11, 21}));
+  probes::paced_result apart;
+  apart.participants = 2;
+  apart.independent = true;
+  apart.steps_run = {1, 3};
+  apart.wakeup_ns = {5, 0, 1, 2};
+  EXPECT_EQ(probes::samples_of(apart, apart.wakeup_ns, 0), (std::vector<double>{5}));
+  EXPECT_EQ(probes::samples_of(apart, apart.wakeup_ns, 1), (std::vector<double>{0, 1, 2}));
 }
 
 TEST(PacedRun, ParticipantSamplesTakesEveryNth) {
@@ -238,13 +372,13 @@ TEST(PacedStep, PerCpuRunsOneParticipantPerCpu) {
   settings.pacing.lead_ns = 1'000'000;
   const auto run = probes::run_paced_per_cpu(settings, cpus);
   EXPECT_EQ(run.participants, 1u);
-  EXPECT_EQ(run.periods, 5);
+  EXPECT_EQ(run.periods_scheduled, 5);
   ASSERT_EQ(run.cpus.size(), 1u);
   ASSERT_TRUE(run.cpus[0].has_value());
   if (run.errors.empty()) {
     EXPECT_EQ(*run.cpus[0], cpu);
   }
-  EXPECT_EQ(run.completion_ns.size(), 5u);
+  EXPECT_EQ(run.completion_ns.size(), static_cast<std::size_t>(run.periods));
 }
 
 TEST(PacedStep, PerCpuRefusesATeamOfItsOwn) {

@@ -8,6 +8,8 @@
 #include <cstdint>
 #include <stdexcept>
 
+#include "bench/probes/delay.hpp"
+#include "bench/probes/paced.hpp"
 #include "bench/probes/period_search.hpp"
 
 namespace {
@@ -208,6 +210,30 @@ TEST(FindPeriod, RefusesSettingsThatCannotSearch) {
   settings.start_period_ns = 1'000;  // below the floor
   EXPECT_NE(probes::period_search_problem(settings), "");
   EXPECT_EQ(probes::period_search_problem(quick_settings()), "");
+}
+
+// What a run whose schedule re-anchored tells the search (delay.hpp,
+// trial_of): a schedule of 8 periods of 1 ms, steps in periods 0, 3, 4 and 7
+// (the ones in 0 and 4 took 2.5 ms and overran, each making the schedule
+// skip two periods): 8 periods, 6 misses (2 overruns, 4 skipped periods).
+TEST(TrialOf, ASkippedPeriodIsAMiss) {
+  probes::paced_result run;
+  run.participants = 1;
+  run.periods = 4;
+  run.completion_ns = {2'500'000, 400'000, 2'500'000, 400'000};
+  run.period_index = {0, 3, 4, 7};
+  run.deadline_misses = 2;
+  run.periods_scheduled = 8;
+  run.skipped_periods = 4;
+  for (std::size_t k = 1; k < run.period_index.size(); ++k)
+    EXPECT_EQ(run.period_index[k],
+              probes::next_period(run.period_index[k - 1], static_cast<std::int64_t>(run.completion_ns[k - 1]), 1'000'000));
+  const probes::trial_outcome trial = probes::trial_of(run, 42);
+  EXPECT_EQ(trial.periods, 8);
+  EXPECT_EQ(trial.misses, 6u);
+  EXPECT_EQ(trial.skipped, 4u);
+  EXPECT_EQ(trial.elapsed_ns, 42);
+  EXPECT_DOUBLE_EQ(trial.completion_p50_ns, (400'000.0 + 2'500'000.0) / 2);
 }
 
 }  // namespace
