@@ -12,7 +12,10 @@
 //  * a publication board, written only by owners: per equation four slots,
 //    k_0, k_1, k_2 (published at stages 0..2) and x_next (published at
 //    stage 3), each owner's slots in a region of its own lines (as padded64,
-//    so that per_thread measures the private copy, not false sharing).
+//    so that per_thread measures the private copy, not false sharing). An
+//    owner publishes there only the equations others read (its exports,
+//    kernels/parallel_exchange.hpp): a chain cut between masses, its two
+//    boundary positions.
 // After every stage sync a participant copies in, from the board, the slots
 // its equations read (its dependencies, nothing else) for that stage.
 // One buffer per slot suffices: slot s is written at stage s and copied in
