@@ -137,8 +137,8 @@ class exchange_runner {
                   const rank_placement& placement)
       : job_(job), settings_(settings), model_(model), offset_(offset), placement_(placement),
         setup_{job.comm, job.host_comm, job.rank, job.size,
-               layouts::partition(model.equations(), static_cast<unsigned>(job.size)),
-               kernels::plan_participants(model, layouts::partition(model.equations(), static_cast<unsigned>(job.size))),
+               kernels::partition_of(model, static_cast<unsigned>(job.size)),
+               kernels::plan_participants(model, kernels::partition_of(model, static_cast<unsigned>(job.size))),
                placement.crowded_here()} {
     // The serial reference for the whole trajectory one measurement runs.
     kernels::staged_rk4<Model> serial(model_, settings.dt);

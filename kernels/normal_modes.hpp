@@ -58,7 +58,8 @@ class normal_mode_solution {
   // Modes in ascending angular frequency.
   [[nodiscard]] const std::vector<normal_mode>& modes() const noexcept { return modes_; }
 
-  // The state (positions then velocities, the models' layout) at time t.
+  // The state at time t: the positions, then the velocities (the two-mass
+  // model's numbering; a chain numbers mass by mass, chain_model::position_equation).
   [[nodiscard]] std::vector<double> state_at(double time) const;
   void state_at(double time, std::span<double> state) const;
 

@@ -85,8 +85,11 @@ chain_model::chain_model(chain_params params) : params_(std::move(params)), mass
 }
 
 std::vector<double> chain_model::initial_state() const {
-  std::vector<double> state(params_.positions);
-  state.insert(state.end(), params_.velocities.begin(), params_.velocities.end());
+  std::vector<double> state(2 * masses_);
+  for (std::size_t mass = 0; mass < masses_; ++mass) {
+    state[position_equation(mass)] = params_.positions[mass];
+    state[velocity_equation(mass)] = params_.velocities[mass];
+  }
   return state;
 }
 
@@ -95,8 +98,8 @@ double chain_model::energy(std::span<const double> state) const noexcept {
   double kinetic = 0.0;
   double potential = 0.0;
   for (std::size_t mass = 0; mass < masses_; ++mass) {
-    const double velocity = state[masses_ + mass];
-    const double stretch = state[mass] - (mass == 0 ? 0.0 : state[mass - 1]);
+    const double velocity = state[velocity_equation(mass)];
+    const double stretch = state[position_equation(mass)] - (mass == 0 ? 0.0 : state[position_equation(mass - 1)]);
     kinetic += params_.masses[mass] * velocity * velocity;
     potential += params_.springs[mass] * stretch * stretch;
   }

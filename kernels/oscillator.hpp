@@ -16,12 +16,24 @@
 //
 //  * chain_model: the paper's eq. (1), M x'' + K x = 0, for s masses in a line,
 //    the first tied to a fixed wall by spring C_1, mass j tied to mass j-1 by
-//    spring C_j, the last mass free. 2s equations: positions first, then
-//    velocities (for s = 2 this is exactly the two-mass numbering).
-//        D_j     = x_{s+j}                                       reads x_{s+j}
-//        D_{s+j} = (C_j (x_{j-1} - x_j) + C_{j+1} (x_{j+1} - x_j)) / m_j
+//    spring C_j, the last mass free. 2s equations, numbered mass by mass: the
+//    position of mass j (1-based) is equation 2j-1, its velocity equation 2j
+//    (0-based: 2(j-1) and 2(j-1)+1), so the state reads x_1, v_1, x_2, v_2, ...
+//        D_{2j-1} = v_j                                          reads v_j
+//        D_{2j}   = (C_j (x_{j-1} - x_j) + C_{j+1} (x_{j+1} - x_j)) / m_j
 //                                                 reads x_{j-1}, x_j, x_{j+1}
 //    (x_0 is the wall, C_{s+1} does not exist: the tridiagonal neighbours).
+//    Why mass by mass and not the two-mass numbering (positions, then
+//    velocities): a contiguous run of equations is then a run of whole masses,
+//    so a participant that owns a block of equations owns its masses'
+//    positions and velocities, computes both, and reads from its neighbours
+//    only the two positions at its block's ends (layouts/partition.hpp cuts
+//    chains between masses). In the two-mass numbering the same ownership is
+//    two ranges per participant, and every layout, channel message and MPI
+//    window would have to handle two; a contiguous block stays one range for
+//    all of them and for the step's loop. The arithmetic of every equation is
+//    the same in either numbering; only the index of each value changes
+//    (position_equation, velocity_equation).
 //
 // The paper's case (the defaults): m1 = m2 = m, C1 = C2 = C, C/m = 1012.5 s^-2,
 // x1(0) = 2, x2(0) = -3, velocities 0. The paper prints m = 2 g and
@@ -34,13 +46,17 @@
 // Cost: the derivative is on the measured path of every benchmark. It is
 // allocation-free, reads only the stage inputs it depends on, and uses
 // coefficients (C/m) divided once at construction, so an evaluation is at most
-// two subtractions, two multiplications and one addition.
+// two subtractions, two multiplications and one addition. A block of
+// equations is evaluated by evaluate_derivatives (below): the chain's
+// derivatives() walks whole masses without a branch per equation; every
+// value is the one derivative() gives, bit for bit.
 //
 // Floating-point contract: every function here is a fixed sequence of IEEE
 // operations on its inputs (lockstep::kernels is compiled with
 // -ffp-contract=off, so no fused multiply-add changes the rounding). The same
 // inputs give the same bits on any thread, which is what makes the parallel
 // step bitwise identical to the serial one.
+#include <algorithm>
 #include <array>
 #include <cassert>
 #include <cmath>
@@ -91,17 +107,41 @@ struct dependency_set {
 //   equations()            the number of first-order equations n (state size)
 //   derivative(i, y)       D_i evaluated at the stage inputs y (reads only dependencies(i))
 //   dependencies(i)        the equations D_i reads, ascending
+//   block_grain()          how many consecutive equations one owner keeps
+//                          together when the participants are no more than
+//                          n / block_grain() (layouts/partition.hpp): 1 for
+//                          the paper's two masses (split one equation per
+//                          thread, as the paper does), 2 for a chain (a
+//                          mass's position and velocity); it must divide n
 //   initial_state()        x(0), n values
 //   energy(x)              kinetic + potential energy of state x (J)
+// Optional: derivatives(first, last, y, out), out[i - first] = D_i(y) for i in
+// [first, last), the same bits as derivative(i, y) (evaluate_derivatives
+// calls it when the model has it, else derivative() one equation at a time).
 template <class Model>
 concept oscillator_model = std::copy_constructible<Model> &&
     requires(const Model& model, std::size_t equation, const double* values, std::span<const double> state) {
       { model.equations() } -> std::convertible_to<std::size_t>;
       { model.derivative(equation, values) } -> std::same_as<double>;
       { model.dependencies(equation) } -> std::same_as<dependency_set>;
+      { model.block_grain() } -> std::convertible_to<std::size_t>;
       { model.initial_state() } -> std::same_as<std::vector<double>>;
       { model.energy(state) } -> std::same_as<double>;
     };
+
+// out[i - first] = D_i(y) for every i in [first, last): the model's own block
+// evaluation when it has one (derivatives()), else derivative() per equation.
+// The staged RK4 and the parallel step both evaluate through here, so they
+// spend the same per equation.
+template <class Model, stage_values Values>
+inline void evaluate_derivatives(const Model& model, std::size_t first, std::size_t last, const Values& y,
+                                 double* out) noexcept {
+  if constexpr (requires { model.derivatives(first, last, y, out); }) {
+    model.derivatives(first, last, y, out);
+  } else {
+    for (std::size_t equation = first; equation < last; ++equation) out[equation - first] = model.derivative(equation, y);
+  }
+}
 
 // ---------------------------------------------------------------------------
 // The paper's two masses.
@@ -144,6 +184,11 @@ class two_mass_model {
         c2_over_m2_(params.c2 / params.m2) {}
 
   [[nodiscard]] static constexpr std::size_t equations() noexcept { return kEquations; }
+  // Split one equation at a time, as the paper splits its four over 1..4 threads.
+  [[nodiscard]] static constexpr std::size_t block_grain() noexcept { return 1; }
+  // Where mass `mass` (0 or 1) has its position and velocity: x1, x2, x3 = x1', x4 = x2'.
+  [[nodiscard]] static constexpr std::size_t position_equation(std::size_t mass) noexcept { return mass; }
+  [[nodiscard]] static constexpr std::size_t velocity_equation(std::size_t mass) noexcept { return 2 + mass; }
 
   // D1..D4 (equation 0..3) one at a time, for a thread that owns one equation.
   // y holds the stage inputs y1..y4 (0-based); each reads only its dependencies.
@@ -247,15 +292,20 @@ class chain_model {
 
   [[nodiscard]] std::size_t equations() const noexcept { return 2 * masses_; }
   [[nodiscard]] std::size_t masses_count() const noexcept { return masses_; }
+  // A mass's position and velocity stay with one owner (its two equations).
+  [[nodiscard]] static constexpr std::size_t block_grain() noexcept { return 2; }
+  // Where mass `mass` (0-based) has its position and velocity: mass by mass.
+  [[nodiscard]] static constexpr std::size_t position_equation(std::size_t mass) noexcept { return 2 * mass; }
+  [[nodiscard]] static constexpr std::size_t velocity_equation(std::size_t mass) noexcept { return 2 * mass + 1; }
 
   // D_{equation+1} at the stage inputs y. For s = 2 it performs exactly the
-  // operations of two_mass_model::derivative (same bits).
+  // operations of two_mass_model::derivative (same bits, other indices).
   template <stage_values Values>
   [[nodiscard]] double derivative(std::size_t equation, const Values& y) const noexcept {
     assert(equation < 2 * masses_);
-    if (equation < masses_) return y[masses_ + equation];
-    const std::size_t mass = equation - masses_;
-    const double here = y[mass];
+    if (equation % 2 == 0) return y[equation + 1];
+    const std::size_t mass = equation / 2;
+    const double here = y[position_equation(mass)];
     const double left_over_mass = left_over_mass_[mass];
     const double right_over_mass = right_over_mass_[mass];
     // Operation order fixed, and chosen so that s = 2 reproduces two_mass_model:
@@ -263,13 +313,44 @@ class chain_model {
     //   middle mass:  (C_j/m_j)(y_{j-1} - y_j) + (C_{j+1}/m_j)(y_{j+1} - y_j)
     //   last mass:    (C_s/m_s)(y_{s-1} - y_s)
     //   single mass:  -(C_1/m_1) y_1
+    // (y_j: the position of mass j); middle_velocity holds the middle case.
     if (mass == 0) {
       if (masses_ == 1) return -(left_over_mass * here);
-      return right_over_mass * (y[1] - here) - left_over_mass * here;
+      return right_over_mass * (y[position_equation(1)] - here) - left_over_mass * here;
     }
-    const double from_left = left_over_mass * (y[mass - 1] - here);
-    if (mass + 1 == masses_) return from_left;
-    return from_left + right_over_mass * (y[mass + 1] - here);
+    if (mass + 1 == masses_) return left_over_mass * (y[position_equation(mass - 1)] - here);
+    return middle_velocity(left_over_mass, right_over_mass, y[position_equation(mass - 1)], here,
+                           y[position_equation(mass + 1)]);
+  }
+
+  // out[i - first] = derivative(i, y) for i in [first, last), bit for bit,
+  // without a branch per equation: the masses strictly inside the chain and
+  // wholly inside [first, last) go through one loop (the middle-mass
+  // formula); a block's partial masses (a block may start on a velocity or
+  // end on a position when there are more participants than masses) and the
+  // chain's two end masses go through derivative().
+  template <stage_values Values>
+  void derivatives(std::size_t first, std::size_t last, const Values& y, double* out) const noexcept {
+    assert(first <= last && last <= 2 * masses_);
+    // Whole masses [whole_first, whole_last) of the block, then those of them
+    // strictly inside the chain (masses 1 .. s-2).
+    const std::size_t whole_first = (first + 1) / 2;
+    const std::size_t whole_last = last / 2;
+    const std::size_t inner_first = std::max<std::size_t>(whole_first, 1);
+    const std::size_t inner_last = std::min(whole_last, masses_ - 1);
+    if (inner_first >= inner_last) {
+      for (std::size_t equation = first; equation < last; ++equation) out[equation - first] = derivative(equation, y);
+      return;
+    }
+    for (std::size_t equation = first; equation < 2 * inner_first; ++equation)
+      out[equation - first] = derivative(equation, y);
+    for (std::size_t mass = inner_first; mass < inner_last; ++mass) {
+      out[2 * mass - first] = y[2 * mass + 1];
+      out[2 * mass + 1 - first] =
+          middle_velocity(left_over_mass_[mass], right_over_mass_[mass], y[2 * mass - 2], y[2 * mass], y[2 * mass + 2]);
+    }
+    for (std::size_t equation = 2 * inner_last; equation < last; ++equation)
+      out[equation - first] = derivative(equation, y);
   }
 
   // Positions read their velocity; velocity j reads positions j-1, j, j+1
@@ -277,14 +358,14 @@ class chain_model {
   [[nodiscard]] dependency_set dependencies(std::size_t equation) const noexcept {
     assert(equation < 2 * masses_);
     dependency_set set;
-    if (equation < masses_) {
-      set.equations[set.count++] = masses_ + equation;
+    if (equation % 2 == 0) {
+      set.equations[set.count++] = equation + 1;
       return set;
     }
-    const std::size_t mass = equation - masses_;
-    if (mass > 0) set.equations[set.count++] = mass - 1;
-    set.equations[set.count++] = mass;
-    if (mass + 1 < masses_) set.equations[set.count++] = mass + 1;
+    const std::size_t mass = equation / 2;
+    if (mass > 0) set.equations[set.count++] = position_equation(mass - 1);
+    set.equations[set.count++] = position_equation(mass);
+    if (mass + 1 < masses_) set.equations[set.count++] = position_equation(mass + 1);
     return set;
   }
 
@@ -293,6 +374,13 @@ class chain_model {
   [[nodiscard]] const chain_params& params() const noexcept { return params_; }
 
  private:
+  // The middle-mass velocity derivative, in derivative()'s operation order.
+  [[nodiscard]] static double middle_velocity(double left_over_mass, double right_over_mass, double left, double here,
+                                              double right) noexcept {
+    const double from_left = left_over_mass * (left - here);
+    return from_left + right_over_mass * (right - here);
+  }
+
   chain_params params_;
   std::size_t masses_;
   std::vector<double> left_over_mass_;   // C_j / m_j

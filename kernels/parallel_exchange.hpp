@@ -9,22 +9,28 @@
 //                                       read in place, results written in place,
 //                                       every participant arrives at every stage.
 //   barrier_copy_in<Barrier, Layout>    a phase_barrier and a private_copy layout
-//                                       (per_thread): results go
-//                                       to the private copy and the board; after
-//                                       each stage's barrier a participant copies
-//                                       its dependencies in from the board.
-//   channel_copy_in<Channel, Layout>    a dataflow channel (seqlock, spsc_queue)
-//                                       and a private_copy layout (per_thread):
-//                                       the owner publishes its
-//                                       block from its private copy; a consumer
-//                                       receives from the producers its block
-//                                       depends on, straight into its private copy.
+//                                       (per_thread): results go to the private
+//                                       copy; publish() puts the values other
+//                                       participants read (the block's exports)
+//                                       on the board; after each stage's barrier
+//                                       a participant copies its dependencies in
+//                                       from the board.
+//   channel_copy_in<Channel, Layout>    a dataflow channel (seqlock, spsc_queue,
+//                                       mailbox) and a private_copy layout
+//                                       (per_thread): the owner publishes its
+//                                       block's exports from its private copy; a
+//                                       consumer receives from the producers its
+//                                       block depends on, straight into its
+//                                       private copy.
 //
-// Every adapter offers the same members to the step, for participant p:
-//   states(p, parity)            x_n as a stage_values accessor
-//   stage_values(p, s)           k_s as a stage_values accessor (s in 0..2 for inputs)
-//   own_stage_value(p, s, i)     k_{s,i} of an equation p owns (s in 0..3)
-//   write_stage_value(p, s, i, v), write_next_state(p, parity, i, v)
+// Every adapter offers the same members to the step, for participant p (the
+// own_* pointers address p's block: element i is equation block.first + i,
+// one array per slot, no per-equation lookup; layouts/shared_slots.hpp):
+//   own_states(p, parity)        x_n of p's block
+//   own_next_states(p, parity)   where p writes x_{n+1} of its block
+//   own_stage_values(p, s)       k_s of p's block, s in 0..3 (written at stage s)
+//   states(p, parity)            x_n as a stage_values accessor by equation (dependencies)
+//   stage_values(p, s)           k_s as a stage_values accessor by equation (s in 0..2)
 //   publish(p, self, stage)      after p wrote its block's values of `stage`
 //   wait(p, self, stage)         the stage sync (what instrumentation times)
 //   copy_in(p, stage)            after the sync: whatever p must copy before the next stage
@@ -34,6 +40,13 @@
 // width), e.g. win_event_faithful's timeout.
 // `stage` in publish/wait is the global stage number, step * 4 + s, which the
 // channels require to increase by one per call.
+//
+// What travels: a participant's exports (participant_plan), the equations of
+// its block that some other participant reads, and nothing else. For the
+// paper's two masses that is the whole block (every equation is read by
+// another thread); for a chain cut between masses it is the positions at the
+// block's two ends, one double to each neighbour per stage, whatever the
+// chain's length.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -42,6 +55,7 @@
 #include <vector>
 
 #include "kernels/oscillator.hpp"
+#include "kernels/rk4.hpp"
 #include "layouts/aligned_buffer.hpp"
 #include "layouts/partition.hpp"
 #include "layouts/per_thread.hpp"  // the board's slot numbering (kBoardNextState) every private_copy layout shares
@@ -51,13 +65,29 @@
 
 namespace lockstep::kernels {
 
-// What one participant reads from others: computed once from the model.
+// What one participant reads from others and gives them: computed once from
+// the model.
 struct participant_plan {
   layouts::equation_block block;
   std::vector<std::size_t> dependencies;  // equations outside the block its equations read, ascending
   std::vector<unsigned> producers;        // owners of those equations, ascending
-  bool has_consumers = false;             // some other participant reads one of its equations
+  std::vector<std::size_t> exports;       // equations of its block some other participant reads, ascending
+  bool exports_contiguous = false;        // exports are one run of consecutive equations
+  bool has_consumers = false;             // exports is not empty
+  // The smallest run of the block holding every equation of the block that
+  // the block itself reads (empty, first == last, when it reads none: the
+  // paper's split, where every equation reads other threads' values): the
+  // stage inputs the step computes from its own values.
+  layouts::equation_block own_reads;
 };
+
+// The partition a model is split by on `participants`: its equations in
+// blocks of its block_grain() (layouts/partition.hpp), so a chain is cut
+// between masses and the paper's two masses one equation at a time.
+template <oscillator_model Model>
+[[nodiscard]] layouts::partition partition_of(const Model& model, unsigned participants) {
+  return layouts::partition(model.equations(), participants, model.block_grain());
+}
 
 // Every participant's plan, for a model split into `blocks`: the one place
 // that derives who reads whom (the threaded step and the MPI ranks of
@@ -65,17 +95,43 @@ struct participant_plan {
 template <oscillator_model Model>
 [[nodiscard]] std::vector<participant_plan> plan_participants(const Model& model, const layouts::partition& blocks) {
   std::vector<participant_plan> plans(blocks.participants());
+  std::vector<bool> exported(blocks.equations(), false);
   for (unsigned participant = 0; participant < blocks.participants(); ++participant) {
     participant_plan& entry = plans[participant];
     entry.block = blocks.block(participant);
     entry.dependencies = block_dependencies(model, entry.block.first, entry.block.last);
-    for (std::size_t equation : entry.dependencies) entry.producers.push_back(blocks.owner(equation));
+    for (std::size_t equation : entry.dependencies) {
+      entry.producers.push_back(blocks.owner(equation));
+      exported[equation] = true;
+    }
     std::sort(entry.producers.begin(), entry.producers.end());
     entry.producers.erase(std::unique(entry.producers.begin(), entry.producers.end()), entry.producers.end());
+    std::size_t own_first = entry.block.last;
+    std::size_t own_last = entry.block.first;
+    for (std::size_t equation = entry.block.first; equation < entry.block.last; ++equation)
+      for (std::size_t dependency : model.dependencies(equation))
+        if (entry.block.contains(dependency)) {
+          own_first = std::min(own_first, dependency);
+          own_last = std::max(own_last, dependency + 1);
+        }
+    entry.own_reads = own_first < own_last ? layouts::equation_block{own_first, own_last}
+                                           : layouts::equation_block{entry.block.first, entry.block.first};
   }
-  for (const participant_plan& consumer : plans)
-    for (unsigned producer : consumer.producers) plans[producer].has_consumers = true;
+  for (participant_plan& entry : plans) {
+    for (std::size_t equation = entry.block.first; equation < entry.block.last; ++equation)
+      if (exported[equation]) entry.exports.push_back(equation);
+    entry.has_consumers = !entry.exports.empty();
+    entry.exports_contiguous =
+        entry.has_consumers && entry.exports.back() - entry.exports.front() + 1 == entry.exports.size();
+  }
   return plans;
+}
+
+// The most values one participant exports: the width of a channel message.
+[[nodiscard]] inline std::size_t largest_exports(const std::vector<participant_plan>& plans) noexcept {
+  std::size_t largest = 0;
+  for (const participant_plan& plan : plans) largest = std::max(largest, plan.exports.size());
+  return largest;
 }
 
 // ---------------------------------------------------------------------------
@@ -85,12 +141,12 @@ class barrier_in_place {
   using sync_type = Barrier;
 
   template <class... SyncArgs>
-  barrier_in_place(const layouts::partition& blocks, const std::vector<participant_plan>& /*plans*/,
+  barrier_in_place(const layouts::partition& blocks, const std::vector<participant_plan>& plans,
                    SyncArgs&&... sync_args)
-      : layout_(blocks), barrier_(blocks.participants(), std::forward<SyncArgs>(sync_args)...) {
+      : layout_(blocks), barrier_(blocks.participants(), std::forward<SyncArgs>(sync_args)...), plans_(&plans) {
     last_stage_.reserve(blocks.participants());
     for (unsigned participant = 0; participant < blocks.participants(); ++participant)
-      last_stage_.emplace_back(blocks.equations(), platform::kCacheLine);
+      last_stage_.emplace_back(blocks.block(participant).size(), platform::kCacheLine);
   }
 
   struct state_reader {
@@ -107,17 +163,16 @@ class barrier_in_place {
   state_reader states(unsigned /*participant*/, unsigned parity) noexcept { return {&layout_, parity}; }
   stage_reader stage_values(unsigned /*participant*/, unsigned stage) noexcept { return {&layout_, stage}; }
 
-  double own_stage_value(unsigned participant, unsigned stage, std::size_t equation) noexcept {
-    return stage < layouts::kSharedStageSlots ? layout_.stage(stage, equation) : last_stage_[participant][equation];
+  const double* own_states(unsigned participant, unsigned parity) noexcept {
+    return &layout_.state(parity, first_of(participant));
   }
-  void write_stage_value(unsigned participant, unsigned stage, std::size_t equation, double value) noexcept {
-    if (stage < layouts::kSharedStageSlots)
-      layout_.stage(stage, equation) = value;
-    else
-      last_stage_[participant][equation] = value;  // k_3: nobody else reads it
+  double* own_next_states(unsigned participant, unsigned parity) noexcept {
+    return &layout_.state(parity ^ 1U, first_of(participant));
   }
-  void write_next_state(unsigned /*participant*/, unsigned parity, std::size_t equation, double value) noexcept {
-    layout_.state(parity ^ 1U, equation) = value;
+  double* own_stage_values(unsigned participant, unsigned stage) noexcept {
+    // k_3 stays private: nobody else reads it.
+    return stage < layouts::kSharedStageSlots ? &layout_.stage(stage, first_of(participant))
+                                              : last_stage_[participant].data();
   }
   void write_initial_state(std::size_t equation, double value) noexcept { layout_.state(0, equation) = value; }
 
@@ -132,9 +187,12 @@ class barrier_in_place {
   double final_state(unsigned parity, std::size_t equation) noexcept { return layout_.state(parity, equation); }
 
  private:
+  std::size_t first_of(unsigned participant) const noexcept { return (*plans_)[participant].block.first; }
+
   Layout layout_;
   Barrier barrier_;
-  std::vector<layouts::aligned_buffer> last_stage_;  // per participant, k_3 (private, own lines)
+  const std::vector<participant_plan>* plans_;
+  std::vector<layouts::aligned_buffer> last_stage_;  // per participant, k_3 of its block (private, own lines)
 };
 
 // ---------------------------------------------------------------------------
@@ -157,23 +215,31 @@ class barrier_copy_in {
   const double* stage_values(unsigned participant, unsigned stage) noexcept {
     return layout_.private_stage(participant, stage);
   }
-  double own_stage_value(unsigned participant, unsigned stage, std::size_t equation) noexcept {
-    return layout_.private_stage(participant, stage)[equation];
+  const double* own_states(unsigned participant, unsigned /*parity*/) noexcept {
+    return layout_.private_state(participant) + first_of(participant);
   }
-  void write_stage_value(unsigned participant, unsigned stage, std::size_t equation, double value) noexcept {
-    layout_.private_stage(participant, stage)[equation] = value;
-    if (stage < layouts::kSharedStageSlots) layout_.board(stage, equation) = value;
+  // x_{n+1} overwrites x_n in the private copy, element by element after its
+  // own read (the update reads only its own element).
+  double* own_next_states(unsigned participant, unsigned /*parity*/) noexcept {
+    return layout_.private_state(participant) + first_of(participant);
   }
-  void write_next_state(unsigned participant, unsigned /*parity*/, std::size_t equation, double value) noexcept {
-    layout_.private_state(participant)[equation] = value;
-    layout_.board(layouts::kBoardNextState, equation) = value;
+  double* own_stage_values(unsigned participant, unsigned stage) noexcept {
+    return layout_.private_stage(participant, stage) + first_of(participant);
   }
   void write_initial_state(std::size_t equation, double value) noexcept {
     for (unsigned participant = 0; participant < blocks_.participants(); ++participant)
       layout_.private_state(participant)[equation] = value;
   }
 
-  void publish(unsigned /*participant*/, sync::participant& /*self*/, std::uint64_t /*stage*/) noexcept {}
+  // The exports of this stage, from the private copy to the board.
+  void publish(unsigned participant, sync::participant& /*self*/, std::uint64_t stage) noexcept {
+    const auto stage_in_step = static_cast<unsigned>(stage % kRk4Stages);
+    const bool next_state = stage_in_step >= layouts::kSharedStageSlots;
+    const double* const source =
+        next_state ? layout_.private_state(participant) : layout_.private_stage(participant, stage_in_step);
+    const std::size_t slot = next_state ? layouts::kBoardNextState : stage_in_step;
+    for (std::size_t equation : (*plans_)[participant].exports) layout_.board(slot, equation) = source[equation];
+  }
   // The barrier orders the board writes of this stage before the copy-in below.
   void wait(unsigned /*participant*/, sync::participant& self, std::uint64_t /*stage*/) {
     barrier_.arrive_and_wait(self);
@@ -192,6 +258,8 @@ class barrier_copy_in {
   }
 
  private:
+  std::size_t first_of(unsigned participant) const noexcept { return (*plans_)[participant].block.first; }
+
   layouts::partition blocks_;
   Layout layout_;  // a private_copy layout: the private copies and the board
   Barrier barrier_;
@@ -209,7 +277,7 @@ class channel_copy_in {
                   SyncArgs&&... sync_args)
       : blocks_(blocks),
         layout_(blocks),
-        width_(blocks.largest_block()),
+        width_(std::max<std::size_t>(largest_exports(plans), 1)),
         channel_(graph_of(plans), width_, std::forward<SyncArgs>(sync_args)...),
         plans_(&plans) {
     staging_.reserve(blocks.participants());
@@ -223,47 +291,50 @@ class channel_copy_in {
   const double* stage_values(unsigned participant, unsigned stage) noexcept {
     return layout_.private_stage(participant, stage);
   }
-  double own_stage_value(unsigned participant, unsigned stage, std::size_t equation) noexcept {
-    return layout_.private_stage(participant, stage)[equation];
+  const double* own_states(unsigned participant, unsigned /*parity*/) noexcept {
+    return layout_.private_state(participant) + first_of(participant);
   }
-  void write_stage_value(unsigned participant, unsigned stage, std::size_t equation, double value) noexcept {
-    layout_.private_stage(participant, stage)[equation] = value;
+  // In place, as barrier_copy_in.
+  double* own_next_states(unsigned participant, unsigned /*parity*/) noexcept {
+    return layout_.private_state(participant) + first_of(participant);
   }
-  void write_next_state(unsigned participant, unsigned /*parity*/, std::size_t equation, double value) noexcept {
-    layout_.private_state(participant)[equation] = value;
+  double* own_stage_values(unsigned participant, unsigned stage) noexcept {
+    return layout_.private_stage(participant, stage) + first_of(participant);
   }
   void write_initial_state(std::size_t equation, double value) noexcept {
     for (unsigned participant = 0; participant < blocks_.participants(); ++participant)
       layout_.private_state(participant)[equation] = value;
   }
 
-  // What a participant publishes at stage s: k_s of its block for s = 0..2,
-  // x_{n+1} of its block at s = 3 (the values its consumers read next).
+  // What a participant publishes at stage s: its exports' k_s for s = 0..2,
+  // their x_{n+1} at s = 3 (the values its consumers read next).
   void publish(unsigned participant, sync::participant& self, std::uint64_t stage) {
     const participant_plan& plan = (*plans_)[participant];
     if (!plan.has_consumers) return;  // nobody would receive it (one thread, or an unread block)
-    const double* source = block_values(participant, static_cast<unsigned>(stage % 4)) + plan.block.first;
-    if (plan.block.size() != width_) {
-      // A smaller block than the channel's width travels in a full-width
-      // message; the tail is never read by a consumer.
-      double* const staging = staging_[participant].data();
-      std::copy(source, source + plan.block.size(), staging);
-      source = staging;
+    const double* const values = block_values(participant, static_cast<unsigned>(stage % kRk4Stages));
+    if (plan.exports_contiguous && plan.exports.size() == width_) {
+      channel_.publish(self, stage, std::span<const double>(values + plan.exports.front(), width_));
+      return;
     }
-    channel_.publish(self, stage, std::span<const double>(source, width_));
+    // Exports that are not one full-width run travel gathered in a
+    // full-width message; the tail is never read by a consumer.
+    double* const staging = staging_[participant].data();
+    for (std::size_t index = 0; index < plan.exports.size(); ++index) staging[index] = values[plan.exports[index]];
+    channel_.publish(self, stage, std::span<const double>(staging, width_));
   }
   // Waits only for the producers this block depends on; the channel copies
-  // each one's block into this participant's private copy.
+  // each one's exports into this participant's private copy.
   void wait(unsigned participant, sync::participant& self, std::uint64_t stage) {
-    double* const destination = block_values(participant, static_cast<unsigned>(stage % 4));
+    double* const destination = block_values(participant, static_cast<unsigned>(stage % kRk4Stages));
     for (unsigned producer : (*plans_)[participant].producers) {
-      const layouts::equation_block block = blocks_.block(producer);
-      if (block.size() == width_) {
-        channel_.receive(self, producer, stage, std::span<double>(destination + block.first, width_));
+      const participant_plan& from = (*plans_)[producer];
+      if (from.exports_contiguous && from.exports.size() == width_) {
+        channel_.receive(self, producer, stage, std::span<double>(destination + from.exports.front(), width_));
       } else {
         double* const staging = staging_[participant].data();
         channel_.receive(self, producer, stage, std::span<double>(staging, width_));
-        std::copy(staging, staging + block.size(), destination + block.first);
+        for (std::size_t index = 0; index < from.exports.size(); ++index)
+          destination[from.exports[index]] = staging[index];
       }
     }
   }
@@ -274,6 +345,7 @@ class channel_copy_in {
   }
 
  private:
+  std::size_t first_of(unsigned participant) const noexcept { return (*plans_)[participant].block.first; }
   double* block_values(unsigned participant, unsigned stage_in_step) noexcept {
     return stage_in_step < layouts::kSharedStageSlots ? layout_.private_stage(participant, stage_in_step)
                                                       : layout_.private_state(participant);
@@ -287,10 +359,10 @@ class channel_copy_in {
 
   layouts::partition blocks_;
   Layout layout_;  // a private_copy layout; only its private copies are used: the channel is the board
-  std::size_t width_;           // doubles per message: the largest block (the channel's contract)
+  std::size_t width_;           // doubles per message: the most exports of a producer (the channel's contract)
   Channel channel_;
   const std::vector<participant_plan>* plans_;
-  std::vector<layouts::aligned_buffer> staging_;  // per participant, for blocks smaller than width_
+  std::vector<layouts::aligned_buffer> staging_;  // per participant, for exports that are not one full-width run
 };
 
 }  // namespace lockstep::kernels

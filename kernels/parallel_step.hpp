@@ -1,16 +1,20 @@
 #pragma once
 // The composed parallel RK4 step: any synchronisation primitive x any layout,
 // T persistent participants, each owning a contiguous block of equations
-// (docs/design.md, The composed step).
+// (layouts/partition.hpp: a chain in blocks of whole masses, the paper's two
+// masses one equation at a time; docs/design.md, The composed step).
 //
 // What one participant does per step (kernels/rk4.hpp names the arithmetic):
 //
 //     for stage s in 0..3:
-//         read the stage input its block needs (its own values and the
-//             published values of its dependencies, through the layout)
-//         k_s of its block = model.derivative(i, stage inputs)
+//         the stage inputs its block reads, into its private input array:
+//             those of its own block that its block reads (plan.own_reads),
+//             from its own values through one pointer per slot, and those of
+//             its dependencies, through the layout's accessors
+//         k_s of its block = evaluate_derivatives(model, block, inputs)
 //         at s = 3: x_{n+1} of its block = rk4_update(x_n, k_0..k_3)
-//         publish (k_s for s < 3, x_{n+1} at s = 3: what its consumers read next)
+//         publish (its exports' k_s for s < 3, x_{n+1} at s = 3: what its
+//             consumers read next)
 //         sync:  barrier primitives: every participant arrives and waits;
 //                dataflow primitives: receive from the producers its block
 //                depends on, and only those
@@ -20,9 +24,16 @@
 // into stage 3 saves the fifth: the owner has every k it needs for its own
 // update once it has computed k_3.
 //
-// Determinism: every value is computed by rk4_stage_input, model.derivative
-// and rk4_update from the same inputs as in staged_rk4, so every combination
-// produces the serial trajectory bit for bit (tests/matrix checks it).
+// Per-equation cost: the loops over the block are the serial step's
+// (staged_rk4): one stage input per element, the model's block evaluation,
+// one update per element, each over plain arrays. What the parallel step adds
+// per stage is per dependency and per export (a chain cut between masses: two
+// of each at most), not per equation.
+//
+// Determinism: every value is computed by rk4_stage_input, the model's
+// derivative (evaluate_derivatives gives derivative()'s bits) and rk4_update
+// from the same inputs as in staged_rk4, so every combination produces the
+// serial trajectory bit for bit (tests/matrix checks it).
 //
 // Applicability (a trait the harness queries before instantiating):
 //     applicable<Sync, Layout>()  -> {bool, reason}
@@ -48,8 +59,9 @@
 //
 //   parallel_rk4<Sync, Layout, Model = two_mass_model, Timing = sync_timing::off>
 //       step(model, dt, threads [, initial_state [, sync_args...]]);
-//     Allocates and lays out everything; throws std::invalid_argument
-//     (layouts::partition_error) when threads is 0 or more than the equations.
+//     Allocates and lays out everything (the partition: partition_of(model,
+//     threads)); throws std::invalid_argument (layouts::partition_error) when
+//     threads is 0 or more than the equations.
 //   step.run(self, steps)
 //     Called once per participant, each on its own thread, self.id in
 //     [0, threads) (the caller launches the team with sync::team_of_t<Sync>
@@ -93,6 +105,7 @@
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_exchange.hpp"
 #include "kernels/rk4.hpp"
+#include "layouts/aligned_buffer.hpp"
 #include "layouts/partition.hpp"
 #include "layouts/shared_slots.hpp"
 #include "platform/cache_line.hpp"
@@ -393,7 +406,7 @@ class parallel_rk4 {
                SyncArgs&&... sync_args)
       : model_(model),
         coefficients_(dt),
-        blocks_(model_.equations(), threads),
+        blocks_(partition_of(model_, threads)),
         plans_(plan_participants(model_, blocks_)),
         exchange_(blocks_, plans_, std::forward<SyncArgs>(sync_args)...),
         records_(threads),
@@ -407,6 +420,9 @@ class parallel_rk4 {
         awaited_[participant] = plans_[participant].producers;
       }
     }
+    inputs_.reserve(threads);
+    for (unsigned participant = 0; participant < threads; ++participant)
+      inputs_.emplace_back(model_.equations(), platform::kCacheLine);
     if (initial_state.size() != model_.equations())
       throw std::invalid_argument("the initial state must hold one value per equation");
     for (std::size_t equation = 0; equation < initial_state.size(); ++equation)
@@ -494,7 +510,12 @@ class parallel_rk4 {
   std::uint64_t run_steps(sync::participant& self, std::uint64_t steps,
                           std::chrono::steady_clock::time_point deadline) {
     const unsigned me = self.id;
-    const layouts::equation_block block = blocks_.block(me);
+    const participant_plan& plan = plans_[me];
+    const layouts::equation_block block = plan.block;
+    const std::size_t size = block.size();
+    // The stage inputs, by equation (only the block's reads and dependencies
+    // are written and read); private to this participant.
+    double* const inputs = inputs_[me].data();
     participant_record& record = records_[me];
     const std::uint64_t first_step = record.steps_taken;
     detail::sync_clock<Timing> clock = make_sync_clock(me, first_step);
@@ -517,18 +538,33 @@ class parallel_rk4 {
       clock.begin_step();
       const auto parity = static_cast<unsigned>(step & 1U);
       const auto x = exchange_.states(me, parity);
+      const double* const x_own = exchange_.own_states(me, parity);
       for (unsigned stage = 0; stage < kRk4Stages; ++stage) {
-        const auto k_previous = exchange_.stage_values(me, stage == 0 ? 0 : stage - 1);
-        const rk4_stage_inputs<decltype(x), decltype(k_previous)> inputs{coefficients_, stage, x, k_previous};
-        for (std::size_t equation = block.first; equation < block.last; ++equation)
-          exchange_.write_stage_value(me, stage, equation, model_.derivative(equation, inputs));
+        // The stage inputs: y = x at stage 0 (rk4_stage_input's stage 0 is
+        // x itself, bit for bit), else x + (c_s h) k_{s-1}.
+        if (stage == 0) {
+          for (std::size_t equation = plan.own_reads.first; equation < plan.own_reads.last; ++equation)
+            inputs[equation] = x_own[equation - block.first];
+          for (const std::size_t equation : plan.dependencies) inputs[equation] = x[equation];
+        } else {
+          const double* const k_own = exchange_.own_stage_values(me, stage - 1);
+          for (std::size_t equation = plan.own_reads.first; equation < plan.own_reads.last; ++equation)
+            inputs[equation] =
+                rk4_stage_input(coefficients_, stage, x_own[equation - block.first], k_own[equation - block.first]);
+          const auto k_previous = exchange_.stage_values(me, stage - 1);
+          for (const std::size_t equation : plan.dependencies)
+            inputs[equation] = rk4_stage_input(coefficients_, stage, x[equation], k_previous[equation]);
+        }
+        double* const k = exchange_.own_stage_values(me, stage);
+        evaluate_derivatives(model_, block.first, block.last, static_cast<const double*>(inputs), k);
         if (stage == kRk4Stages - 1) {
-          for (std::size_t equation = block.first; equation < block.last; ++equation)
-            exchange_.write_next_state(
-                me, parity, equation,
-                rk4_update(coefficients_, x[equation], exchange_.own_stage_value(me, 0, equation),
-                           exchange_.own_stage_value(me, 1, equation), exchange_.own_stage_value(me, 2, equation),
-                           exchange_.own_stage_value(me, 3, equation)));
+          const double* const k0 = exchange_.own_stage_values(me, 0);
+          const double* const k1 = exchange_.own_stage_values(me, 1);
+          const double* const k2 = exchange_.own_stage_values(me, 2);
+          double* const x_next = exchange_.own_next_states(me, parity);
+          for (std::size_t element = 0; element < size; ++element)
+            x_next[element] = rk4_update(coefficients_, x_own[element], k0[element], k1[element], k2[element],
+                                         k[element]);
         }
         const std::uint64_t global_stage = step * kRk4Stages + stage;
         exchange_.publish(me, self, global_stage);
@@ -597,6 +633,7 @@ class parallel_rk4 {
   std::vector<participant_plan> plans_;
   typename detail::exchange_for<Sync, Layout>::type exchange_;
   std::vector<participant_record> records_;
+  std::vector<layouts::aligned_buffer> inputs_;  // per participant: its stage inputs by equation (own lines)
   std::vector<std::vector<unsigned>> awaited_;  // per participant: whose arrivals its syncs wait for
   std::vector<detail::arrival_stamps> arrivals_;  // Timing = sampled: per participant (sync_clock<sampled>)
   std::int64_t stamp_origin_ = platform::now_ns();

@@ -33,11 +33,15 @@
 //
 // For a thread that owns a block of equations, the pattern per step is:
 //     for s in 0..3:
-//         for i in block: k[s][i] = model.derivative(i, rk4_stage_inputs{coefficients, s, x, k[s-1]})
+//         for i in block and block_dependencies(model, first, last):
+//             y[i] = rk4_stage_input(coefficients, s, x[i], k[s-1][i])
+//         k[s][block] = evaluate_derivatives(model, first, last, y)
 //         publish k[s][block]; synchronise (all threads, or the producers of
 //         block_dependencies(model, first, last))
 //     for i in block: x[i] = rk4_update(coefficients, x[i], k[0][i], k[1][i], k[2][i], k[3][i])
-// where x and k[s-1] are read through the layout (any stage_values accessor).
+// where x and k[s-1] are read through the layout (kernels/parallel_step.hpp).
+// rk4_stage_inputs below computes y on demand instead, for a caller that
+// reads a few inputs once each.
 #include <array>
 #include <cassert>
 #include <cmath>
@@ -151,10 +155,10 @@ class staged_rk4 {
       for (std::size_t element = 0; element < equations_; ++element) {
         stage_inputs_[element] = rk4_stage_input(coefficients_, stage, state_[element], previous[element]);
       }
-      std::vector<double>& current = stage_values_[stage];
-      for (std::size_t equation = 0; equation < equations_; ++equation) {
-        current[equation] = model_.derivative(equation, stage_inputs_.data());
-      }
+      // Every equation's derivative, through the same evaluation the
+      // parallel step uses for its block (evaluate_derivatives).
+      const double* const inputs = stage_inputs_.data();
+      evaluate_derivatives(model_, 0, equations_, inputs, stage_values_[stage].data());
     }
     for (std::size_t element = 0; element < equations_; ++element) {
       state_[element] = rk4_update(coefficients_, state_[element], stage_values_[0][element],

@@ -194,14 +194,25 @@ void check_integration(const Model& model, const chain_model& chain, const norma
                        const verify_settings& settings, const verify_progress& progress, verify_report& report) {
   const std::uint64_t steps = settings.steps();
   const std::size_t positions = analytic.masses_count();
-  // The largest |x_i - y_i| over the positions (the first `positions` of each state).
-  const auto position_error = [positions](std::span<const double> x, std::span<const double> y) {
+  // The largest |x_j - y_j| over the positions: x_j from a state in the
+  // numbering of `numbering` (a model: its position_equation(j)), y_j the
+  // first `positions` values of `reference` (the analytic state, positions
+  // first, or a trajectory's positions).
+  const auto position_error = [positions](const auto& numbering, std::span<const double> state,
+                                          std::span<const double> reference) {
     double largest = 0.0;
     for (std::size_t position = 0; position < positions; ++position)
-      largest = std::max(largest, std::abs(x[position] - y[position]));
+      largest = std::max(largest, std::abs(state[numbering.position_equation(position)] - reference[position]));
     return largest;
   };
-  const auto positions_of = [positions](std::span<const double> state) {
+  const auto positions_of = [positions](const auto& numbering, std::span<const double> state) {
+    std::vector<double> result(positions);
+    for (std::size_t position = 0; position < positions; ++position)
+      result[position] = state[numbering.position_equation(position)];
+    return result;
+  };
+  // The positions of an analytic state (positions first, then velocities).
+  const auto analytic_positions = [positions](std::span<const double> state) {
     return std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(positions));
   };
 
@@ -223,16 +234,16 @@ void check_integration(const Model& model, const chain_model& chain, const norma
       report.energy.initial = model.energy(integrator.state());
       report.trajectory.reserve(steps + 1);
       analytic.state_at(0.0, exact);
-      report.trajectory.push_back({0.0, positions_of(integrator.state()), positions_of(exact)});
+      report.trajectory.push_back({0.0, positions_of(model, integrator.state()), analytic_positions(exact)});
     }
     for (std::uint64_t step = 1; step <= rung.steps; ++step) {
       integrator.step();
       const double time = integrator.time();
       const auto state = integrator.state();
       analytic.state_at(time, exact);
-      rung.max_error = std::max(rung.max_error, position_error(state, exact));
+      rung.max_error = std::max(rung.max_error, position_error(model, state, exact));
       if (given_step) {
-        report.trajectory.push_back({time, positions_of(state), positions_of(exact)});
+        report.trajectory.push_back({time, positions_of(model, state), analytic_positions(exact)});
         const double energy = model.energy(state);
         const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
                                                          : energy;
@@ -293,9 +304,9 @@ void check_integration(const Model& model, const chain_model& chain, const norma
       chain, times,
       [&](std::size_t index, std::span<const double> state) {
         analytic.state_at(times[index], exact_at);
-        dopri5.max_error_vs_analytic = std::max(dopri5.max_error_vs_analytic, position_error(state, exact_at));
+        dopri5.max_error_vs_analytic = std::max(dopri5.max_error_vs_analytic, position_error(chain, state, exact_at));
         dopri5.max_difference_vs_rk4 =
-            std::max(dopri5.max_difference_vs_rk4, position_error(state, report.trajectory[index].positions));
+            std::max(dopri5.max_difference_vs_rk4, position_error(chain, state, report.trajectory[index].positions));
       },
       settings.dopri5_tolerance);
   dopri5.steps = run.steps;

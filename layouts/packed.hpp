@@ -61,7 +61,7 @@ namespace packed_proof {
 inline constexpr auto kOffset = [](std::size_t slot, std::size_t equation) {
   return packed_offset(4, slot, equation);
 };
-inline constexpr auto kOwner = [](std::size_t equation) { return owner_of(4, 4, equation); };
+inline constexpr auto kOwner = [](std::size_t equation) { return owner_of(4, 4, equation, 1); };
 static_assert(packed_offset(4, kSharedSlots - 1, 3) + sizeof(double) == 160,
               "packed holds the paper's 4 equations x 5 slots in 160 contiguous bytes");
 static_assert(round_up(160, platform::kCacheLine) / platform::kCacheLine == 3,
@@ -71,6 +71,13 @@ static_assert(packed_offset(4, stage_slot(0), 0) / platform::kCacheLine ==
               "packed: one stage's values of all four threads lie in one line (the false sharing it measures)");
 static_assert(most_owners_in_a_block(kOffset, kOwner, 4, kSharedSlots, platform::kCacheLine, 4) == 4,
               "packed: some cache line is written by all four threads");
+inline constexpr auto kChainOffset = [](std::size_t slot, std::size_t equation) {
+  return packed_offset(10, slot, equation);
+};
+inline constexpr auto kChainOwner = [](std::size_t equation) { return owner_of(10, 2, equation, 2); };
+static_assert(owner_blocks_contiguous(kOffset, kOwner, 4, kSharedSlots) &&
+                  owner_blocks_contiguous(kChainOffset, kChainOwner, 10, kSharedSlots),
+              "packed: each owner's block of a slot is one array (the paper's case; 5 masses on 2 threads)");
 }  // namespace packed_proof
 
 }  // namespace lockstep::layouts

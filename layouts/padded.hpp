@@ -34,19 +34,20 @@ namespace lockstep::layouts {
 
 // Byte offset of the region of `participant`.
 [[nodiscard]] constexpr std::size_t padded_region_offset(std::size_t equations, unsigned participants,
-                                                         std::size_t pad, unsigned participant) noexcept {
+                                                         std::size_t grain, std::size_t pad,
+                                                         unsigned participant) noexcept {
   std::size_t offset = 0;
   for (unsigned before = 0; before < participant; ++before)
-    offset += padded_region_bytes(block_of(equations, participants, before).size(), pad);
+    offset += padded_region_bytes(block_of(equations, participants, before, grain).size(), pad);
   return offset;
 }
 
 // Byte offset of (slot, equation).
-[[nodiscard]] constexpr std::size_t padded_offset(std::size_t equations, unsigned participants, std::size_t pad,
-                                                  std::size_t slot, std::size_t equation) noexcept {
-  const unsigned owner = owner_of(equations, participants, equation);
-  const equation_block block = block_of(equations, participants, owner);
-  return padded_region_offset(equations, participants, pad, owner) +
+[[nodiscard]] constexpr std::size_t padded_offset(std::size_t equations, unsigned participants, std::size_t grain,
+                                                  std::size_t pad, std::size_t slot, std::size_t equation) noexcept {
+  const unsigned owner = owner_of(equations, participants, equation, grain);
+  const equation_block block = block_of(equations, participants, owner, grain);
+  return padded_region_offset(equations, participants, grain, pad, owner) +
          (slot * block.size() + (equation - block.first)) * sizeof(double);
 }
 
@@ -67,7 +68,8 @@ class padded {
   static constexpr std::size_t kWriterIsolation = Pad;  // proved below (padded_proof)
 
   explicit padded(const partition& blocks)
-      : slots_(padded_region_offset(blocks.equations(), blocks.participants(), Pad, blocks.participants()) /
+      : slots_(padded_region_offset(blocks.equations(), blocks.participants(), blocks.grain(), Pad,
+                                    blocks.participants()) /
                    sizeof(double),
                Pad),
         region_(blocks.equations()),
@@ -76,7 +78,8 @@ class padded {
       const unsigned owner = blocks.owner(equation);
       const equation_block block = blocks.block(owner);
       region_[equation] =
-          padded_region_offset(blocks.equations(), blocks.participants(), Pad, owner) / sizeof(double) +
+          padded_region_offset(blocks.equations(), blocks.participants(), blocks.grain(), Pad, owner) /
+              sizeof(double) +
           (equation - block.first);
       block_size_[equation] = block.size();
     }
@@ -107,13 +110,21 @@ using padded128 = padded<platform::kPrefetchPair>;
 // bytes holds values of two owners, for the paper's case (4 equations on 4
 // and 2 threads) and an uneven chain (6 equations on 4 threads).
 namespace padded_proof {
-template <std::size_t Equations, unsigned Participants, std::size_t Pad>
+template <std::size_t Equations, unsigned Participants, std::size_t Grain, std::size_t Pad>
 constexpr bool isolated() {
   constexpr auto offset = [](std::size_t slot, std::size_t equation) {
-    return padded_offset(Equations, Participants, Pad, slot, equation);
+    return padded_offset(Equations, Participants, Grain, Pad, slot, equation);
   };
-  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation); };
+  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation, Grain); };
   return !owners_share_a_block(offset, owner, Equations, kSharedSlots, Pad);
+}
+template <std::size_t Equations, unsigned Participants, std::size_t Grain, std::size_t Pad>
+constexpr bool contiguous() {
+  constexpr auto offset = [](std::size_t slot, std::size_t equation) {
+    return padded_offset(Equations, Participants, Grain, Pad, slot, equation);
+  };
+  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation, Grain); };
+  return owner_blocks_contiguous(offset, owner, Equations, kSharedSlots);
 }
 static_assert(padded_region_bytes(1, platform::kCacheLine) == 64,
               "padded64: one equation's five slots (40 bytes) round up to one line");
@@ -121,15 +132,23 @@ static_assert(padded_region_bytes(2, platform::kCacheLine) == 128,
               "padded64: two equations' ten slots (80 bytes) round up to two lines");
 static_assert(padded_region_bytes(1, platform::kPrefetchPair) == 128,
               "padded128: one equation's slots take a whole line pair");
-static_assert(padded_region_offset(4, 4, platform::kCacheLine, 3) == 3 * 64,
+static_assert(padded_region_offset(4, 4, 1, platform::kCacheLine, 3) == 3 * 64,
               "padded64, paper's case: thread p's region starts on line p");
-static_assert(padded_offset(4, 4, platform::kPrefetchPair, stage_slot(2), 1) == 128 + 4 * sizeof(double),
+static_assert(padded_offset(4, 4, 1, platform::kPrefetchPair, stage_slot(2), 1) == 128 + 4 * sizeof(double),
               "padded128: k_2 of equation 1 is the fifth double of the second line pair");
-static_assert(isolated<4, 4, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 4)");
-static_assert(isolated<4, 2, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 2)");
-static_assert(isolated<6, 4, platform::kCacheLine>(), "padded64: no line holds two writers (6 on 4)");
-static_assert(isolated<4, 4, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 on 4)");
-static_assert(isolated<6, 4, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (6 on 4)");
+static_assert(padded_offset(10, 2, 2, platform::kCacheLine, stage_slot(0), 7) ==
+                  padded_region_bytes(6, platform::kCacheLine) + (stage_slot(0) * 4 + 1) * sizeof(double),
+              "padded64, a 5-mass chain on 2 threads: k_0 of equation 7 (mass 4's velocity) is its owner's second");
+static_assert(isolated<4, 4, 1, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 4)");
+static_assert(isolated<4, 2, 1, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 2)");
+static_assert(isolated<6, 4, 1, platform::kCacheLine>(), "padded64: no line holds two writers (6 on 4)");
+static_assert(isolated<10, 2, 2, platform::kCacheLine>(), "padded64: no line holds two writers (5 masses on 2)");
+static_assert(isolated<4, 4, 1, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 on 4)");
+static_assert(isolated<6, 4, 1, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (6 on 4)");
+static_assert(isolated<8, 3, 2, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 masses on 3)");
+static_assert(contiguous<4, 2, 1, platform::kCacheLine>() && contiguous<6, 4, 1, platform::kPrefetchPair>() &&
+                  contiguous<10, 2, 2, platform::kCacheLine>(),
+              "padded: each owner's block of a slot is one array");
 }  // namespace padded_proof
 
 }  // namespace lockstep::layouts

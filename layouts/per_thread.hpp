@@ -12,7 +12,10 @@
 //  * a publication board, written only by owners: per equation four slots,
 //    k_0, k_1, k_2 (published at stages 0..2) and x_next (published at
 //    stage 3), each owner's slots in a region of its own lines (as padded64,
-//    so that per_thread measures the private copy, not false sharing).
+//    so that per_thread measures the private copy, not false sharing). An
+//    owner publishes there only the equations others read (its exports,
+//    kernels/parallel_exchange.hpp): a chain cut between masses, its two
+//    boundary positions.
 // After every stage sync a participant copies in, from the board, the slots
 // its equations read (its dependencies, nothing else) for that stage.
 // One buffer per slot suffices: slot s is written at stage s and copied in
@@ -41,13 +44,13 @@ inline constexpr std::size_t kPrivateStageValues = 4;  // k_0..k_3
 [[nodiscard]] constexpr std::size_t board_region_bytes(std::size_t block_size) noexcept {
   return round_up(kBoardSlots * block_size * sizeof(double), platform::kCacheLine);
 }
-[[nodiscard]] constexpr std::size_t board_offset(std::size_t equations, unsigned participants, std::size_t slot,
-                                                 std::size_t equation) noexcept {
-  const unsigned owner = owner_of(equations, participants, equation);
-  const equation_block block = block_of(equations, participants, owner);
+[[nodiscard]] constexpr std::size_t board_offset(std::size_t equations, unsigned participants, std::size_t grain,
+                                                 std::size_t slot, std::size_t equation) noexcept {
+  const unsigned owner = owner_of(equations, participants, equation, grain);
+  const equation_block block = block_of(equations, participants, owner, grain);
   std::size_t region = 0;
   for (unsigned before = 0; before < owner; ++before)
-    region += board_region_bytes(block_of(equations, participants, before).size());
+    region += board_region_bytes(block_of(equations, participants, before, grain).size());
   return region + (slot * block.size() + (equation - block.first)) * sizeof(double);
 }
 
@@ -68,7 +71,8 @@ class per_thread {
         board_stride_(blocks.equations()) {
     for (std::size_t equation = 0; equation < equations_; ++equation) {
       const equation_block block = blocks.block(blocks.owner(equation));
-      board_index_[equation] = board_offset(equations_, blocks.participants(), 0, equation) / sizeof(double);
+      board_index_[equation] =
+          board_offset(equations_, blocks.participants(), blocks.grain(), 0, equation) / sizeof(double);
       board_stride_[equation] = block.size();
     }
     copies_.reserve(blocks.participants());
@@ -106,19 +110,32 @@ class per_thread {
 };
 
 namespace per_thread_proof {
-template <std::size_t Equations, unsigned Participants>
+template <std::size_t Equations, unsigned Participants, std::size_t Grain>
 constexpr bool isolated() {
   constexpr auto offset = [](std::size_t slot, std::size_t equation) {
-    return board_offset(Equations, Participants, slot, equation);
+    return board_offset(Equations, Participants, Grain, slot, equation);
   };
-  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation); };
+  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation, Grain); };
   return !owners_share_a_block(offset, owner, Equations, kBoardSlots, platform::kCacheLine);
 }
+template <std::size_t Equations, unsigned Participants, std::size_t Grain>
+constexpr bool contiguous() {
+  constexpr auto offset = [](std::size_t slot, std::size_t equation) {
+    return board_offset(Equations, Participants, Grain, slot, equation);
+  };
+  constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation, Grain); };
+  return owner_blocks_contiguous(offset, owner, Equations, kBoardSlots);
+}
+static_assert(contiguous<4, 2, 1>() && contiguous<10, 2, 2>(),
+              "per_thread: each owner's block of a board slot is one array (private copies are whole arrays)");
 static_assert(board_region_bytes(1) == platform::kCacheLine,
               "per_thread: one equation's four board slots (32 bytes) take one line of their own");
-static_assert(board_offset(4, 4, kBoardNextState, 2) == 2 * 64 + 3 * sizeof(double),
+static_assert(board_offset(4, 4, 1, kBoardNextState, 2) == 2 * 64 + 3 * sizeof(double),
               "per_thread, paper's case: x_next of equation 2 is the fourth double of line 2");
-static_assert(isolated<4, 4>() && isolated<4, 2>() && isolated<6, 4>(),
+static_assert(board_offset(10, 2, 2, 0, 6) == board_region_bytes(6),
+              "per_thread, a 5-mass chain on 2 threads: the second owner's region starts after the first's 3 masses");
+static_assert(isolated<4, 4, 1>() && isolated<4, 2, 1>() && isolated<6, 4, 1>() && isolated<10, 2, 2>() &&
+                  isolated<8, 3, 2>(),
               "per_thread: no board line holds values of two writers, so only the copy-in differs from padded64");
 }  // namespace per_thread_proof
 

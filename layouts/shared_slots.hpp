@@ -28,6 +28,14 @@
 //  * private_copy (per_thread): every participant keeps a private copy of the
 //    whole state and of k_0..k_3, and copies in what the others published
 //    (the paper's `X1 = GX1`). See per_thread.hpp.
+//
+// Every layout keeps, in each slot, one owner's block of equations as one
+// array: consecutive equations of a block at consecutive doubles
+// (owner_blocks_contiguous below, proved by each layout's static_asserts and
+// checked at run time by tests/matrix/layouts_test.cpp). The step reads and
+// writes its own block through one pointer per slot, with no per-equation
+// lookup (kernels/parallel_exchange.hpp); only the few values it reads from
+// other owners go through the per-equation accessors.
 #include <cstddef>
 #include <string_view>
 
@@ -64,6 +72,20 @@ template <class Offset, class Owner>
           if (offset(slot_a, a) / unit == offset(slot_b, b) / unit) return true;
     }
   return false;
+}
+
+// True when, in every slot, each equation that has the same owner as the
+// equation before it lies one double after that one: one owner's block of a
+// slot is one array, in equation order.
+template <class Offset, class Owner>
+[[nodiscard]] constexpr bool owner_blocks_contiguous(Offset offset, Owner owner, std::size_t equations,
+                                                     std::size_t slots) {
+  for (std::size_t slot = 0; slot < slots; ++slot)
+    for (std::size_t equation = 1; equation < equations; ++equation)
+      if (owner(equation) == owner(equation - 1) &&
+          offset(slot, equation) != offset(slot, equation - 1) + sizeof(double))
+        return false;
+  return true;
 }
 
 // The most owners that have a value in one `unit`-byte block.

@@ -127,11 +127,12 @@ void serial_entry(benchmark::State& state, harness_state& harness, const entry_s
 // earlier, may belong to another pace; this one belongs to the same. vs_c2c
 // (the run's) stays, for comparing runs.
 void add_paired_c2c(benchmark::State& state, const platform::placement_plan& plan, unsigned threads) {
+  if (threads != 2) return;  // before pu_at(1): a plan of one thread has no thread 1
   const auto pu_a = plan.pu_at(0);
   const auto pu_b = plan.pu_at(1);
   const auto sync_stage = state.counters.find("sync_ns_per_stage");
   const bool fixed_pair = plan.kind == platform::placement::compact || plan.kind == platform::placement::scatter;
-  if (threads != 2 || !fixed_pair || !pu_a || !pu_b || *pu_a == *pu_b || sync_stage == state.counters.end()) return;
+  if (!fixed_pair || !pu_a || !pu_b || *pu_a == *pu_b || sync_stage == state.counters.end()) return;
   c2c::pair_request request;
   request.cpu_a = static_cast<int>(*pu_a);
   request.cpu_b = static_cast<int>(*pu_b);

@@ -35,6 +35,7 @@ struct late_equation_model {
   std::chrono::microseconds delay{2000};
 
   [[nodiscard]] static constexpr std::size_t equations() noexcept { return kernels::two_mass_model::equations(); }
+  [[nodiscard]] static constexpr std::size_t block_grain() noexcept { return kernels::two_mass_model::block_grain(); }
   template <kernels::stage_values Values>
   [[nodiscard]] double derivative(std::size_t equation, const Values& y) const {
     if (equation == 0) std::this_thread::sleep_for(delay);

@@ -1,10 +1,11 @@
 // The correctness oracle of the benchmark matrix (docs/design.md): every applicable
 // sync x layout, on 1, 2 and 4 threads, unpinned and compact, reproduces the
-// serial staged RK4 trajectory bit for bit; and the s-mass chain (uneven
-// blocks, three-way dependencies) on several thread counts, with every
-// applicable layout, including the chains the harness integrates beyond four
-// threads (kernels/model_choice.hpp). A combination that is not applicable is a test too: it
-// must say why.
+// serial staged RK4 trajectory bit for bit; and the s-mass chain (blocks of
+// whole masses, uneven ones, more threads than masses, three-way
+// dependencies) on 1 to 4 threads, with every applicable layout, including
+// the chains the harness integrates beyond four threads
+// (kernels/model_choice.hpp). A combination that is not applicable is a test
+// too: it must say why; so is a chain the threads cannot split.
 #include "kernels/model_choice.hpp"
 #include "tests/matrix/matrix_cases.hpp"
 
@@ -52,9 +53,17 @@ void register_two_mass() {
 
 // Chains, with every applicable layout (the paper's four equations split
 // evenly on 1, 2 and 4 threads; a layout's offsets for uneven blocks are
-// checked here): 3 masses (6 equations) on 4 threads gives blocks of 2, 2, 1,
-// 1; 5 masses (10 equations) on 3 threads gives 4, 3, 3, and on 2 threads
-// two blocks of 5 with dependencies inside each.
+// checked here). A chain is cut between masses when there are at least as
+// many masses as threads (layouts/partition.hpp), so each block is whole
+// masses, computes its own positions and velocities and reads its
+// neighbours' boundary positions:
+//   5 masses on 2 threads: 3 + 2 masses; on 3 threads: 2 + 2 + 1 (threads
+//   not dividing masses); 8 on 3: 3 + 3 + 2; 33 on 4: 9 + 8 + 8 + 8 (the
+//   middle-mass loop over several masses, two neighbours each); 4 on 4: one
+//   mass each; 6 on 1: the whole chain, nobody to wait for.
+// With more threads than masses the blocks are single equations, so a mass's
+// position and velocity can have two owners: 3 masses on 4 threads gives
+// {x1, v1}, {x2, v2}, {x3}, {v3}; 2 masses on 3 threads {x1, v1}, {x2}, {v2}.
 template <class Sync, class Layout>
 void register_chain() {
   if constexpr (kernels::applicable<Sync, Layout>().applicable) {
@@ -62,13 +71,31 @@ void register_chain() {
       std::size_t masses;
       unsigned threads;
     };
-    for (const shape chain_shape : {shape{3, 4}, shape{5, 3}, shape{5, 2}})
+    for (const shape chain_shape : {shape{5, 2}, shape{5, 3}, shape{8, 3}, shape{33, 4}, shape{4, 4}, shape{6, 1},
+                                    shape{3, 4}, shape{2, 3}})
       register_scenario("Chain", chain_name<Sync, Layout>(chain_shape.masses, chain_shape.threads),
                         [chain_shape] {
                           const kernels::chain_model chain(kernels::chain_params::uniform(chain_shape.masses));
                           expect_bitwise_serial<Sync, Layout>(chain, chain_shape.threads, placement::none,
                                                               steps_for<Sync>(chain_shape.threads, kChainSteps));
                         });
+  }
+}
+
+// More threads than a chain's equations (T > 2S) is refused with a reason,
+// before anything is built, for every applicable pair.
+template <class Sync, class Layout>
+void register_refused_chain() {
+  if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+    register_scenario("Chain", std::string(Sync::kName) + "/" + std::string(Layout::kName) + "/masses2/threads5/refused",
+                      [] {
+                        const kernels::chain_model chain(kernels::chain_params::uniform(2));
+                        EXPECT_NE((kernels::not_applicable_reason<Sync, Layout>(chain.equations(), 5))
+                                      .find("every thread must own at least one equation"),
+                                  std::string::npos);
+                        EXPECT_THROW((kernels::parallel_rk4<Sync, Layout, kernels::chain_model>(chain, kStepSize, 5)),
+                                     layouts::partition_error);
+                      });
   }
 }
 
@@ -119,6 +146,7 @@ const bool registered = [] {
     layouts::for_each_layout([]<class Layout>() {
       register_two_mass<Sync, Layout>();
       register_chain<Sync, Layout>();
+      register_refused_chain<Sync, Layout>();
       if constexpr (kernels::applicable<Sync, Layout>().applicable && !pure_spin<Sync>())
         for (const unsigned threads : kDefaultChainThreads) register_default_chain<Sync, Layout>(threads);
     });

@@ -56,12 +56,13 @@ std::size_t distinct(const std::vector<placed>& slots) {
 struct shape {
   std::size_t equations;
   unsigned participants;
+  std::size_t grain = 1;  // 2: a chain's masses (layouts/partition.hpp)
 };
-constexpr shape kShapes[] = {{4, 1}, {4, 2}, {4, 4}, {6, 4}, {10, 3}, {16, 4}};
+constexpr shape kShapes[] = {{4, 1}, {4, 2}, {4, 4}, {6, 4}, {10, 3}, {16, 4}, {10, 2, 2}, {16, 3, 2}, {66, 4, 2}};
 
 TEST(Partition, BlocksCoverEveryEquationOnceInOrder) {
   for (const shape& each : kShapes) {
-    const partition blocks(each.equations, each.participants);
+    const partition blocks(each.equations, each.participants, each.grain);
     std::size_t next = 0;
     for (unsigned participant = 0; participant < each.participants; ++participant) {
       const equation_block block = blocks.block(participant);
@@ -76,6 +77,39 @@ TEST(Partition, BlocksCoverEveryEquationOnceInOrder) {
   }
 }
 
+// A grain of 2 (a chain's masses): blocks of whole units while there are at
+// least as many units as participants, in order, every equation once, sizes
+// one unit apart at most; single equations beyond.
+TEST(Partition, CutsInWholeGrainsWhenThereAreEnough) {
+  for (std::size_t units : {1U, 2U, 3U, 5U, 8U, 33U})
+    for (unsigned participants = 1; participants <= 2 * units; ++participants) {
+      const partition blocks(2 * units, participants, 2);
+      EXPECT_EQ(blocks.grain(), 2U);
+      EXPECT_EQ(blocks.by_grain(), participants <= units) << units << " units on " << participants;
+      const std::size_t unit = blocks.by_grain() ? 2 : 1;
+      std::size_t next = 0;
+      for (unsigned participant = 0; participant < participants; ++participant) {
+        const equation_block block = blocks.block(participant);
+        EXPECT_EQ(block.first, next);
+        EXPECT_EQ(block.first % unit, 0U);
+        EXPECT_EQ(block.size() % unit, 0U);
+        EXPECT_GE(block.size(), unit);
+        EXPECT_LE(block.size(), blocks.largest_block());
+        EXPECT_LE(blocks.largest_block() - block.size(), unit) << "blocks differ by one unit at most";
+        for (std::size_t equation = block.first; equation < block.last; ++equation)
+          EXPECT_EQ(blocks.owner(equation), participant);
+        next = block.last;
+      }
+      EXPECT_EQ(next, 2 * units);
+    }
+  EXPECT_EQ(partition(4, 2, 1).block(0).last, 2U) << "a grain of 1 is the equation split";
+}
+
+TEST(Partition, RejectsAGrainThatDoesNotDivideTheEquations) {
+  EXPECT_THROW(partition(5, 2, 2), partition_error);
+  EXPECT_THROW(partition(4, 2, 0), partition_error);
+}
+
 TEST(Partition, RejectsMoreThreadsThanEquationsWithAReason) {
   EXPECT_THROW(partition(4, 0), partition_error);
   try {
@@ -88,7 +122,7 @@ TEST(Partition, RejectsMoreThreadsThanEquationsWithAReason) {
 
 TEST(Packed, EverySlotDistinctAndContiguous) {
   for (const shape& each : kShapes) {
-    const partition blocks(each.equations, each.participants);
+    const partition blocks(each.equations, each.participants, each.grain);
     packed layout(blocks);
     const auto slots = shared_slots_of(layout, blocks);
     EXPECT_EQ(distinct(slots), kSharedSlots * each.equations);
@@ -107,11 +141,22 @@ void expect_shared_slots_as_declared() {
   constexpr std::size_t isolation = Layout::kWriterIsolation;
   constexpr std::size_t alignment = isolation > platform::kCacheLine ? isolation : platform::kCacheLine;
   for (const shape& each : kShapes) {
-    const partition blocks(each.equations, each.participants);
+    const partition blocks(each.equations, each.participants, each.grain);
     Layout layout(blocks);
     const auto slots = shared_slots_of(layout, blocks);
     EXPECT_EQ(distinct(slots), kSharedSlots * each.equations);
     EXPECT_EQ(address(layout.state(0, 0)) % alignment, 0U) << Layout::kName << " starts on a block boundary";
+    // Each owner's block of a slot is one array (shared_slots.hpp): the step
+    // addresses it through one pointer.
+    for (std::size_t equation = 1; equation < each.equations; ++equation) {
+      if (blocks.owner(equation) != blocks.owner(equation - 1)) continue;
+      for (unsigned parity = 0; parity < 2; ++parity)
+        EXPECT_EQ(address(layout.state(parity, equation)), address(layout.state(parity, equation - 1)) + sizeof(double))
+            << Layout::kName << ": x of equation " << equation;
+      for (unsigned stage = 0; stage < kSharedStageSlots; ++stage)
+        EXPECT_EQ(address(layout.stage(stage, equation)), address(layout.stage(stage, equation - 1)) + sizeof(double))
+            << Layout::kName << ": k_" << stage << " of equation " << equation;
+    }
     if constexpr (isolation > 0) {
       EXPECT_FALSE(owners_share(slots, isolation))
           << Layout::kName << ": two writers share a " << isolation << "-byte block with " << each.equations
@@ -131,13 +176,20 @@ template <class Layout>
 void expect_private_copies_as_declared() {
   constexpr std::size_t isolation = Layout::kWriterIsolation;
   for (const shape& each : kShapes) {
-    const partition blocks(each.equations, each.participants);
+    const partition blocks(each.equations, each.participants, each.grain);
     Layout layout(blocks);
     std::vector<placed> board;
     for (std::size_t equation = 0; equation < each.equations; ++equation)
       for (std::size_t slot = 0; slot < kBoardSlots; ++slot)
         board.push_back({address(layout.board(slot, equation)), blocks.owner(equation)});
     EXPECT_EQ(distinct(board), kBoardSlots * each.equations);
+    for (std::size_t equation = 1; equation < each.equations; ++equation) {
+      if (blocks.owner(equation) != blocks.owner(equation - 1)) continue;
+      for (std::size_t slot = 0; slot < kBoardSlots; ++slot) {
+        EXPECT_EQ(address(layout.board(slot, equation)), address(layout.board(slot, equation - 1)) + sizeof(double))
+            << Layout::kName << ": board slot " << slot << " of equation " << equation;
+      }
+    }
     std::vector<placed> copies;
     for (unsigned participant = 0; participant < each.participants; ++participant) {
       for (std::size_t equation = 0; equation < each.equations; ++equation) {

@@ -1,6 +1,7 @@
 // The composed step's contract beyond bitwise determinism: who depends on
 // whom, applicability, the bounded run's agreed stop, the sync-time
 // instrumentation, and constructor arguments reaching the primitive.
+#include <algorithm>
 #include <atomic>
 #include <barrier>
 #include <chrono>
@@ -37,6 +38,120 @@ TEST(StepPlan, TwoThreadsOwnPositionsAndVelocities) {
   EXPECT_EQ(step.plan_of(0).dependencies, (std::vector<std::size_t>{2, 3}));
   EXPECT_EQ(step.plan_of(1).dependencies, (std::vector<std::size_t>{0, 1}));
   EXPECT_EQ(step.plan_of(0).producers, (std::vector<unsigned>{1}));
+}
+
+// The paper's split stays one equation at a time on 1..4 threads: the same
+// blocks as before chains were cut between masses, and every block's values
+// go whole to the others (each is read by another thread).
+TEST(StepPlan, ThePapersSplitIsOneEquationAtATime) {
+  const kernels::two_mass_model model;
+  const std::vector<std::vector<std::size_t>> firsts{{0}, {0, 2}, {0, 2, 3}, {0, 1, 2, 3}};
+  for (unsigned threads = 1; threads <= 4; ++threads) {
+    const layouts::partition blocks = kernels::partition_of(model, threads);
+    const std::vector<kernels::participant_plan> plans = kernels::plan_participants(model, blocks);
+    for (unsigned participant = 0; participant < threads; ++participant) {
+      const kernels::participant_plan& plan = plans[participant];
+      EXPECT_EQ(plan.block.first, firsts[threads - 1][participant]) << threads << " threads";
+      if (threads == 1) {
+        EXPECT_EQ(plan.own_reads.first, 0U);
+        EXPECT_EQ(plan.own_reads.last, 4U);
+        EXPECT_TRUE(plan.exports.empty());
+        EXPECT_FALSE(plan.has_consumers);
+        continue;
+      }
+      EXPECT_EQ(plan.own_reads.size(), 0U) << "on 2..4 threads every equation reads only other threads' values";
+      std::vector<std::size_t> whole_block;
+      for (std::size_t equation = plan.block.first; equation < plan.block.last; ++equation)
+        whole_block.push_back(equation);
+      EXPECT_EQ(plan.exports, whole_block) << threads << " threads, participant " << participant;
+      EXPECT_TRUE(plan.exports_contiguous);
+    }
+  }
+}
+
+// A chain on T <= S threads: blocks of whole masses (sizes differing by one
+// mass at most, the larger first), every equation owned once, each block
+// reading only the positions just outside it, from its neighbours only, and
+// giving them only its two boundary positions.
+TEST(StepPlan, AChainIsCutBetweenMassesAndReadsOnlyItsNeighboursBoundaries) {
+  for (const std::size_t masses : {1U, 2U, 3U, 5U, 8U, 33U, 4096U})
+    for (unsigned threads = 1; threads <= std::min<std::size_t>(masses, 6); ++threads) {
+      const kernels::chain_model chain(kernels::chain_params::uniform(masses));
+      const layouts::partition blocks = kernels::partition_of(chain, threads);
+      ASSERT_TRUE(blocks.by_grain()) << masses << " masses on " << threads;
+      const std::vector<kernels::participant_plan> plans = kernels::plan_participants(chain, blocks);
+      std::vector<unsigned> owners(chain.equations(), threads);
+      std::size_t next = 0;
+      for (unsigned participant = 0; participant < threads; ++participant) {
+        const std::string where = std::to_string(masses) + " masses, participant " + std::to_string(participant) +
+                                  " of " + std::to_string(threads);
+        const kernels::participant_plan& plan = plans[participant];
+        const layouts::equation_block block = plan.block;
+        EXPECT_EQ(block.first, next) << where;
+        next = block.last;
+        EXPECT_EQ(block.first % 2, 0U) << where << ": the block starts on a position";
+        EXPECT_EQ(block.size() % 2, 0U) << where << ": whole masses";
+        const std::size_t block_masses = block.size() / 2;
+        EXPECT_TRUE(block_masses == masses / threads || block_masses == masses / threads + 1) << where;
+        EXPECT_EQ(block_masses == masses / threads + 1, participant < masses % threads) << where << ": larger first";
+        for (std::size_t equation = block.first; equation < block.last; ++equation) {
+          EXPECT_EQ(owners[equation], threads) << "equation " << equation << " owned twice";
+          owners[equation] = participant;
+        }
+        // Its dependencies: the position before its first mass and after its last.
+        std::vector<std::size_t> boundaries;
+        std::vector<unsigned> neighbours;
+        std::vector<std::size_t> exports;
+        if (participant > 0) {
+          boundaries.push_back(block.first - 2);
+          neighbours.push_back(participant - 1);
+          exports.push_back(block.first);
+        }
+        if (participant + 1 < threads) {
+          boundaries.push_back(block.last);
+          neighbours.push_back(participant + 1);
+          if (exports.empty() || exports.back() != block.last - 2) exports.push_back(block.last - 2);
+        }
+        EXPECT_EQ(plan.dependencies, boundaries) << where;
+        EXPECT_EQ(plan.producers, neighbours) << where;
+        EXPECT_EQ(plan.exports, exports) << where;
+        EXPECT_EQ(plan.has_consumers, threads > 1) << where;
+        EXPECT_EQ(plan.own_reads.first, block.first) << where << ": its equations read all of its block";
+        EXPECT_EQ(plan.own_reads.last, block.last) << where;
+      }
+      EXPECT_EQ(next, chain.equations());
+      EXPECT_EQ(std::count(owners.begin(), owners.end(), threads), 0) << "an equation nobody owns";
+    }
+}
+
+// S < T <= 2S (the chains beyond four threads, one equation each): single
+// equations, every one owned once; a participant still waits only for the
+// owners of the masses next to its own.
+TEST(StepPlan, MoreThreadsThanMassesSplitsEquations) {
+  for (const std::size_t masses : {2U, 3U, 4U, 8U})
+    for (unsigned threads = static_cast<unsigned>(masses) + 1; threads <= 2 * masses; ++threads) {
+      const kernels::chain_model chain(kernels::chain_params::uniform(masses));
+      const layouts::partition blocks = kernels::partition_of(chain, threads);
+      EXPECT_FALSE(blocks.by_grain());
+      const std::vector<kernels::participant_plan> plans = kernels::plan_participants(chain, blocks);
+      std::size_t next = 0;
+      for (unsigned participant = 0; participant < threads; ++participant) {
+        const kernels::participant_plan& plan = plans[participant];
+        EXPECT_EQ(plan.block.first, next);
+        EXPECT_GE(plan.block.size(), 1U);
+        EXPECT_LE(plan.block.size(), 2U);
+        next = plan.block.last;
+        for (const unsigned producer : plan.producers) {
+          const std::size_t own_mass = plan.block.first / 2;
+          const std::size_t their_first = blocks.block(producer).first / 2;
+          const std::size_t their_last = (blocks.block(producer).last - 1) / 2;
+          EXPECT_TRUE(their_last + 1 >= own_mass && their_first <= (plan.block.last - 1) / 2 + 1)
+              << masses << " masses on " << threads << ": participant " << participant << " waits for "
+              << producer << ", which owns no mass next to its own";
+        }
+      }
+      EXPECT_EQ(next, chain.equations());
+    }
 }
 
 TEST(Applicability, ChannelsNeedPrivateCopiesAndSayWhy) {

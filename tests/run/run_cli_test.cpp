@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "platform/placement.hpp"
+#include "layouts/registry.hpp"
 #include "sync/registry.hpp"
 #include "tests/support/run_command.hpp"
 #include "tests/support/scratch_directory.hpp"
@@ -256,6 +257,41 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
       EXPECT_GT(entry["ns_per_step"].get<double>(), 0.0);
     }
   }
+}
+
+// Every thread count the options accept runs, one included: `--threads 1`
+// measures every primitive with every layout it applies to, unpinned and
+// pinned (the instrumented entries and the overhead pair too), or lists the
+// pair as not applicable; a run of one thread once ended in "internal error:
+// thread 1 is not in a plan of 1 threads" (exit 3), from the 2-thread
+// core-to-core pairing asking a 1-thread plan for its second thread.
+TEST(RunCli, OneThreadRunsEveryPrimitiveAndLayout) {
+  watchdog guard(std::chrono::seconds(200 * lockstep::testing::kSlowdown), "a one-thread lockstep run did not finish");
+  scratch_directory scratch("lockstep-run-one-thread");
+  const fs::path out = scratch.path() / "one.json";
+  const auto result = run_command(run_args({"--quick", "--threads", "1", "--repetitions", "1", "--pairs", "0",
+                                            "--out", out.string(), "--", "--benchmark_min_time=0.001"}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  std::ifstream file(out);
+  const nlohmann::json document = nlohmann::json::parse(file);
+  std::set<std::string> measured;
+  for (const auto& entry : document["benchmarks"]) {
+    if (entry.value("run_type", "") != "iteration") continue;
+    const std::string name = entry["name"];
+    EXPECT_FALSE(entry.value("error_occurred", false)) << name << ": " << entry.value("error_message", "");
+    if (!entry.value("error_occurred", false)) measured.insert(name);
+  }
+  const std::string not_applicable = document["context"].value("not_applicable", "");
+  for (const auto& primitive : lockstep::sync::all_primitive_info)
+    for (const auto& layout : lockstep::layouts::all_layout_info)
+      for (const char* pin : {"none", "compact"}) {
+        const std::string name = "rk4/sync:" + std::string(primitive.name) + "/layout:" + std::string(layout.name) +
+                                 "/pin:" + pin + "/threads:1";
+        EXPECT_TRUE(measured.count(name) > 0 || not_applicable.find(name + ": ") != std::string::npos)
+            << name << " neither measured nor listed as not applicable";
+      }
+  EXPECT_TRUE(measured.count("overhead/accounting:on/sync:seqlock/layout:per_thread/pin:compact/threads:1"))
+      << "the instrumented overhead entry at one thread";
 }
 
 // The pace trace and the paired comparisons (bench/run: pace.hpp,
