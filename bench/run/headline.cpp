@@ -2,6 +2,7 @@
 #include "bench/run/headline.hpp"
 
 #include <fmt/core.h>
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <map>
@@ -190,7 +191,15 @@ std::optional<headline_answer> answer_of(const run_book& book, const std::vector
     if (best == nullptr || choice.ns_per_step < best->ns_per_step) best = &choice;
   }
   if (best == nullptr) return std::nullopt;
-  headline_answer answer{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}};
+  headline_answer answer{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}, {}};
+  const double best_highest = best->ns_per_step * (1.0 + best->spread_pct / 100.0);
+  for (const auto& choice : choices) {
+    if (&choice == best || choice.model != best->model) continue;
+    if (choice.ns_per_step * (1.0 - choice.spread_pct / 100.0) <= best_highest)
+      answer.level.push_back({choice.threads, choice.pin, choice.entry, choice.ns_per_step});
+  }
+  std::sort(answer.level.begin(), answer.level.end(),
+            [](const headline_level& a, const headline_level& b) { return a.ns_per_step < b.ns_per_step; });
   answer.serial_ns_per_step = book.serial_step_ns(best->model);
   if (const captured_entry* entry = book.find(best->entry)) answer.vs_serial = entry->median("vs_serial");
   return answer;
@@ -199,6 +208,13 @@ std::optional<headline_answer> answer_of(const run_book& book, const std::vector
 std::string answer_line(const headline_answer& answer) {
   std::string line = fmt::format("Best here: {}threads:{} pin:{}, {} a step", model_words(answer.model),
                                  answer.threads, answer.pin, format_ns(answer.ns_per_step));
+  if (!answer.level.empty()) {
+    std::vector<std::string> others;
+    for (const auto& other : answer.level)
+      others.push_back(fmt::format("threads:{} pin:{} ({})", other.threads, other.pin, format_ns(other.ns_per_step)));
+    line += fmt::format(", tied with {}: their repetitions overlap and no pair compared them",
+                        fmt::join(others, " and "));
+  }
   if (!answer.serial_ns_per_step || !answer.vs_serial) return line + "; the serial step was not measured";
   line += fmt::format("; the serial step of the same model takes {}", format_ns(*answer.serial_ns_per_step));
   const double ratio = *answer.vs_serial;
@@ -509,6 +525,13 @@ nlohmann::json headline_json(const run_headline& headline) {
   const auto optional_json = [](const std::optional<double>& value) {
     return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
   };
+  const auto level_json = [](const std::vector<headline_level>& level) {
+    nlohmann::json json = nlohmann::json::array();
+    for (const auto& other : level)
+      json.push_back({{"threads", other.threads}, {"pin", other.pin}, {"entry", other.entry},
+                      {"ns_per_step", other.ns_per_step}});
+    return json;
+  };
   nlohmann::json answer = nullptr;
   if (const auto& best = headline.answer)
     answer = {{"model", best->model},
@@ -517,7 +540,8 @@ nlohmann::json headline_json(const run_headline& headline) {
               {"entry", best->entry},
               {"ns_per_step", best->ns_per_step},
               {"serial_ns_per_step", optional_json(best->serial_ns_per_step)},
-              {"vs_serial", optional_json(best->vs_serial)}};
+              {"vs_serial", optional_json(best->vs_serial)},
+              {"level", level_json(best->level)}};
   nlohmann::json stopped = nlohmann::json::array();
   for (const auto& entry : headline.stopped)
     stopped.push_back({{"entry", entry.entry},

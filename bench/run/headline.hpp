@@ -35,7 +35,9 @@
 //
 // Before the per-group lines, one line answers first: the fastest choice of
 // the run (which thread count and placement) and its step against the serial
-// step of the same model (headline_answer).
+// step of the same model (headline_answer). No pair compares choices across
+// thread counts or placements, so one whose repetitions overlap the fastest's
+// is named beside it as a tie.
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -120,8 +122,20 @@ struct known_answers {
   std::string migration_unavailable;
 };
 
+// A choice of another thread count or placement that the run does not
+// separate from the best: no pair compares choices across groups, and their
+// repetitions' ranges (median +- spread) overlap.
+struct headline_level {
+  unsigned threads = 0;
+  std::string pin;
+  std::string entry;
+  double ns_per_step = 0.0;
+};
+
 // The run's best choice against the serial step of its model (medians of
 // the two entries; vs_serial is the one derived figure, derived_figures.hpp).
+// The best is the lowest median; the choices as good as far as the run can
+// tell are named beside it (`level`), so that a tie is said as a tie.
 struct headline_answer {
   std::string model;
   unsigned threads = 0;
@@ -130,6 +144,7 @@ struct headline_answer {
   double ns_per_step = 0.0;
   std::optional<double> serial_ns_per_step;
   std::optional<double> vs_serial;  // the choice's step / the serial step
+  std::vector<headline_level> level;  // by median
 };
 
 // An entry that lost repetitions to a stop (a stall, a lost wake-up, the

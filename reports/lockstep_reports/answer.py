@@ -174,6 +174,10 @@ def first_words(answer: HeadlineAnswer) -> str:
     """The answer first: the run's best combination, and its step against the serial step of its model."""
     words = (f"Best of the run: {answer.threads} thread{'s' if answer.threads != 1 else ''}, pin:{answer.pin}, "
              f"{_entry_words(answer.entry_key)}, {format_ns(answer.ns_per_step)} a step")
+    if answer.level:
+        others = " and ".join(f"{threads} thread{'s' if threads != 1 else ''}, pin:{pin} ({format_ns(step)})"
+                              for threads, pin, step in answer.level)
+        words += f", tied with {others}: their repetitions overlap and no pair compared them"
     if answer.vs_serial is None:
         return words + "."
     serial = f" ({format_ns(answer.serial_ns_per_step)})" if answer.serial_ns_per_step is not None else ""

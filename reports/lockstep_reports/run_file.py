@@ -333,6 +333,9 @@ class HeadlineAnswer:
     ns_per_step: float
     serial_ns_per_step: float | None
     vs_serial: float | None
+    # (threads, pin, ns_per_step) of the choices the run does not separate from this one (lockstep_headline.answer
+    # .level: their repetitions overlap and no pair compared them): a tie, said beside the best.
+    level: tuple = ()
 
 
 @dataclass(frozen=True)

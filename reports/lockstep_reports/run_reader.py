@@ -282,10 +282,17 @@ def _read_answer(path: str, place: tuple, raw) -> HeadlineAnswer | None:
     threads = _headline_threads(path, place + ("threads",), item.get("threads", required=True))
     pin = _headline_text(path, place + ("pin",), item.get("pin", required=True))
     entry, key = _headline_entry(path, place, item)
+    level = []
+    for index, raw_other in enumerate(item.value.get("level") or []):
+        other = _headline_object(path, place + ("level", index), raw_other)
+        level.append((_headline_threads(path, place + ("level", index, "threads"), other.get("threads", required=True)),
+                      _headline_text(path, place + ("level", index, "pin"), other.get("pin", required=True)),
+                      other.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")))
     return HeadlineAnswer(threads, pin, entry, key, item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns"),
                           item.number("serial_ns_per_step", 0.0, fields.LONGEST_NS, required=False, nullable=True,
                                       unit=" ns"),
-                          item.number("vs_serial", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True))
+                          item.number("vs_serial", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
+                          tuple(level))
 
 
 def _read_headline(path: str, document: dict) -> Headline | None:

@@ -731,6 +731,17 @@ class AnswerBox(Pages):
         self.assertLess(section.index('<p class="first">'), section.index("<table"))
         self.assertNotIn("Best: threads:2", box)  # the object says it; its line is not repeated
 
+    def test_choices_the_run_does_not_separate_are_a_tie_in_the_first_line(self):
+        document = load_document(XEON)
+        block = document["lockstep_headline"]
+        block["answer"] = {"model": "", "threads": 2, "pin": "none", "entry": block["recommendations"][1]["entry"],
+                           "ns_per_step": 893.7, "serial_ns_per_step": 29.1, "vs_serial": 30.71,
+                           "level": [{"threads": 2, "pin": "compact", "entry": block["recommendations"][0]["entry"],
+                                      "ns_per_step": 899.7}]}
+        _, markdown = self.pages(self.write("level.json", document))
+        self.assertIn("893.7 ns a step, tied with 2 threads, pin:compact (899.7 ns): their repetitions overlap and no "
+                      "pair compared them: 30.7x the serial step", markdown)
+
     def test_the_words_it_uses_are_explained_in_the_box(self):
         html, markdown = self.pages(XEON)
         section, box = answer_boxes(html, markdown)

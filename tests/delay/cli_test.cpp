@@ -114,7 +114,7 @@ TEST(FalseshareCommand, WritesParseableJson) {
   lockstep::testing::watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown), "lockstep falseshare");
   const auto path = temp_json("falseshare");
   const auto result = run_command(
-      {LOCKSTEP_BINARY, "falseshare", "--window", "2ms", "--repeats", "1", "--strides", "8,64,128", "--out", path});
+      {LOCKSTEP_BINARY, "falseshare", "--window", "2ms", "--repeats", "3", "--strides", "8,64,128", "--out", path});
   ASSERT_EQ(result.exit_status, 0) << result.err;
   EXPECT_NE(result.out.find("ns per access by stride"), std::string::npos) << result.out;
   // The text ends with the answer, one line, which the file holds too.
@@ -143,7 +143,17 @@ TEST(FalseshareCommand, WritesParseableJson) {
       EXPECT_EQ(pattern["strides"][0]["stride_bytes"], 8);
       EXPECT_EQ(pattern["strides"][1]["stride_bytes"], 128);
     }
-    ASSERT_TRUE(pattern.contains("penalty"));
+    // A penalty pairs the two strides within one repeat; a repeat in which
+    // some thread was never scheduled (a loaded machine, a 2 ms window) has
+    // no mean, and a pattern left without a pair says so instead.
+    if (!pattern.contains("penalty")) {
+      const std::size_t said = result.out.find("  " + pattern["words"].get<std::string>() + " ",
+                                               result.out.find("penalty of one line against apart"));
+      ASSERT_NE(said, std::string::npos) << result.out;
+      const std::string line = result.out.substr(said, result.out.find('\n', said) - said);
+      EXPECT_NE(line.find("not measured both on one line and apart"), std::string::npos) << result.out;
+      continue;
+    }
     EXPECT_EQ(pattern["penalty"]["a_stride_bytes"], 8);
     EXPECT_EQ(pattern["penalty"]["b_stride_bytes"], 128);
   }

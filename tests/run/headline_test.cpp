@@ -401,3 +401,56 @@ TEST(Headline, SaysWhyFalseSharingWasNotMeasured) {
 }
 
 }  // namespace
+
+namespace {
+
+// An rk4 entry whose repetitions measured these steps.
+void add_spread_step(bench::run_book& book, const std::string& pin, unsigned threads,
+                     const std::vector<double>& steps) {
+  bench::captured_entry entry;
+  entry.name = step_name("mailbox", "per_thread", pin, threads);
+  entry.fields = {{"kind", "rk4"}, {"sync", "mailbox"}, {"layout", "per_thread"}, {"pin", pin},
+                  {"threads", std::to_string(threads)}};
+  for (double step : steps)
+    entry.repetitions.push_back({{"ns_per_step", step}, {"oversubscribed", threads > 2 ? 1.0 : 0.0}, {"vs_c2c", 1.0}});
+  book.record(std::move(entry));
+}
+
+}  // namespace
+
+// No pair compares choices of different placements or thread counts: the
+// best by median is named with every choice whose repetitions overlap its
+// own, as a tie, in the line and in the JSON; one whose repetitions lie
+// apart is not.
+TEST(AnswerFirst, ChoicesTheRunDoesNotSeparateAreNamedAsATie) {
+  bench::run_book book;
+  add_spread_step(book, "compact", 2, {900.0, 1000.0, 1100.0});
+  add_spread_step(book, "none", 2, {950.0, 1050.0, 1150.0});
+  add_spread_step(book, "compact", 4, {4900.0, 5000.0, 5100.0});
+  const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
+  ASSERT_TRUE(headline.answer.has_value());
+  EXPECT_EQ(headline.answer->pin, "compact");
+  ASSERT_EQ(headline.answer->level.size(), 1u);
+  EXPECT_EQ(headline.answer->level[0].pin, "none");
+  EXPECT_EQ(headline.answer->level[0].threads, 2u);
+  const auto first = std::find_if(headline.lines.begin(), headline.lines.end(),
+                                  [](const std::string& line) { return line.rfind("Best here:", 0) == 0; });
+  ASSERT_NE(first, headline.lines.end());
+  EXPECT_NE(first->find("tied with threads:2 pin:none (1.05 us): their repetitions overlap and no pair compared them"),
+            std::string::npos)
+      << *first;
+  EXPECT_EQ(first->find("threads:4"), std::string::npos) << *first;
+  const nlohmann::json json = bench::headline_json(headline);
+  ASSERT_EQ(json["answer"]["level"].size(), 1u);
+  EXPECT_EQ(json["answer"]["level"][0]["pin"], "none");
+}
+
+TEST(AnswerFirst, AChoiceWhoseRepetitionsLieApartIsNoTie) {
+  bench::run_book book;
+  add_spread_step(book, "compact", 2, {900.0, 1000.0, 1100.0});
+  add_spread_step(book, "none", 2, {1500.0, 1600.0, 1700.0});
+  const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
+  ASSERT_TRUE(headline.answer.has_value());
+  EXPECT_TRUE(headline.answer->level.empty());
+  EXPECT_EQ(bench::headline_json(headline)["answer"]["level"], nlohmann::json::array());
+}
