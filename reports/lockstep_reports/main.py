@@ -24,8 +24,19 @@ class UsageError(Exception):
 
 
 class ParagraphFormatter(argparse.HelpFormatter):
-    """argparse's help with the description's and the epilog's paragraphs (split at blank lines) each filled
-    to the width, and lines that start with two spaces (examples) kept as they are."""
+    """argparse's help in the style of every other lockstep command's (CLI11's): options in a column at 30, an
+    option's spellings joined by a comma; the description's and the epilog's paragraphs (split at blank lines)
+    each filled to the width, and lines that start with two spaces (examples) kept as they are."""
+
+    def __init__(self, prog, **keywords):
+        keywords.setdefault("max_help_position", 30)
+        super().__init__(prog, **keywords)
+
+    def _format_action_invocation(self, action):
+        if not action.option_strings or action.nargs == 0:
+            return ",".join(action.option_strings) or super()._format_action_invocation(action)
+        metavar = self._format_args(action, self._get_default_metavar_for_optional(action))
+        return ",".join(action.option_strings) + " " + metavar
 
     def _fill_text(self, text, width, indent):
         paragraphs = []
@@ -43,9 +54,32 @@ class OneLineParser(argparse.ArgumentParser):
     option is written whole (no abbreviations), and a mistyped one gets the closest option named."""
 
     def __init__(self, **keywords):
-        super().__init__(allow_abbrev=False, formatter_class=ParagraphFormatter, **keywords)
+        super().__init__(allow_abbrev=False, formatter_class=ParagraphFormatter, add_help=False, **keywords)
+        self._positionals.title = "Positionals"
+        self._optionals.title = "Options"
+        self.add_argument("-h", "--help", action="help", help="Print this help message and exit")
+
+    def format_help(self):
+        """As the other commands print theirs: the description's first paragraph, the usage, the positionals and
+        the options, then the rest of the description and the epilog."""
+        formatter = self._get_formatter()
+        first, _, rest = (self.description or "").partition("\n\n")
+        formatter.add_text(first)
+        formatter.add_usage(self.usage, self._actions, self._mutually_exclusive_groups, prefix="Usage: ")
+        for group in self._action_groups:
+            formatter.start_section(group.title)
+            formatter.add_text(group.description)
+            formatter.add_arguments(group._group_actions)
+            formatter.end_section()
+        formatter.add_text(rest)
+        formatter.add_text(self.epilog)
+        return formatter.format_help()
 
     def error(self, message):
+        # "--time: unknown value ..." as the other commands word it, not argparse's "argument --time: ..."
+        message = message.removeprefix("argument ")
+        if "did you mean" in message or "(valid: " in message:  # it says what to give already
+            raise UsageError(message)
         raise UsageError(f"{message} (`lockstep {self.prog.split()[-1]} --help` lists the options)")
 
     def parse_args(self, args=None, namespace=None):
@@ -99,12 +133,25 @@ def percentage(text: str) -> float:
     return value
 
 
+def one_of(*names: str):
+    """A value from a list of names; anything else is a one-line usage error that suggests the closest name, as
+    every other lockstep command's lists do ("unknown value 'rael' (did you mean real?)")."""
+    def check(text: str) -> str:
+        if text in names:
+            return text
+        close = difflib.get_close_matches(text, names, n=1, cutoff=0.6)
+        hint = f"did you mean {close[0]}?" if close else "valid: " + ", ".join(names)
+        raise argparse.ArgumentTypeError(f"unknown value {text!r} ({hint})")
+    return check
+
+
 BAD_INPUT = ("2 bad input: an unusable file, a bad option, or an output that cannot be written (one line on stderr "
              "naming it, nothing written)")
 
 
 def tool_parser(tool: str, description: str, files_metavar: str, files_help: str, epilog: str) -> OneLineParser:
-    parser = OneLineParser(prog=f"lockstep {tool}", description=description, epilog=epilog)
+    parser = OneLineParser(prog=f"lockstep {tool}", description=description, epilog=epilog,
+                           usage=f"%(prog)s [OPTIONS] {files_metavar} [{files_metavar} ...]")
     parser.add_argument("files", nargs="+", metavar=files_metavar, help=files_help)
     return parser
 
@@ -151,7 +198,7 @@ def compare_parser() -> argparse.ArgumentParser:
     parser.add_argument("--alpha", type=float, default=0.05, metavar="LEVEL",
                         help="false discovery rate of the Benjamini-Hochberg q-values shown and counted beside "
                              "the verdicts, between 0 and 1 (default 0.05)")
-    parser.add_argument("--time", choices=("real", "cpu"), default="real",
+    parser.add_argument("--time", type=one_of("real", "cpu"), default="real", metavar="{real,cpu}",
                         help="which time to compare: real, the wall-clock step time (default), or cpu, participant "
                              "0's CPU time per step")
     parser.add_argument("--all", action="store_true", dest="everything",

@@ -845,6 +845,30 @@ class CommandLines(Scratch):
                 self.assertEqual((status, out), (2, ""))
                 self.assertEqual(err, f"lockstep {argv[0]}: {expected}\n")
 
+    def test_a_mistyped_value_names_the_one_meant(self):
+        for value, expected in (("rael", "--time: unknown value 'rael' (did you mean real?)"),
+                                ("wall", "--time: unknown value 'wall' (valid: real, cpu)")):
+            with self.subTest(value):
+                status, out, err = run_tool("compare", "a.json", "b.json", "--time", value)
+                self.assertEqual((status, out), (2, ""))
+                self.assertEqual(err, f"lockstep compare: {expected}\n")
+
+    def test_the_help_reads_as_every_other_commands_help(self):
+        """The other commands' help (CLI11's): a first line that says what the command does, then
+        'Usage: lockstep X [OPTIONS] ...', 'Options:' with '-h,--help'; compare's and report's alike."""
+        for tool in ("compare", "report"):
+            with self.subTest(tool):
+                helped = subprocess.run(["/usr/bin/python3", os.path.join(REPORTS_DIR, "cli.py"), tool, "--help"],
+                                        capture_output=True, text=True, check=True)
+                lines = helped.stdout.splitlines()
+                self.assertFalse(lines[0].lower().startswith("usage"), lines[0])
+                usage = next(line for line in lines if line.startswith("Usage: "))
+                self.assertTrue(usage.startswith(f"Usage: lockstep {tool} [OPTIONS] "), usage)
+                self.assertIn("Options:", lines)
+                self.assertIn("Positionals:", lines)
+                self.assertTrue(any(line.strip().startswith("-h,--help") for line in lines))
+                self.assertLess(lines.index(usage), lines.index("Options:"))
+
     def test_option_values_and_negative_numbers_are_not_taken_for_options(self):
         status, _, err = run_tool("compare", fixture("machine_a.json"), fixture("machine_a_rerun.json"),
                                   "--noise", "-5")
