@@ -40,9 +40,11 @@ struct c2c_options {
 
 
 std::vector<method> parse_methods(const std::string& text) {
-  check_name(text, {"cas", "store_load", "both"}, "--method: unknown value");
+  check_name(text, {"cas", "store_load", "stage", "both", "all"}, "--method: unknown value");
   if (text == "cas") return {method::cas};
   if (text == "store_load") return {method::store_load};
+  if (text == "stage") return {method::stage};
+  if (text == "all") return {method::cas, method::store_load, method::stage};
   return {method::cas, method::store_load};
 }
 
@@ -110,7 +112,9 @@ void add_c2c(CLI::App& app, int& result) {
       "c2c", "Core-to-core latency matrix: two pinned threads bounce one cache line; pairs labelled by hwloc relation");
   command->add_option("--cores", options->cores, "CPUs to measure, e.g. 0,2,4-7 (default: every usable core)");
   command->add_flag("--smt", options->smt, "Include SMT siblings (default: one PU per core)");
-  command->add_option("--method", options->methods, "cas, store_load or both")->capture_default_str();
+  command->add_option("--method", options->methods,
+                      "cas, store_load, both (those two), stage (each thread writes its own line and waits for the "
+                      "other's: the floor of a two-thread stage sync, in one-way latencies) or all")->capture_default_str();
   command->add_option("--samples", options->samples, "One-way latency samples per pair and method, taken back to back, each the mean of --rounds round trips")
       ->check(CLI::Range(1, 1'000'000))
       ->capture_default_str();

@@ -30,7 +30,9 @@ c2c_analysis analyse_c2c(const std::vector<c2c::pair_latency>& results, const st
 namespace {
 
 std::string matrix_text(const std::vector<int>& cpus, const c2c_matrix& matrix) {
-  std::string text = fmt::format("\nmedian one-way latency, ns ({}):\n{:>6}", c2c::to_string(matrix.how), "");
+  std::string text = fmt::format("\nmedian {}, ns ({}):\n{:>6}",
+                                 matrix.how == c2c::method::stage ? "stage time" : "one-way latency",
+                                 c2c::to_string(matrix.how), "");
   for (int cpu : cpus) text += fmt::format(" {:>7}", cpu);
   text += "\n";
   for (int row : cpus) {
@@ -55,6 +57,10 @@ std::string c2c_text(const c2c::c2c_settings& settings, const std::vector<int>& 
                      const std::vector<c2c::pair_latency>& results, const c2c_analysis& analysis) {
   std::string text = fmt::format("one-way latency = round trip / 2, {} samples of {} round trips per pair\n",
                                  settings.samples, settings.rounds_per_sample);
+  for (const c2c::method how : settings.methods)
+    if (how == c2c::method::stage)
+      text += "stage: both threads write their own line, then wait for the other's (a two-thread stage sync at "
+              "its least); both lines cross at once, so its ideal is one one-way latency\n";
   text += fmt::format("{:>5} {:>5}  {:<18} {:<10} {:>9} {:>9} {:>9}\n", "cpu", "cpu", "relation", "method", "min ns",
                       "p50 ns", "p99 ns");
   for (std::size_t i = 0; i < results.size(); ++i) {

@@ -16,9 +16,19 @@
 //                        ping-pong, what lock-free counters do);
 //   - method::store_load A stores 2k+1 and spins loading until it reads
 //                        2k+2; B spins loading until it reads 2k+1 and
-//                        stores 2k+2 (what flags and sequence counters do).
+//                        stores 2k+2 (what flags and sequence counters do);
+//   - method::stage      a stage of two participants: each thread stores k+1
+//                        into its own word (A's at the page's start, B's one
+//                        prefetch pair further) and spins loading until the
+//                        other's word reads k+1 (what every two-thread stage
+//                        sync must do at least: the dataflow channels publish
+//                        and poll so, the barriers arrive and wait so). The
+//                        two lines cross at once, so a stage's floor is one
+//                        transfer where the ping-pong pays two per round.
 // A times `rounds_per_sample` round trips with the steady clock and records
-// one sample = elapsed / rounds / 2 (one-way = round trip / 2). Averaging over
+// one sample = elapsed / rounds / 2 (one-way = round trip / 2); for
+// method::stage a round is one stage and the sample elapsed / rounds (a
+// stage's time, in the same unit: its ideal is one one-way latency). Averaging over
 // rounds keeps the clock's own cost (~20 ns) out of the sample; the
 // distribution over samples keeps preemptions visible (they land in the top
 // percentiles, not in the minimum or the median).
@@ -61,11 +71,20 @@
 
 namespace lockstep::bench::c2c {
 
-enum class method { cas, store_load };
+enum class method { cas, store_load, stage };
 
 inline const char* to_string(method how) noexcept {
-  return how == method::cas ? "cas" : "store_load";
+  switch (how) {
+    case method::cas: return "cas";
+    case method::store_load: return "store_load";
+    case method::stage: return "stage";
+  }
+  return "?";
 }
+
+// The sample's divisor of a round's time: a round trip is two one-way
+// transfers; a stage is one (both lines cross at once).
+inline double transfers_per_round(method how) noexcept { return how == method::stage ? 1.0 : 2.0; }
 
 struct pair_request {
   int cpu_a = 0;  // the initiator: maps the page, touches it first, keeps the clock
@@ -111,19 +130,34 @@ class fresh_page {
     // First touch by the constructing (pinned) thread: the page's frame is
     // allocated on this thread's node, and the line starts in its cache.
     word_ = new (memory_) std::atomic<std::uint64_t>(0);
+    stage_words_[0] = word_;
+    for (std::size_t index = 1; index < 2 * kStageSlots; ++index)
+      stage_words_[index] = new (static_cast<char*>(memory_) + index * kStageWordSpacing) std::atomic<std::uint64_t>(0);
   }
   fresh_page(const fresh_page&) = delete;  // owns a mapping
   fresh_page& operator=(const fresh_page&) = delete;
   ~fresh_page() {
+    for (std::size_t index = 1; index < 2 * kStageSlots; ++index) stage_words_[index]->~atomic();
     word_->~atomic();
     ::munmap(memory_, page_size_);
   }
   std::atomic<std::uint64_t>& word() noexcept { return *word_; }
+  // method::stage's words: each side's ring of kStageSlots lines (stage k
+  // in slot k % kStageSlots, as a dataflow channel's ring), every word a
+  // prefetch pair (128 bytes) from the next, so no adjacent-line prefetch
+  // pulls another; side 0 is the initiator's, side 1 the responder's. The
+  // word at the page's start (word()) is side 0's slot 0.
+  static constexpr std::size_t kStageSlots = 4;
+  std::atomic<std::uint64_t>& stage_word(unsigned side, std::uint64_t k) noexcept {
+    return *stage_words_[side * kStageSlots + k % kStageSlots];
+  }
 
  private:
+  static constexpr std::size_t kStageWordSpacing = 128;
   void* memory_ = nullptr;
   std::size_t page_size_ = 0;
   std::atomic<std::uint64_t>* word_ = nullptr;
+  std::atomic<std::uint64_t>* stage_words_[2 * kStageSlots] = {};
 };
 
 // The initiator's half of round trip k: move the word 2k -> 2k+1. With CAS
@@ -148,6 +182,30 @@ inline void initiator_round(std::atomic<std::uint64_t>& word, method how, std::u
     // (2) acquire load: pairs with the responder's release store (4).
     while (word.load(std::memory_order_acquire) != mine + 1) spin();
   }
+}
+
+// Stage k of method::stage, the same on both sides: publish our word, wait
+// for theirs. The responder's last stage may still be polling the page when
+// the initiator has seen it end, so stage_finish holds the page until the
+// responder says it has left.
+inline void stage_round(fresh_page& page, unsigned side, std::uint64_t k) {
+  patient_spin spin;
+  // (5) release store: pairs with the other side's acquire load (6) of stage k.
+  page.stage_word(side, k).store(k + 1, std::memory_order_release);
+  // (6) acquire load: pairs with the other side's release store (5) of stage k.
+  while (page.stage_word(1 - side, k).load(std::memory_order_acquire) != k + 1) spin();
+}
+
+// The end of method::stage: the responder stores one past the last stage
+// and touches the page no more; the initiator waits for that store.
+inline void stage_finish_responder(fresh_page& page, std::uint64_t rounds) {
+  // (7) release store: pairs with the initiator's acquire load (8).
+  page.stage_word(1, rounds).store(rounds + 1, std::memory_order_release);
+}
+inline void stage_finish_initiator(fresh_page& page, std::uint64_t rounds) {
+  patient_spin spin;
+  // (8) acquire load: pairs with the responder's release store (7).
+  while (page.stage_word(1, rounds).load(std::memory_order_acquire) != rounds + 1) spin();
 }
 
 // After the last CAS round the initiator waits for the responder's final
@@ -201,6 +259,7 @@ inline std::vector<double> measure_pair(const pair_request& request) {
   // page, -1 = A failed, -2 = B failed.
   std::atomic<int> stage{0};
   std::atomic<std::atomic<std::uint64_t>*> shared_word{nullptr};
+  std::atomic<detail::fresh_page*> shared_page{nullptr};  // method::stage's words
   std::exception_ptr error_a;
   std::exception_ptr error_b;
 
@@ -222,8 +281,16 @@ inline std::vector<double> measure_pair(const pair_request& request) {
     // relaxed: ordered after the initiator's store by the acquire load of
     // stage above (which pairs with the release half of its CAS to 1).
     std::atomic<std::uint64_t>& word = *shared_word.load(std::memory_order_relaxed);
+    // relaxed: as word, ordered by the acquire load of stage above.
+    detail::fresh_page& page = *shared_page.load(std::memory_order_relaxed);
     stage.store(2, std::memory_order_release);  // release: pairs with the initiator's acquire wait for 2
-    for (std::uint64_t k = 0; k < total_rounds; ++k) detail::responder_round(word, request.how, k);
+    for (std::uint64_t k = 0; k < total_rounds; ++k) {
+      if (request.how == method::stage)
+        detail::stage_round(page, 1, k);
+      else
+        detail::responder_round(word, request.how, k);
+    }
+    if (request.how == method::stage) detail::stage_finish_responder(page, total_rounds);
   });
 
   std::thread initiator([&] {
@@ -232,6 +299,7 @@ inline std::vector<double> measure_pair(const pair_request& request) {
       detail::fresh_page page;
       // relaxed: published by the release half of the CAS of stage to 1 below.
       shared_word.store(&page.word(), std::memory_order_relaxed);
+      shared_page.store(&page, std::memory_order_relaxed);
       int expected = 0;
       // release: publishes the page (and shared_word) to the responder's acquire load.
       if (!stage.compare_exchange_strong(expected, 1, std::memory_order_acq_rel, std::memory_order_acquire))
@@ -243,16 +311,22 @@ inline std::vector<double> measure_pair(const pair_request& request) {
       if (seen != 2) return;  // the responder failed to pin after the page was ready
 
       std::atomic<std::uint64_t>& word = page.word();
+      auto round = [&](std::uint64_t k) {
+        if (request.how == method::stage)
+          detail::stage_round(page, 0, k);
+        else
+          detail::initiator_round(word, request.how, k);
+      };
       std::uint64_t k = 0;
-      for (; k < static_cast<std::uint64_t>(request.warmup_rounds); ++k)
-        detail::initiator_round(word, request.how, k);
+      for (; k < static_cast<std::uint64_t>(request.warmup_rounds); ++k) round(k);
       for (std::size_t s = 0; s < one_way_ns.size(); ++s) {
         const auto start = std::chrono::steady_clock::now();
-        for (int r = 0; r < request.rounds_per_sample; ++r, ++k) detail::initiator_round(word, request.how, k);
+        for (int r = 0; r < request.rounds_per_sample; ++r, ++k) round(k);
         const auto elapsed = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start);
-        one_way_ns[s] = elapsed.count() / request.rounds_per_sample / 2.0;
+        one_way_ns[s] = elapsed.count() / request.rounds_per_sample / transfers_per_round(request.how);
       }
       if (request.how == method::cas) detail::initiator_finish(word, total_rounds);
+      if (request.how == method::stage) detail::stage_finish_initiator(page, total_rounds);
     } catch (...) {
       error_a = std::current_exception();
       int expected = 0;

@@ -37,6 +37,7 @@ void expect_samples(method how) {
 
 TEST(CoreToCore, CasReturnsEverySample) { expect_samples(method::cas); }
 TEST(CoreToCore, StoreLoadReturnsEverySample) { expect_samples(method::store_load); }
+TEST(CoreToCore, StageReturnsEverySample) { expect_samples(method::stage); }
 
 TEST(CoreToCore, RejectsBadRequests) {
   pair_request same;
