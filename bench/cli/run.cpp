@@ -43,6 +43,7 @@ struct run_options {
   bool crossover = false;             // --crossover: the model-size sweep after the matrix
   std::string crossover_budget;       // empty: bench::kCrossoverBudgetNs
   std::size_t crossover_max_masses = bench::kCrossoverMaxMasses;
+  std::size_t crossover_through = 0;  // 0: a series stops once confirmed
   int repetitions = 0;   // 0: the mode's default
   std::string min_time;  // empty: the mode's default
   std::string out;
@@ -137,6 +138,10 @@ int execute(const run_options& options) {
       crossover.budget_ns = parse_duration_ns(options.crossover_budget, "--crossover-budget", 1'000'000'000,
                                               3'600'000'000'000);
     crossover.max_masses = options.crossover_max_masses;
+    crossover.through_masses = options.crossover_through;
+    if (crossover.through_masses > crossover.max_masses)
+      throw usage_error(fmt::format("--crossover-through: {} masses is above --crossover-max-masses ({})",
+                                    crossover.through_masses, crossover.max_masses));
     crossover.noise = request.noise;
     request.crossover = crossover;
   }
@@ -207,6 +212,11 @@ void add_run(CLI::App& app, int& result) {
       ->needs(crossover);
   run->add_option("--crossover-max-masses", options->crossover_max_masses,
                   fmt::format("The crossover sweep's largest chain, in masses (default {})", bench::kCrossoverMaxMasses))
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
+      ->needs(crossover);
+  run->add_option("--crossover-through", options->crossover_through,
+                  "Sweep every series up to at least this many masses, past a confirmed crossover (default: a "
+                  "series stops once two sizes in a row clear 1)")
       ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
       ->needs(crossover);
   run->add_option("--repetitions", options->repetitions,

@@ -210,7 +210,7 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
       }
       clear_in_a_row[index] = point.measured() && point.speedup.low > 1.0 ? clear_in_a_row[index] + 1 : 0;
       one.points.push_back(std::move(point));
-      if (going[index] && clear_in_a_row[index] >= kCrossoverClearPoints) {
+      if (going[index] && clear_in_a_row[index] >= kCrossoverClearPoints && masses >= settings.through_masses) {
         one.stop_reason = "confirmed";
         going[index] = false;
       }

@@ -22,7 +22,8 @@
 // (its waits are its own team's).
 //
 // When a series stops: two points in a row with the whole interval above 1
-// (the crossover confirmed), the largest size (max_masses), or the sweep's
+// (the crossover confirmed; with through_masses, not before that size), the
+// largest size (max_masses), or the sweep's
 // budget (whichever comes first; the budget covers the whole sweep, every
 // series, and is checked before each size).
 //
@@ -59,6 +60,9 @@ inline constexpr unsigned kCrossoverClearPoints = 2;
 struct crossover_settings {
   std::int64_t budget_ns = kCrossoverBudgetNs;
   std::size_t max_masses = kCrossoverMaxMasses;
+  // A series confirmed below this size goes on up to it (0: it stops once
+  // confirmed): the speedup at a size of interest, measured the same way.
+  std::size_t through_masses = 0;
   unsigned pairs = kCrossoverPairs;
   std::int64_t block_ns = kCrossoverBlockNs;
   double noise = kDefaultNoise;
