@@ -162,8 +162,13 @@ std::string series_text(const crossover_series& series, bool first) {
                          equations_text(*found.masses, series.threads), why);
     }
     case crossover_status::always:
-      return fmt::format("{} pays off at every size measured, from {} masses", series.sync,
-                         masses_text(*found.masses));
+      // Sizes below the first measured one that were not measured (every
+      // pair set aside) leave S* unknown below it: said, not hidden.
+      return fmt::format("{} pays off at every size measured, from {} masses{}", series.sync,
+                         masses_text(*found.masses),
+                         !series.points.empty() && !series.points.front().measured()
+                             ? " (the sizes below were not measured: a CPU taken)"
+                             : "");
     case crossover_status::none_within_sweep: break;
   }
   if (measured.empty())

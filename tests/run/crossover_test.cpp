@@ -152,6 +152,22 @@ TEST(CrossoverLines, OneLinePerThreadCountTheLeaderFirstInFull) {
   EXPECT_NE(line.find("2 pairs set aside"), std::string::npos) << line;
 }
 
+TEST(CrossoverLines, AboveOneFromTheFirstSizeMeasuredSaysTheSizesBelowWereNot) {
+  crossover_sweep sweep = two_series();
+  sweep.series.resize(1);
+  crossover_series& series = sweep.series.front();
+  series.points[0].pairs = 0;
+  series.points[0].pairs_set_aside = 16;
+  series.points[0].failure = "every pair set aside: another process took a CPU";
+  series.points[1].speedup = {1.2, 1.1, 1.3};
+  series.crossover = find_crossover(crossover_points(series));
+  ASSERT_EQ(series.crossover.status, crossover_status::always);
+  const std::string line = crossover_lines(sweep).front();
+  EXPECT_NE(line.find("mailbox pays off at every size measured, from 4 masses (the sizes below were not measured"),
+            std::string::npos)
+      << line;
+}
+
 TEST(CrossoverJson, TheReadersNamesWithEveryPointAndTheModel) {
   const nlohmann::json json = crossover_json(two_series());
   ASSERT_EQ(json["crossovers"].size(), 2u);
