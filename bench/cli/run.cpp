@@ -206,9 +206,9 @@ void add_run(CLI::App& app, int& result) {
       "confirmed by a point above it; a series stops once two points in a row clear 1. In the answer and the "
       "JSON (lockstep_crossover); --plan estimates it");
   run->add_option("--crossover-budget", options->crossover_budget,
-                  fmt::format("The crossover sweep's time in all, with a unit (default {}; 1s to 1h); the sweep "
-                              "stops at the first size past it",
-                              bench::format_seconds(static_cast<double>(bench::kCrossoverBudgetNs) / 1e9)))
+                  fmt::format("The crossover sweep's time in all, with a unit (default {}s; 1s to 3600s); the "
+                              "sweep stops at the first size past it",
+                              bench::kCrossoverBudgetNs / 1'000'000'000))
       ->needs(crossover);
   run->add_option("--crossover-max-masses", options->crossover_max_masses,
                   fmt::format("The crossover sweep's largest chain, in masses (default {})", bench::kCrossoverMaxMasses))
