@@ -40,6 +40,10 @@ struct run_options {
   std::optional<std::size_t> masses;  // --masses: not given, each thread count's own model
   bool plan = false;                  // --plan: print what would run, measure nothing
   bool scaling = false;               // --scaling: the thread sweep, one placement
+  bool crossover = false;             // --crossover: the model-size sweep after the matrix
+  std::string crossover_budget;       // empty: bench::kCrossoverBudgetNs
+  std::size_t crossover_max_masses = bench::kCrossoverMaxMasses;
+  std::size_t crossover_through = 0;  // 0: a series stops once confirmed
   int repetitions = 0;   // 0: the mode's default
   std::string min_time;  // empty: the mode's default
   std::string out;
@@ -128,6 +132,19 @@ int execute(const run_options& options) {
   request.pairs = options.pairs;
   request.noise = options.noise_pct / 100.0;
   request.benchmark_flags = options.benchmark_flags;
+  if (options.crossover) {
+    bench::crossover_settings crossover;
+    if (!options.crossover_budget.empty())
+      crossover.budget_ns = parse_duration_ns(options.crossover_budget, "--crossover-budget", 1'000'000'000,
+                                              3'600'000'000'000);
+    crossover.max_masses = options.crossover_max_masses;
+    crossover.through_masses = options.crossover_through;
+    if (crossover.through_masses > crossover.max_masses)
+      throw usage_error(fmt::format("--crossover-through: {} masses is above --crossover-max-masses ({})",
+                                    crossover.through_masses, crossover.max_masses));
+    crossover.noise = request.noise;
+    request.crossover = crossover;
+  }
 
   // Every option is read; now the result file, before anything is measured:
   // a destination that cannot be written fails here, in a millisecond. A
@@ -181,6 +198,27 @@ void add_run(CLI::App& app, int& result) {
   run->add_flag("--scaling", options->scaling,
                 "The scaling sweep: threads 2, 4, 8, ... up to the CPUs (at least 8), pin:compact unless --pin, "
                 "every layout; the summary draws sync time per stage against threads, per primitive on its best layout");
+  auto* crossover = run->add_flag(
+      "--crossover", options->crossover,
+      "After the matrix, from what model size a parallel step pays off: per thread count above 1, the run's "
+      "choice and std_barrier at pin:compact step a chain of S = 2, 4, 8, ... masses, each paired with the serial "
+      "step of the same chain (a speedup with its interval); the crossover S* is where the speedup crosses 1, "
+      "confirmed by a point above it; a series stops once two points in a row clear 1. In the answer and the "
+      "JSON (lockstep_crossover); --plan estimates it");
+  run->add_option("--crossover-budget", options->crossover_budget,
+                  fmt::format("The crossover sweep's time in all, with a unit (default {}s; 1s to 3600s); the "
+                              "sweep stops at the first size past it",
+                              bench::kCrossoverBudgetNs / 1'000'000'000))
+      ->needs(crossover);
+  run->add_option("--crossover-max-masses", options->crossover_max_masses,
+                  fmt::format("The crossover sweep's largest chain, in masses (default {})", bench::kCrossoverMaxMasses))
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
+      ->needs(crossover);
+  run->add_option("--crossover-through", options->crossover_through,
+                  "Sweep every series up to at least this many masses, past a confirmed crossover (default: a "
+                  "series stops once two sizes in a row clear 1)")
+      ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
+      ->needs(crossover);
   run->add_option("--repetitions", options->repetitions,
                   fmt::format("Repetitions per entry (default {}; --quick {})", bench::kDefaultRepetitions, bench::kQuickRepetitions))
       ->check(CLI::Range(1, 1000));

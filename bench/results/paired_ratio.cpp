@@ -11,6 +11,8 @@ std::string_view to_string(comparison_kind kind) noexcept {
       return "migration";
     case comparison_kind::against_best_other:
       return "against_best_other";
+    case comparison_kind::crossover:
+      return "crossover";
   }
   return "false_sharing";
 }

@@ -71,7 +71,10 @@ inline ratio_verdict inverse(ratio_verdict verdict) {
 
 // What a comparison sets side by side (the summary's sections).
 // against_best_other compares RK4 steps (rk4/...) or bare episodes (barrier/...): the names say which.
-enum class comparison_kind { false_sharing, migration, against_best_other };
+// crossover: the serial step of a chain against a parallel step of the same
+// chain (a speedup; bench/run/crossover_sweep.hpp), kept out of the run's
+// lockstep_pairs.
+enum class comparison_kind { false_sharing, migration, against_best_other, crossover };
 std::string_view to_string(comparison_kind kind) noexcept;
 
 struct comparison {
@@ -93,6 +96,18 @@ struct paired_result {
   double block_ms = 0.0;   // the median timed block, both sides
   bool budget_cut = false; // fewer pairs than asked: the comparison's time budget ran out
   std::string failure;     // non-empty: not measured, and why
+  // Where a side says what its blocks saw (block_runner::last_facts,
+  // accounting on): the ratios of pairs in which another thread held a CPU of
+  // a side (its threads waited on a run queue for more than 1 % of its block;
+  // without schedstat, any involuntary context switch) are set aside here,
+  // never in `ratios`.
+  // Per pair kept: each side's time per unit and the CPUs the side kept busy
+  // (0 where the side says nothing or its clock could not be read).
+  std::vector<double> set_aside;
+  std::vector<double> unit_ns_a;
+  std::vector<double> unit_ns_b;
+  std::vector<double> cpus_busy_a;
+  std::vector<double> cpus_busy_b;
 };
 
 }  // namespace lockstep::bench

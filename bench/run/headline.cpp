@@ -420,6 +420,7 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
   headline.stopped = stopped_entries(book);
   headline.collapsed.assign(book.collapsed.begin(), book.collapsed.end());
   headline.probes = probes;
+  if (book.crossover) headline.crossover = crossover_lines(*book.crossover);
   std::vector<std::string> choices;
   if (headline.choices.empty()) choices.push_back("  no RK4 step was measured without error: nothing to recommend");
   for (const auto& choice : headline.choices) choice_lines(choices, choice, cpus);
@@ -435,7 +436,8 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
                              result_path, stem, result_path));
   // A matrix of many thread counts keeps its first choices within the
   // headline's lines and leaves the others to the report.
-  const std::size_t room = kHeadlineLines - 2 - std::min(rest.size(), kHeadlineLines - 4);
+  const std::size_t room =
+      kHeadlineLines - 2 - std::min(rest.size() + headline.crossover.size(), kHeadlineLines - 4);
   if (choices.size() > room) {
     const std::size_t left = choices.size() - (room - 1);
     choices.resize(room - 1);
@@ -446,6 +448,7 @@ run_headline make_headline(const run_book& book, const known_answers& probes, un
                               "noise band {:.0f} %):",
                               100.0 * book.noise));
   if (headline.answer) lines.push_back(answer_line(*headline.answer));
+  lines.insert(lines.end(), headline.crossover.begin(), headline.crossover.end());
   lines.insert(lines.end(), choices.begin(), choices.end());
   lines.insert(lines.end(), rest.begin(), rest.end());
   if (lines.size() > kHeadlineLines) lines.resize(kHeadlineLines);
@@ -550,6 +553,7 @@ nlohmann::json headline_json(const run_headline& headline) {
                        {"reason", entry.reason}});
   return {{"lines", headline.lines},
           {"answer", answer},
+          {"crossover", headline.crossover},
           {"stopped", stopped},
           {"recommendations", recommendations},
           {"collapsed", headline.collapsed},

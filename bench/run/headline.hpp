@@ -7,6 +7,8 @@
 // them at 120 columns, the result file and the report keep them as they are):
 //   * first, the best combination of the run and its step against the serial
 //     step of the same model (headline_answer);
+//   * with --crossover, per thread count swept, from what model size the
+//     parallel step pays off (crossover.hpp: crossover_lines);
 //   * for each model, thread count and placement measured, the combination
 //     to use: the primitive and layout whose step the paired comparisons put
 //     first, its step time with its spread over repetitions, its stage
@@ -163,6 +165,9 @@ struct run_headline {
   std::vector<headline_stopped> stopped;
   std::vector<std::string> collapsed;  // entry names
   known_answers probes;
+  // --crossover: one line per thread count swept (crossover.hpp:
+  // crossover_lines), also among `lines`, after the answer-first line.
+  std::vector<std::string> crossover;
   std::vector<std::string> lines;      // the text, at most kHeadlineLines lines
 };
 

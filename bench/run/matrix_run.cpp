@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "bench/run/barrier_entries.hpp"
+#include "bench/run/crossover_sweep.hpp"
 #include "bench/run/derived_sections.hpp"
 #include "bench/results/derived_figures.hpp"
 #include "bench/run/headline.hpp"
@@ -55,8 +56,9 @@ std::size_t planned_comparisons(const std::vector<std::string>& names) {
   return plan_comparisons(planned).size();
 }
 
-std::string plan_of(const platform::topology& machine, const run_selection& selection,
+std::string plan_of(const platform::topology& machine, const matrix_request& request,
                const std::vector<std::string>& names, const run_book& book, const run_cost& cost) {
+  const run_selection& selection = request.selection;
   std::map<std::string, std::size_t> by_kind;
   for (const auto& name : names) ++by_kind[parse_entry_name(name)["kind"]];
   const std::size_t comparisons = planned_comparisons(names);
@@ -81,6 +83,20 @@ std::string plan_of(const platform::topology& machine, const run_selection& sele
   for (const auto& name : names) entries += "  " + name + "\n";
   if (!book.not_applicable.empty()) entries += "not applicable:\n";
   for (const auto& skipped : book.not_applicable) entries += "  " + skipped.name + ": " + skipped.reason + "\n";
+  std::string crossover;
+  if (request.crossover) {
+    std::size_t counts = 0;
+    for (const unsigned threads : selection.threads) counts += threads > 1 ? 1 : 0;
+    const std::size_t series = 2 * counts;
+    crossover = fmt::format(
+        "crossover sweep (--crossover): up to {} series (per thread count above 1, the run's choice and "
+        "std_barrier at pin:compact), S = {} to {} masses doubling, {} pairs of {} blocks a point; estimated at "
+        "most {} (every series to the largest size; a series stops once two points clear 1), budget {}\n",
+        series, kCrossoverFirstMasses, request.crossover->max_masses, request.crossover->pairs,
+        format_ns(static_cast<double>(request.crossover->block_ns)),
+        format_seconds(estimate_crossover_s(series, *request.crossover)),
+        format_seconds(static_cast<double>(request.crossover->budget_ns) / 1e9));
+  }
   return fmt::format("lockstep run --plan (nothing measured)\n"
              "machine: {} ({}, {} CPUs in the affinity set)\n"
              "threads: {}\n"
@@ -88,11 +104,12 @@ std::string plan_of(const platform::topology& machine, const run_selection& sele
              "entries: {} ({}), {} repetitions each; not applicable: {}\n"
              "paired comparisons: {}, {} pairs each\n"
              "estimated time: {} (matrix {}, pairs {}; calibrated on a 2-vCPU VM, an estimate)\n"
+             "{}"
              "entries to measure:\n{}",
              machine.source(), machine.summary(), machine.affinity().size(), thread_list, models, names.size(), kinds,
              cost.repetitions, book.not_applicable.size(), comparisons, cost.pairs,
              format_seconds(estimate.total_s()), format_seconds(estimate.matrix_s),
-             format_seconds(estimate.pairs_s), entries);
+             format_seconds(estimate.pairs_s), crossover, entries);
 }
 
 // How many registered entries Google Benchmark's own --benchmark_filter keeps
@@ -291,6 +308,24 @@ void measure_comparisons(prepared_matrix& run) {
   });
 }
 
+// --crossover: the series from the run's choices (the headline's, made here
+// from what the run measured so far), then the sweep (crossover_sweep.hpp).
+void measure_crossovers(prepared_matrix& run, const crossover_settings& settings, const known_answers& probes,
+                        const platform::topology& machine) {
+  const run_headline chosen =
+      make_headline(run.book, probes, static_cast<unsigned>(machine.affinity().size()), std::string());
+  std::vector<crossover_series> series = plan_crossover_series(run.book, chosen.choices);
+  fmt::print(stderr,
+             "lockstep run: crossover sweep, {} series, S = {} to {} masses doubling, {} pairs a point, at most {}\n",
+             series.size(), kCrossoverFirstMasses, settings.max_masses, settings.pairs,
+             format_seconds(static_cast<double>(settings.budget_ns) / 1e9));
+  std::fflush(stderr);
+  run.book.crossover = sweep_crossovers(run.harness, std::move(series), settings, [](std::size_t masses, double elapsed) {
+    fmt::print(stderr, "  crossover: {} masses done, {} elapsed\n", masses, format_seconds(elapsed));
+    std::fflush(stderr);
+  });
+}
+
 // The context keys only the finished run knows.
 context_map in_run_context(const run_book& book, const pace_modes& modes, unsigned cpus) {
   context_map in_run;
@@ -330,6 +365,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
   write_pace_and_pairs(document, run.book, &run.pace, modes);
   write_derived_sections(document, run.book);
   document["lockstep_headline"] = headline_json(run.book.headline);
+  if (run.book.crossover) document["lockstep_crossover"] = crossover_json(*run.book.crossover);
   if (request.scaling) document["lockstep_scaling"] = scaling_json(scaling_of(run.book), run.book.c2c_one_way_ns());
   // The machine's fingerprint from the one producer (replacing Google
   // Benchmark's host_name and num_cpus with the same figures), then the
@@ -344,7 +380,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
 
 std::string plan_text(const matrix_request& request, const platform::topology& machine) {
   const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine, "/dev/null");
-  return plan_of(machine, request.selection, run->names, run->book, run->cost);
+  return plan_of(machine, request, run->names, run->book, run->cost);
 }
 
 run_book run_matrix(const matrix_request& request, const platform::topology& machine,
@@ -353,6 +389,7 @@ run_book run_matrix(const matrix_request& request, const platform::topology& mac
   measure_entries(*run, result_file.destination());
   measure_comparisons(*run);
   const known_answers probes = measure_known_answers(machine, request.quick);
+  if (request.crossover) measure_crossovers(*run, *request.crossover, probes, machine);
   run->pace.take();  // the trace's last reading
   const pace_modes modes = find_modes(run->pace.trace());
   assign_pace_modes(run->book, modes);

@@ -7,11 +7,13 @@
 // long an entry runs, how many pairs, how long a comparison may take) lives
 // here, with the measured reasons for its numbers.
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "bench/results/result_file.hpp"
+#include "bench/run/crossover_sweep.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/run_plan.hpp"
 #include "platform/topology.hpp"
@@ -56,6 +58,8 @@ struct matrix_request {
   int pairs = -1;                    // pairs per paired comparison; -1: the mode's default
   double noise = kDefaultNoise;      // the noise band (a fraction)
   std::vector<std::string> benchmark_flags;  // Google Benchmark's own, after --
+  // --crossover: the sweep after the matrix (crossover_sweep.hpp); empty: none.
+  std::optional<crossover_settings> crossover;
 };
 
 // --plan: what the run would measure and how long it would take, from the

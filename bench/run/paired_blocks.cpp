@@ -24,6 +24,11 @@ namespace {
 // before: no time passes between them.
 constexpr std::int64_t kFreshReadingNs = 1'000'000;
 constexpr std::uint64_t kRoundOrderSeed = 0x9a17'04de;
+// A side whose threads waited on a run queue for more than this share of its
+// block (warm-up and timed batch) had a CPU taken by another thread: a
+// kernel worker's few microseconds stay below it, a competing process's
+// timeslice (milliseconds) does not.
+constexpr double kCpuTakenShare = 0.01;
 
 
 // From the layout registry: a shared layout whose writers share lines (the
@@ -176,6 +181,25 @@ void take_pair(harness_state& harness, comparison_in_progress& progress, unsigne
     progress.finished = true;
     return;
   }
+  // Sides that say what their blocks saw: a pair in which another process
+  // took a side's CPU is set aside, not averaged in.
+  const auto facts_a = progress.side_a->last_facts();
+  const auto facts_b = progress.side_b->last_facts();
+  const auto preempted = [](const std::optional<block_facts>& facts) {
+    if (!facts) return false;
+    if (facts->run_queue_wait_ns)
+      return static_cast<double>(*facts->run_queue_wait_ns) > kCpuTakenShare * static_cast<double>(facts->block_ns);
+    return facts->involuntary_switches > 0;  // no schedstat: any preemption
+  };
+  if (preempted(facts_a) || preempted(facts_b)) {
+    result.set_aside.push_back(*a / *b);
+    if (harness.pace != nullptr) result.readings.resize(result.readings.size() - 2);
+    return;
+  }
+  result.unit_ns_a.push_back(*a);
+  result.unit_ns_b.push_back(*b);
+  result.cpus_busy_a.push_back(facts_a && facts_a->cpus_busy ? *facts_a->cpus_busy : 0.0);
+  result.cpus_busy_b.push_back(facts_b && facts_b->cpus_busy ? *facts_b->cpus_busy : 0.0);
   result.ratios.push_back(*a / *b);
   progress.block_ms.push_back(*a * static_cast<double>(progress.units_a) * 1e-6);
   progress.block_ms.push_back(*b * static_cast<double>(progress.units_b) * 1e-6);

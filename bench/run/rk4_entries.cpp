@@ -250,6 +250,58 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   }
 }
 
+// One participant's share of a block: `count` steps of the composed step.
+struct run_steps {
+  template <class Step>
+  void operator()(Step& step, sync::participant& self, std::uint64_t count) const {
+    step.run(self, count);
+  }
+};
+
+// The serial step of a chain as one side of a pair (chain_serial_runner).
+class serial_block_runner final : public block_runner {
+ public:
+  explicit serial_block_runner(std::size_t masses)
+      : rk4_(kernels::chain_model(kernels::model_choice{masses}.chain()), kBenchmarkStepSeconds) {}
+
+  std::optional<double> run_block(std::uint64_t units) override {
+    const platform::thread_counters before = accounting_ ? platform::snapshot_current_thread() : platform::thread_counters{};
+    if (accounting_ && !schedstat_) schedstat_.emplace();  // on the thread that runs the blocks
+    const std::optional<std::int64_t> waited_before =
+        accounting_ ? schedstat_->read().run_queue_wait_ns : std::optional<std::int64_t>();
+    const std::int64_t block_start = platform::now_ns();
+    rk4_.run(units);  // warm-up, as a team's block has
+    const std::int64_t cpu_start = thread_cpu_ns();
+    const std::int64_t start = platform::now_ns();
+    rk4_.run(units);
+    const std::int64_t elapsed = platform::now_ns() - start;
+    const std::int64_t cpu_end = thread_cpu_ns();
+    benchmark::DoNotOptimize(rk4_.state().data());
+    facts_.reset();
+    if (accounting_) {
+      const platform::thread_counters after = platform::snapshot_current_thread();
+      const std::optional<std::int64_t> waited_after = schedstat_->read().run_queue_wait_ns;
+      block_facts facts{(after - before).involuntary_switches,
+                        waited_before && waited_after ? std::optional<std::int64_t>(*waited_after - *waited_before)
+                                                      : std::nullopt,
+                        platform::now_ns() - block_start, std::nullopt};
+      if (cpu_start >= 0 && cpu_end >= cpu_start && elapsed > 0)
+        facts.cpus_busy = static_cast<double>(cpu_end - cpu_start) / static_cast<double>(elapsed);
+      facts_ = facts;
+    }
+    if (elapsed <= 0 || units == 0) return std::nullopt;
+    return static_cast<double>(elapsed) / static_cast<double>(units);
+  }
+  void set_accounting(bool on) override { accounting_ = on; }
+  [[nodiscard]] std::optional<block_facts> last_facts() const override { return facts_; }
+
+ private:
+  kernels::staged_rk4<kernels::chain_model> rk4_;
+  std::optional<platform::thread_counter_reader> schedstat_;
+  bool accounting_ = false;
+  std::optional<block_facts> facts_;
+};
+
 bool selected(const std::vector<std::string>& names, std::string_view name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
@@ -301,9 +353,7 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
               harness.block_runners[spec.name()] =
                   block_runner_of<sync::team_of_t<Sync>,
                                   kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off>>(
-                      harness, pin, threads,
-                      [](auto& step, sync::participant& self, std::uint64_t count) { step.run(self, count); },
-                      model_of<Model>(spec), kBenchmarkStepSeconds, threads);
+                      harness, pin, threads, run_steps{}, model_of<Model>(spec), kBenchmarkStepSeconds, threads);
             });
             registered.push_back(spec.name());
           }
@@ -398,6 +448,43 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
     registered.push_back(spec.name());
   }
   return registered;
+}
+
+block_runner_factory chain_step_runner(const harness_state& harness, const std::string& sync,
+                                       const std::string& layout, platform::placement pin, unsigned threads,
+                                       std::size_t masses, bool accounting) {
+  block_runner_factory factory;
+  const kernels::model_choice model{masses};
+  sync::for_each_primitive([&]<class Sync>() {
+    if (Sync::kName != sync) return;
+    layouts::for_each_layout([&]<class Layout>() {
+      if (Layout::kName != layout) return;
+      if constexpr (kernels::applicable<Sync, Layout>().applicable) {
+        if (!kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads).empty()) return;
+        entry_spec spec{entry_kind::rk4, sync, layout, pin, threads};
+        spec.masses = masses;
+        block_runner_factory bare =
+            block_runner_of<sync::team_of_t<Sync>,
+                            kernels::parallel_rk4<Sync, Layout, kernels::chain_model, kernels::sync_timing::off>>(
+                harness, pin, threads, run_steps{}, model_of<kernels::chain_model>(spec), kBenchmarkStepSeconds,
+                threads);
+        factory = [bare, accounting]() {
+          std::unique_ptr<block_runner> runner = bare();
+          runner->set_accounting(accounting);
+          return runner;
+        };
+      }
+    });
+  });
+  return factory;
+}
+
+block_runner_factory chain_serial_runner(std::size_t masses) {
+  return [masses]() -> std::unique_ptr<block_runner> {
+    auto runner = std::make_unique<serial_block_runner>(masses);
+    runner->set_accounting(true);
+    return runner;
+  };
 }
 
 }  // namespace lockstep::bench

@@ -83,4 +83,17 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
 // The summary quotes on / off.
 std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness);
 
+// The sides of the crossover sweep's pairs (crossover_sweep.hpp), with
+// accounting as asked (block_runner::last_facts): the chain of `masses` masses
+// stepped by (sync, layout) on `threads` participants placed by `pin`, as the
+// matrix builds a chain's entry (the bare step); empty when a name is not in
+// a registry or the pair does not apply there (kernels::not_applicable_reason).
+block_runner_factory chain_step_runner(const harness_state& harness, const std::string& sync,
+                                       const std::string& layout, platform::placement pin, unsigned threads,
+                                       std::size_t masses, bool accounting);
+// The serial staged step of the same chain (rk4/model:chainS/serial) on the
+// calling thread, unpinned, as the serial entry runs: a warm-up batch, then
+// the timed one; accounting on.
+block_runner_factory chain_serial_runner(std::size_t masses);
+
 }  // namespace lockstep::bench

@@ -43,6 +43,7 @@
 #include <vector>
 
 #include "bench/results/derived_figures.hpp"
+#include "bench/run/crossover.hpp"
 #include "bench/run/headline.hpp"
 #include "bench/run/pace.hpp"
 #include "bench/results/paired_ratio.hpp"
@@ -188,6 +189,9 @@ class run_book {
   // Entries that collapsed (paired_blocks.hpp: find_collapsed): reported in a
   // line, kept out of rankings, paired comparisons and colour scales.
   std::set<std::string> collapsed;
+  // --crossover: the sweep after the matrix (crossover_sweep.hpp); the
+  // headline says its crossovers.
+  std::optional<crossover_sweep> crossover;
   // The answer (headline.hpp), made when the run is over.
   run_headline headline;
   unsigned cpus = 0;  // the affinity set the run measured on

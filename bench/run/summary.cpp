@@ -131,6 +131,8 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
         out += fmt::format("  {:<44} none {} / compact {}: {}\n", what.group, median_of(book, what.a),
                            median_of(book, what.b), comparison_figure(book, what));
         break;
+      case comparison_kind::crossover:  // the sweep's own section (crossover.hpp), not the run's plan
+        break;
       case comparison_kind::against_best_other:
         if (what.group == last_group) break;
         last_group = what.group;

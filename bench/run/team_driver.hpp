@@ -24,6 +24,7 @@
 #include "bench/run/run_book.hpp"
 #include "platform/placement.hpp"
 #include "platform/statistics.hpp"
+#include "platform/step_counters.hpp"
 #include "sync/registry.hpp"
 #include "platform/thread_accounting.hpp"
 #include "sync/concepts.hpp"
@@ -52,6 +53,10 @@ struct call_result {
   // timed batches (a spinning participant burns its CPU while it waits, a
   // sleeping one does not). -1 when any participant's clock is missing.
   std::int64_t team_cpu_ns = -1;
+  // With accounting: the time the team's threads waited on a run queue
+  // (runnable, not running: schedstat) from before the warm-up batch to after
+  // the last timed one, summed; empty when a thread's schedstat is unreadable.
+  std::optional<std::int64_t> run_queue_wait_ns;
 };
 
 // Per-participant slots, written only by the participant's own thread and
@@ -63,6 +68,7 @@ struct alignas(platform::kCacheLine) participant_slot {
   sync::sync_counters counters_before{};
   std::int64_t timed_cpu_start_ns = -1;  // thread_cpu_ns() as its first timed batch starts
   std::int64_t timed_cpu_end_ns = -1;    // and after the last batch's barrier
+  std::int64_t run_queue_wait_ns = -1;   // with accounting: over the call; -1 unreadable
   std::string failure;
 };
 
@@ -89,7 +95,12 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
       // Still take part: the others would wait for this participant forever.
       slot.failure = error.what();
     }
-    if (accounting) slot.accounting_before = platform::snapshot_current_thread();
+    std::optional<platform::thread_counter_reader> schedstat;
+    std::optional<std::int64_t> waited_before;
+    if (accounting) {
+      slot.accounting_before = platform::snapshot_current_thread();
+      waited_before = schedstat.emplace().read().run_queue_wait_ns;
+    }
     slot.counters_before = slot.self.counters;
     slot.timed_cpu_start_ns = -1;
     std::uint64_t done = 0;
@@ -118,7 +129,12 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
       }
     });
     slot.timed_cpu_end_ns = thread_cpu_ns();
-    if (accounting) slot.accounting_after = platform::snapshot_current_thread();
+    slot.run_queue_wait_ns = -1;
+    if (accounting) {
+      if (const auto waited_after = schedstat->read().run_queue_wait_ns; waited_before && waited_after)
+        slot.run_queue_wait_ns = *waited_after - *waited_before;
+      slot.accounting_after = platform::snapshot_current_thread();
+    }
   });
 
   call_result result;
@@ -134,6 +150,11 @@ call_result run_call(Team& team, std::vector<participant_slot>& slots, const pla
     result.sync_totals += delta;
     if (accounting) *result.accounting += slot.accounting_after - slot.accounting_before;
     if (result.failure.empty() && !slot.failure.empty()) result.failure = slot.failure;
+  }
+  if (accounting) {
+    std::int64_t waited = 0;
+    for (const participant_slot& slot : slots) waited = slot.run_queue_wait_ns < 0 || waited < 0 ? -1 : waited + slot.run_queue_wait_ns;
+    if (waited >= 0) result.run_queue_wait_ns = waited;
   }
   const participant_slot& lead = slots.front();
   if (!result.batches.batch_ns.empty() && lead.timed_cpu_start_ns >= 0 &&
@@ -173,12 +194,33 @@ class affinity_guard {
 // combination, built once, ready to run short blocks on demand. A block is
 // one call (run_call): a warm-up batch and one timed batch of `units` units,
 // without accounting or instrumentation (a pair compares the bare costs).
+// What a block saw of the machine, from a runner with accounting on (the
+// crossover sweep's): whether its threads kept their CPUs.
+struct block_facts {
+  // Involuntary context switches of its threads over the block (warm-up and
+  // timed batch).
+  std::int64_t involuntary_switches = 0;
+  // Over the same span, the time its threads waited on a run queue, summed
+  // (schedstat; empty when unreadable), and the span's wall time: with no
+  // more threads than CPUs, a wait is another process holding a CPU.
+  std::optional<std::int64_t> run_queue_wait_ns;
+  std::int64_t block_ns = 0;
+  // The threads' CPU time over the timed batch / its wall time (the run's
+  // cpus_busy per entry): empty when a thread's CPU clock could not be read.
+  std::optional<double> cpus_busy;
+};
+
 class block_runner {
  public:
   virtual ~block_runner() = default;
   // The timed batch's time per unit, or empty when the block stalled, ran
   // out of its budget, or the team could not be placed.
   virtual std::optional<double> run_block(std::uint64_t units) = 0;
+  // On: every block snapshots its threads' context switches (outside the
+  // timed batch) and last_facts says what the last block saw. Off (the
+  // default, the matrix's pairs): no facts.
+  virtual void set_accounting(bool on) { (void)on; }
+  [[nodiscard]] virtual std::optional<block_facts> last_facts() const { return std::nullopt; }
 };
 using block_runner_factory = std::function<std::unique_ptr<block_runner>()>;
 
@@ -197,8 +239,12 @@ class team_block_runner final : public block_runner {
         slots_(plan_.threads) {}
 
   std::optional<double> run_block(std::uint64_t units) override;
+  void set_accounting(bool on) override { accounting_ = on; }
+  [[nodiscard]] std::optional<block_facts> last_facts() const override { return facts_; }
 
  private:
+  bool accounting_ = false;
+  std::optional<block_facts> facts_;
   const run_settings& settings_;
   platform::placement_plan plan_;
   std::unique_ptr<Subject> subject_;
@@ -350,10 +396,20 @@ template <class Team, class Subject, class Work>
 std::optional<double> team_block_runner<Team, Subject, Work>::run_block(std::uint64_t units) {
   affinity_guard restore_caller;  // omp_team runs participant 0 on the calling thread
   auto share = [this](sync::participant& self, std::uint64_t count) { work_(*subject_, self, count); };
-  const call_result result = run_call(team_, slots_, plan_, 1, units, settings_, false, share);
+  const std::int64_t block_start_ns = platform::now_ns();
+  const call_result result = run_call(team_, slots_, plan_, 1, units, settings_, accounting_, share);
+  facts_.reset();
   if (!result.failure.empty() || result.batches.stalled || result.batches.over_budget ||
       result.batches.batch_ns.empty())
     return std::nullopt;
+  if (result.accounting) {
+    block_facts facts{result.accounting->involuntary_switches, result.run_queue_wait_ns,
+                      platform::now_ns() - block_start_ns, std::nullopt};
+    if (result.team_cpu_ns >= 0 && result.batches.batch_ns.front() > 0)
+      facts.cpus_busy =
+          static_cast<double>(result.team_cpu_ns) / static_cast<double>(result.batches.batch_ns.front());
+    facts_ = facts;
+  }
   return ns_per_unit(result);
 }
 

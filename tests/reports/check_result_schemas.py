@@ -1,7 +1,7 @@
 """What each lockstep command writes against its kind's schema (docs/schemas/<kind>.schema.json).
 
 Runs one kind's commands with the smallest settings that still write every shape of the file (delay: plain,
---compare-pinning, --per-cpu, --find-period with and without an answer; run: plain and --scaling; verify: two
+--compare-pinning, --per-cpu, --find-period with and without an answer; run: plain, --scaling and --crossover; verify: two
 masses and a chain; topology: this machine and a synthetic one; mpi: two ranks, and two ranks that must share
 a CPU), and checks each file as a writer's test does: strictly, so a key
 a writer adds or misspells without its schema fails here (reports/lockstep_reports/schemas.py, strict=True).
@@ -29,6 +29,10 @@ SHAPES = {
          ["--", "--benchmark_min_time=0.01"], {}),
         ("scaling", ["run", "--quick", "--scaling", "--repetitions", "1", "--sync", "std_barrier",
                      "--layout", "padded64", "--pairs", "0"], ["--", "--benchmark_min_time=0.01"], {}),
+        ("crossover", ["run", "--quick", "--repetitions", "1", "--threads", "2", "--pin", "compact",
+                       "--sync", "mailbox,std_barrier", "--layout", "per_thread", "--pairs", "2", "--crossover",
+                       "--crossover-max-masses", "16", "--crossover-budget", "5s"],
+         ["--", "--benchmark_min_time=0.01"], {}),
     ],
     "c2c": [("plain", ["c2c", "--samples", "20", "--rounds", "5", "--max-pairs", "4"], [], {})],
     "delay": [

@@ -1,0 +1,269 @@
+// The crossover finder (crossover.hpp).
+#include "bench/run/crossover.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <map>
+
+#include "kernels/rk4.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+using speedup_of = std::function<double(const ratio_estimate&)>;
+
+// The index of the last point whose value rises above 1 from at or below 1
+// at the point before; empty when the value never rises.
+std::optional<std::size_t> last_rise(const std::vector<crossover_point>& points, const speedup_of& value) {
+  std::optional<std::size_t> rise;
+  for (std::size_t index = 1; index < points.size(); ++index)
+    if (value(points[index - 1].speedup) <= 1.0 && value(points[index].speedup) > 1.0) rise = index;
+  return rise;
+}
+
+// Where the value crosses 1 between points rise - 1 and rise: log value
+// linear in log masses.
+double interpolated(const std::vector<crossover_point>& points, std::size_t rise, const speedup_of& value) {
+  const crossover_point& below = points[rise - 1];
+  const crossover_point& above = points[rise];
+  const double y0 = std::log(std::max(value(below.speedup), 1e-300));
+  const double y1 = std::log(std::max(value(above.speedup), 1e-300));
+  const double x0 = std::log(below.masses);
+  const double x1 = std::log(above.masses);
+  const double fraction = y1 > y0 ? std::clamp(-y0 / (y1 - y0), 0.0, 1.0) : 1.0;
+  return std::exp(x0 + fraction * (x1 - x0));
+}
+
+bool all_above_one(const std::vector<crossover_point>& points, const speedup_of& value) {
+  return std::all_of(points.begin(), points.end(), [&](const crossover_point& point) { return value(point.speedup) > 1.0; });
+}
+
+// One end of S*'s interval, from one end of the speedup's: empty when the
+// grid does not reach it (the end above 1 from the first point, or not above 1
+// at the last point).
+std::optional<double> end_crossing(const std::vector<crossover_point>& points, const speedup_of& value) {
+  if (points.empty() || all_above_one(points, value) || !(value(points.back().speedup) > 1.0)) return std::nullopt;
+  const auto rise = last_rise(points, value);
+  if (!rise) return std::nullopt;
+  return interpolated(points, *rise, value);
+}
+
+}  // namespace
+
+std::string_view to_string(crossover_status status) noexcept {
+  switch (status) {
+    case crossover_status::crossed: return "crossed";
+    case crossover_status::crossed_unconfirmed: return "crossed_unconfirmed";
+    case crossover_status::none_within_sweep: return "none_within_sweep";
+    case crossover_status::always: return "always";
+  }
+  return "none_within_sweep";
+}
+
+crossover_estimate find_crossover(const std::vector<crossover_point>& points) {
+  const speedup_of median = [](const ratio_estimate& estimate) { return estimate.median; };
+  const speedup_of low = [](const ratio_estimate& estimate) { return estimate.low; };
+  const speedup_of high = [](const ratio_estimate& estimate) { return estimate.high; };
+  crossover_estimate found;
+  if (points.empty()) return found;
+  const auto first_confirming = [&](double above) -> std::optional<double> {
+    for (const auto& point : points)
+      if (point.masses > above && point.speedup.low > 1.0) return point.masses;
+    return std::nullopt;
+  };
+  if (all_above_one(points, median)) {
+    found.status = crossover_status::always;
+    found.masses = points.front().masses;
+    // Below the grid, at most the first point; the interval's upper end is
+    // where its low end clears 1.
+    found.high = points.front().speedup.low > 1.0 ? std::optional<double>(points.front().masses)
+                                                  : end_crossing(points, low);
+    found.confirmed_at = points.front().speedup.low > 1.0 ? std::optional<double>(points.front().masses)
+                                                          : first_confirming(points.front().masses);
+    return found;
+  }
+  const auto rise = last_rise(points, median);
+  if (!rise) return found;  // none within the sweep
+  const double crossing = interpolated(points, *rise, median);
+  found.masses = crossing;
+  found.low = end_crossing(points, high);
+  found.high = end_crossing(points, low);
+  // The interval holds its estimate (interpolations of three curves on a
+  // coarse grid can cross each other).
+  if (found.low) found.low = std::min(*found.low, crossing);
+  if (found.high) found.high = std::max(*found.high, crossing);
+  for (std::size_t index = *rise; index < points.size(); ++index)
+    if (!(points[index].speedup.median > 1.0)) {
+      found.contradicted_at = points[index].masses;
+      break;
+    }
+  if (!found.contradicted_at) found.confirmed_at = first_confirming(crossing);
+  found.status = found.confirmed_at ? crossover_status::crossed : crossover_status::crossed_unconfirmed;
+  return found;
+}
+
+std::vector<crossover_point> crossover_points(const crossover_series& series) {
+  std::vector<crossover_point> points;
+  for (const auto& point : series.points)
+    if (point.measured()) points.push_back({static_cast<double>(point.masses), point.speedup});
+  return points;
+}
+
+namespace {
+
+std::string masses_text(double masses) { return fmt::format("{:.0f}", masses); }
+
+// "[1100, 1900]", an open end said in words.
+std::string interval_text(const crossover_estimate& found, const crossover_series& series) {
+  const auto measured = crossover_points(series);
+  const std::string low = found.low ? masses_text(*found.low)
+                                    : "below " + masses_text(measured.empty() ? 0.0 : measured.front().masses);
+  const std::string high = found.high ? masses_text(*found.high)
+                                      : "beyond " + masses_text(measured.empty() ? 0.0 : measured.back().masses);
+  return fmt::format("[{}, {}]", low, high);
+}
+
+std::string equations_text(double masses, unsigned threads) {
+  return fmt::format("{:.0f} equations a thread", 2.0 * masses / static_cast<double>(threads));
+}
+
+// Why a series stopped, in words.
+std::string stop_words(const std::string& reason) {
+  if (reason == "confirmed") return "two points in a row clear of 1";
+  if (reason == "budget") return "the sweep's budget ran out";
+  if (reason == "largest_size") return "the largest size";
+  return reason;
+}
+
+// One series in the line: the first of a thread count says what it means in
+// full, the others follow in short.
+std::string series_text(const crossover_series& series, bool first) {
+  const crossover_estimate& found = series.crossover;
+  const auto measured = crossover_points(series);
+  switch (found.status) {
+    case crossover_status::crossed:
+      return fmt::format("{} {}from about {} {}{} ({})", series.sync, first ? "pays off " : "",
+                         masses_text(*found.masses), first ? "masses " : "", interval_text(found, series),
+                         equations_text(*found.masses, series.threads));
+    case crossover_status::crossed_unconfirmed: {
+      std::string why = "no point above it clears 1 with its whole interval";
+      if (found.contradicted_at) {
+        for (const auto& point : measured)
+          if (point.masses == *found.contradicted_at)
+            why = fmt::format("at {} masses it falls back to {:.2f}x [{:.2f}, {:.2f}]", masses_text(point.masses),
+                              point.speedup.median, point.speedup.low, point.speedup.high);
+      }
+      return fmt::format("{} crosses 1 at about {} masses {} ({}), unconfirmed: {}", series.sync,
+                         masses_text(*found.masses), interval_text(found, series),
+                         equations_text(*found.masses, series.threads), why);
+    }
+    case crossover_status::always:
+      // Sizes below the first measured one that were not measured (every
+      // pair set aside) leave S* unknown below it: said, not hidden.
+      return fmt::format("{} pays off at every size measured, from {} masses{}", series.sync,
+                         masses_text(*found.masses),
+                         !series.points.empty() && !series.points.front().measured()
+                             ? " (the sizes below were not measured: a CPU taken)"
+                             : "");
+    case crossover_status::none_within_sweep: break;
+  }
+  if (measured.empty())
+    return fmt::format("{}: nothing measured ({})", series.sync, series.stop_reason.empty() ? "no point" : stop_words(series.stop_reason));
+  const auto best = std::max_element(measured.begin(), measured.end(), [](const crossover_point& a, const crossover_point& b) {
+    return a.speedup.median < b.speedup.median;
+  });
+  return fmt::format("{}: none within the sweep up to {} masses (best {:.2f}x [{:.2f}, {:.2f}] at {}; stopped: {})",
+                     series.sync, masses_text(measured.back().masses), best->speedup.median, best->speedup.low,
+                     best->speedup.high, masses_text(best->masses), stop_words(series.stop_reason));
+}
+
+nlohmann::json optional_json(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
+  // threads -> its series, in the sweep's order (the leader first)
+  std::map<unsigned, std::vector<const crossover_series*>> by_threads;
+  for (const auto& series : sweep.series) by_threads[series.threads].push_back(&series);
+  std::vector<std::string> lines;
+  for (const auto& [threads, all] : by_threads) {
+    std::string line = fmt::format("Crossover at {} threads (pin:{}): ", threads, all.front()->pin);
+    bool pays_off = false;
+    std::size_t set_aside = 0;
+    for (std::size_t index = 0; index < all.size(); ++index) {
+      line += (index == 0 ? "" : "; ") + series_text(*all[index], index == 0);
+      const auto status = all[index]->crossover.status;
+      pays_off = pays_off || status == crossover_status::crossed || status == crossover_status::always;
+      for (const auto& point : all[index]->points) set_aside += point.pairs_set_aside;
+    }
+    if (pays_off) line += "; below that, step serially";
+    if (set_aside > 0)
+      line += fmt::format(" ({} pairs set aside: another process took a CPU)", set_aside);
+    lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
+nlohmann::json crossover_json(const crossover_sweep& sweep) {
+  nlohmann::json crossovers = nlohmann::json::array();
+  for (const auto& series : sweep.series) {
+    const crossover_estimate& found = series.crossover;
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& point : series.points) {
+      std::optional<double> over_model;
+      if (point.model_ns && *point.model_ns > 0.0 && point.parallel_ns > 0.0) over_model = point.parallel_ns / *point.model_ns;
+      points.push_back({{"masses", point.masses},
+                        {"equations_per_thread", point.equations_per_thread()},
+                        {"serial_ns", point.serial_ns},
+                        {"parallel_ns", point.parallel_ns},
+                        {"speedup", point.speedup.median},
+                        {"ci_low", point.speedup.low},
+                        {"ci_high", point.speedup.high},
+                        {"verdict", point.measured() ? nlohmann::json(to_string(point.verdict)) : nlohmann::json(nullptr)},
+                        {"pairs", point.pairs},
+                        {"pairs_set_aside", point.pairs_set_aside},
+                        {"cpu_taken", point.pairs_set_aside > 0},
+                        {"cpus_busy", optional_json(point.cpus_busy)},
+                        {"oversubscribed", point.oversubscribed},
+                        {"model_ns", optional_json(point.model_ns)},
+                        {"measured_over_model", optional_json(over_model)},
+                        {"failure", point.failure}});
+    }
+    const bool crossed = found.masses.has_value();
+    crossovers.push_back({{"threads", series.threads},
+                          {"pin", series.pin},
+                          {"sync", series.sync},
+                          {"layout", series.layout},
+                          {"leader", series.leader},
+                          {"status", to_string(found.status)},
+                          {"masses", optional_json(found.masses)},
+                          {"ci_low", crossed ? optional_json(found.low) : nlohmann::json(nullptr)},
+                          {"ci_high", crossed ? optional_json(found.high) : nlohmann::json(nullptr)},
+                          {"equations_per_thread",
+                           crossed ? nlohmann::json(2.0 * *found.masses / series.threads) : nlohmann::json(nullptr)},
+                          {"confirmed_at", optional_json(found.confirmed_at)},
+                          {"contradicted_at", optional_json(found.contradicted_at)},
+                          {"stop_reason", series.stop_reason},
+                          {"stage_sync_ns", optional_json(series.stage_sync_ns)},
+                          {"stage_sync_entry", series.stage_sync_entry},
+                          {"stages_per_step", kernels::kRk4Stages},
+                          {"points", points}});
+  }
+  return {{"budget_s", static_cast<double>(sweep.budget_ns) / 1e9},
+          {"max_masses", sweep.max_masses},
+          {"pairs_per_point", sweep.pairs},
+          {"block_ms", static_cast<double>(sweep.block_ns) / 1e6},
+          {"spent_s", sweep.spent_s},
+          {"stop_reason", sweep.stop_reason},
+          {"confidence", kConfidence},
+          {"lines", crossover_lines(sweep)},
+          {"crossovers", crossovers}};
+}
+
+}  // namespace lockstep::bench

@@ -1,0 +1,122 @@
+#pragma once
+// Where a parallel step starts to pay off: the crossover S*, from a sweep of
+// the chain's model size S (masses) on a doubling grid, each point a paired
+// speedup serial step / parallel step with its bootstrap interval
+// (bench/results/paired_ratio.hpp). A pure function of the points: nothing
+// here measures (crossover_sweep.hpp does).
+//
+// The rule (find_crossover):
+//   * the speedup crosses 1 at the last rise of the median above 1 (a noisy
+//     curve may rise and fall back before it); S* is interpolated between the
+//     two grid points that bracket it, log speedup linear in log S;
+//   * the interval of S*: the same crossing of the interval's ends. Where the
+//     low end crosses 1 is the interval's upper end (from there on the whole
+//     interval is above 1), where the high end crosses 1 its lower end (below
+//     it the whole interval is below 1). An end the grid does not reach is
+//     open (empty): the high end above 1 from the first point, or the low end
+//     never above 1 within the sweep;
+//   * confirmed: a measured point above S* has its whole interval above 1
+//     (confirmed_at, the first such point). Otherwise the crossing is
+//     unconfirmed: no point above it cleared 1 with its whole interval, or a
+//     point above it fell back to a median at or below 1 (contradicted_at);
+//   * none within the sweep: the median never rises above 1 (or there are no
+//     points);
+//   * always: every median above 1, from the first point on: S* lies below the
+//     grid, and `masses` is the first point (an upper bound).
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/results/paired_ratio.hpp"
+
+namespace lockstep::bench {
+
+// One point of the sweep: the model size and the paired speedup there.
+struct crossover_point {
+  double masses = 0.0;
+  ratio_estimate speedup;  // serial step / parallel step: median, low, high
+};
+
+enum class crossover_status { crossed, crossed_unconfirmed, none_within_sweep, always };
+std::string_view to_string(crossover_status status) noexcept;
+
+struct crossover_estimate {
+  crossover_status status = crossover_status::none_within_sweep;
+  std::optional<double> masses;   // S*: where the median crosses 1 (always: the first point)
+  std::optional<double> low;      // where the interval's high end crosses 1; empty: below the grid
+  std::optional<double> high;     // where the interval's low end crosses 1; empty: beyond the sweep
+  std::optional<double> confirmed_at;     // the first point above S* whose whole interval is above 1
+  std::optional<double> contradicted_at;  // the first point above S* whose median is not above 1
+};
+
+// `points` in ascending masses (the doubling grid); masses and speedups above 0.
+crossover_estimate find_crossover(const std::vector<crossover_point>& points);
+
+// What the sweep measured (crossover_sweep.hpp measures it): per series, a
+// primitive on its layout at one thread count and placement, the points of
+// the doubling grid.
+struct crossover_sweep_point {
+  std::size_t masses = 0;
+  unsigned threads = 1;
+  double serial_ns = 0.0;    // the serial step: median over the pairs kept
+  double parallel_ns = 0.0;  // the parallel step: likewise
+  ratio_estimate speedup;    // serial / parallel, paired: median and interval
+  ratio_verdict verdict = ratio_verdict::unsure;
+  std::size_t pairs = 0;            // pairs kept
+  std::size_t pairs_set_aside = 0;  // pairs in which another process took a CPU (block_facts)
+  std::optional<double> cpus_busy;  // the parallel side's threads' CPU time / wall time, median
+  bool oversubscribed = false;      // more threads than CPUs: preemptions are the team's own, not flagged
+  // The model beside it: serial_ns / threads + stages per step x the stage
+  // sync the run measured for this primitive at this thread count.
+  std::optional<double> model_ns;
+  std::string failure;  // non-empty: no speedup measured here, and why
+  [[nodiscard]] bool measured() const noexcept { return failure.empty() && pairs > 0; }
+  [[nodiscard]] double equations_per_thread() const noexcept {
+    return 2.0 * static_cast<double>(masses) / static_cast<double>(threads);
+  }
+};
+
+struct crossover_series {
+  unsigned threads = 2;
+  std::string pin;
+  std::string sync;
+  std::string layout;
+  bool leader = true;  // the run's choice at this thread count; false: the baseline (std::barrier)
+  // The stage sync the model takes: the run's sync_ns_per_stage (median) of
+  // this primitive's entry at this thread count, placement and layout, and
+  // that entry; empty when the run did not measure it (accounting off).
+  std::optional<double> stage_sync_ns;
+  std::string stage_sync_entry;
+  std::vector<crossover_sweep_point> points;
+  std::string stop_reason;
+  crossover_estimate crossover;  // find_crossover of the points measured
+};
+
+struct crossover_sweep {
+  std::int64_t budget_ns = 0;
+  std::size_t max_masses = 0;
+  unsigned pairs = 0;        // pairs per point asked
+  std::int64_t block_ns = 0;
+  double spent_s = 0.0;
+  std::string stop_reason;   // why the sweep as a whole ended
+  std::vector<crossover_series> series;
+};
+
+// The points a finder reads: the measured ones of a series.
+std::vector<crossover_point> crossover_points(const crossover_series& series);
+
+// The headline's crossover lines, one per thread count ("Crossover at 2
+// threads (pin:compact): mailbox pays off from about 1450 masses [1100, 1900]
+// (1450 equations a thread); std_barrier from about 2900 [...]; below that,
+// step serially").
+std::vector<std::string> crossover_lines(const crossover_sweep& sweep);
+
+// The result file's "lockstep_crossover" (docs/schemas/run.schema.json).
+nlohmann::json crossover_json(const crossover_sweep& sweep);
+
+}  // namespace lockstep::bench

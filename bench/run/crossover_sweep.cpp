@@ -1,0 +1,228 @@
+// The crossover sweep (crossover_sweep.hpp).
+#include "bench/run/crossover_sweep.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <map>
+#include <optional>
+
+#include "bench/run/rk4_entries.hpp"
+#include "bench/run/run_plan.hpp"
+#include "kernels/rk4.hpp"
+#include "platform/clock.hpp"
+#include "platform/placement.hpp"
+#include "platform/statistics.hpp"
+#include "sync/registry.hpp"
+
+namespace lockstep::bench {
+
+namespace {
+
+// A comparison's own bound within the sweep: far above what its pairs take
+// (16 pairs of two 4 ms blocks, a step of about a millisecond at the largest
+// size); the sweep's budget is what bounds the whole.
+constexpr std::int64_t kComparisonBudgetNs = 20'000'000'000;
+// A probe block this long sizes a side's blocks (its time per unit).
+constexpr double kProbeBlockNs = 200'000.0;
+// A pair of blocks costs this many times its two timed blocks (warm-up
+// batches, the teams' start, the probes): run_plan.cpp's kPairOverBlocks.
+constexpr double kPairOverBlocks = 5.0;
+
+// The units of a side's block: from a probe block of growing size, as
+// units_for_batch sizes an entry's batch (block_units then scales it to the
+// block). One unit when the probe stalls (the pair will say so).
+std::uint64_t probe_units(const block_runner_factory& factory, const run_settings& settings) {
+  const std::unique_ptr<block_runner> runner = factory();
+  std::uint64_t units = 1;
+  for (;;) {
+    const std::optional<double> unit_ns = runner->run_block(units);
+    if (!unit_ns || !(*unit_ns > 0.0)) return 1;
+    if (*unit_ns * static_cast<double>(units) >= kProbeBlockNs || units >= kMaxUnitsPerBatch / 8)
+      return units_for_batch(*unit_ns, settings);
+    units *= 8;
+  }
+}
+
+std::optional<double> median_of(const std::vector<double>& values) {
+  std::vector<double> kept;
+  for (const double value : values)
+    if (value > 0.0) kept.push_back(value);
+  if (kept.empty()) return std::nullopt;
+  return platform::median(kept);
+}
+
+crossover_sweep_point point_of(const paired_result& pair, const crossover_series& series, std::size_t masses,
+                               bool oversubscribed) {
+  crossover_sweep_point point;
+  point.masses = masses;
+  point.threads = series.threads;
+  point.oversubscribed = oversubscribed;
+  point.failure = pair.failure;
+  point.pairs = pair.ratios.size();
+  point.pairs_set_aside = pair.set_aside.size();
+  if (point.failure.empty() && pair.ratios.empty())
+    point.failure = "every pair set aside: another process took a CPU";
+  if (!point.failure.empty()) return point;
+  point.speedup = pair.estimate;
+  point.verdict = pair.verdict;
+  point.serial_ns = median_of(pair.unit_ns_a).value_or(0.0);
+  point.parallel_ns = median_of(pair.unit_ns_b).value_or(0.0);
+  point.cpus_busy = median_of(pair.cpus_busy_b);
+  if (series.stage_sync_ns)
+    point.model_ns = point.serial_ns / static_cast<double>(series.threads) + kernels::kRk4Stages * *series.stage_sync_ns;
+  return point;
+}
+
+}  // namespace
+
+std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices) {
+  std::map<unsigned, std::vector<const headline_choice*>> by_threads;
+  for (const auto& choice : choices)
+    if (choice.threads > 1) by_threads[choice.threads].push_back(&choice);
+  const std::string compact(platform::to_string(platform::placement::compact));
+  std::vector<crossover_series> planned;
+  for (const auto& [threads, here] : by_threads) {
+    const auto compact_choice = std::find_if(here.begin(), here.end(), [&](const headline_choice* choice) {
+      return choice->pin == compact;
+    });
+    const headline_choice& chosen = compact_choice != here.end() ? **compact_choice : *here.front();
+    const auto stage_sync_of = [&](crossover_series& series, const std::string& entry) {
+      series.stage_sync_entry = entry;
+      if (const captured_entry* found = book.find(entry)) series.stage_sync_ns = found->median("sync_ns_per_stage");
+    };
+    crossover_series leader;
+    leader.threads = threads;
+    leader.pin = chosen.pin;
+    leader.sync = chosen.sync;
+    leader.layout = chosen.layout;
+    stage_sync_of(leader, chosen.entry);
+    planned.push_back(leader);
+    if (chosen.sync == sync::kBaselinePrimitive) continue;
+    // The baseline on its best layout here: the lowest median.
+    std::optional<measured_entry> best;
+    for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step")) {
+      const captured_entry& entry = *step.entry;
+      if (entry.field("sync") != sync::kBaselinePrimitive || entry.field("pin") != chosen.pin ||
+          entry.field("threads") != std::to_string(threads) || entry.field("model") != chosen.model)
+        continue;
+      if (!best || step.median < best->median) best = step;
+    }
+    if (!best) continue;
+    crossover_series baseline = leader;
+    baseline.leader = false;
+    baseline.sync = best->entry->field("sync");
+    baseline.layout = best->entry->field("layout");
+    baseline.stage_sync_ns.reset();
+    stage_sync_of(baseline, best->entry->name);
+    planned.push_back(baseline);
+  }
+  return planned;
+}
+
+double estimate_crossover_s(std::size_t series, const crossover_settings& settings) {
+  std::size_t sizes = 0;
+  for (std::size_t masses = kCrossoverFirstMasses; masses <= settings.max_masses; masses *= 2) ++sizes;
+  const double per_point_ns = kPairOverBlocks * 2.0 * static_cast<double>(settings.block_ns) * settings.pairs;
+  const double all_ns = static_cast<double>(series * sizes) * per_point_ns;
+  return std::min(all_ns, static_cast<double>(settings.budget_ns)) / 1e9;
+}
+
+crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_series> series,
+                                 const crossover_settings& settings,
+                                 const std::function<void(std::size_t, double)>& progress) {
+  crossover_sweep sweep;
+  sweep.budget_ns = settings.budget_ns;
+  sweep.max_masses = settings.max_masses;
+  sweep.pairs = settings.pairs;
+  sweep.block_ns = settings.block_ns;
+  sweep.series = std::move(series);
+  // The sweep's pairs take no pace readings: each pair's two blocks share the
+  // pace, and the pace trace is the matrix's.
+  pace_probe* const pace = harness.pace;
+  harness.pace = nullptr;
+  pairing_settings pairing;
+  pairing.pairs = settings.pairs;
+  pairing.block_ns = settings.block_ns;
+  pairing.noise = settings.noise;
+  pairing.budget_ns = kComparisonBudgetNs;
+  const std::size_t cpus = harness.machine->affinity().size();
+  std::vector<bool> going(sweep.series.size(), true);
+  std::vector<unsigned> clear_in_a_row(sweep.series.size(), 0);
+  const std::int64_t start_ns = platform::now_ns();
+  const auto elapsed_s = [&] { return static_cast<double>(platform::now_ns() - start_ns) / 1e9; };
+  for (std::size_t masses = kCrossoverFirstMasses;; masses *= 2) {
+    const bool any = std::find(going.begin(), going.end(), true) != going.end();
+    if (!any) {
+      sweep.stop_reason = "every series stopped";
+      break;
+    }
+    const auto stop_going = [&](const char* reason) {
+      for (std::size_t index = 0; index < going.size(); ++index)
+        if (going[index]) sweep.series[index].stop_reason = reason;
+      sweep.stop_reason = reason;
+    };
+    if (masses > settings.max_masses) {
+      stop_going("largest_size");
+      break;
+    }
+    if (platform::now_ns() - start_ns > settings.budget_ns) {
+      stop_going("budget");
+      break;
+    }
+    entry_spec serial{entry_kind::serial, {}, {}, platform::placement::none, 1};
+    serial.masses = masses;
+    const std::string serial_name = serial.name();
+    std::vector<comparison> plan;
+    std::vector<std::size_t> which;
+    for (std::size_t index = 0; index < sweep.series.size(); ++index) {
+      if (!going[index]) continue;
+      const crossover_series& one = sweep.series[index];
+      const platform::placement pin = platform::parse_placement(one.pin);
+      const bool oversubscribed = one.threads > cpus;
+      block_runner_factory factory =
+          chain_step_runner(harness, one.sync, one.layout, pin, one.threads, masses, !oversubscribed);
+      if (!factory) continue;  // too few masses for the threads at this size: the next one
+      entry_spec parallel{entry_kind::rk4, one.sync, one.layout, pin, one.threads};
+      parallel.masses = masses;
+      const std::string name = parallel.name();
+      harness.units_per_batch[name] = probe_units(factory, harness.settings);
+      harness.block_runners[name] = std::move(factory);
+      plan.push_back({comparison_kind::crossover,
+                      fmt::format("crossover sync:{} layout:{} pin:{} threads:{} masses:{}", one.sync, one.layout,
+                                  one.pin, one.threads, masses),
+                      serial_name, name});
+      which.push_back(index);
+    }
+    if (plan.empty()) continue;
+    harness.block_runners[serial_name] = chain_serial_runner(masses);
+    harness.units_per_batch[serial_name] = probe_units(harness.block_runners[serial_name], harness.settings);
+    std::vector<paired_result>& pairs = harness.book->pairs;
+    const std::size_t before = pairs.size();
+    measure_pairs(harness, plan, pairing, {});
+    for (std::size_t item = 0; item < which.size() && before + item < pairs.size(); ++item) {
+      const std::size_t index = which[item];
+      crossover_series& one = sweep.series[index];
+      crossover_sweep_point point = point_of(pairs[before + item], one, masses, one.threads > cpus);
+      if (!point.failure.empty() && point.pairs_set_aside == 0) {
+        one.stop_reason = "failed: " + point.failure;
+        going[index] = false;
+      }
+      clear_in_a_row[index] = point.measured() && point.speedup.low > 1.0 ? clear_in_a_row[index] + 1 : 0;
+      one.points.push_back(std::move(point));
+      if (going[index] && clear_in_a_row[index] >= kCrossoverClearPoints && masses >= settings.through_masses) {
+        one.stop_reason = "confirmed";
+        going[index] = false;
+      }
+    }
+    // The sweep's pairs are its own section, not the run's lockstep_pairs.
+    pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(before), pairs.end());
+    if (progress) progress(masses, elapsed_s());
+  }
+  harness.pace = pace;
+  for (auto& one : sweep.series) one.crossover = find_crossover(crossover_points(one));
+  sweep.spent_s = elapsed_s();
+  return sweep;
+}
+
+}  // namespace lockstep::bench

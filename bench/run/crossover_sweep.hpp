@@ -1,0 +1,86 @@
+#pragma once
+// `lockstep run --crossover`: after the matrix, from what model size a
+// parallel step pays off here (crossover.hpp finds it in what this measures).
+//
+// Which series: for each thread count above 1 the run measured, at
+// pin:compact (or the run's first placement there when compact was not
+// measured), the run's choice at that thread count (the headline's, on its
+// layout) and std::barrier, the C++20 baseline (sync::kBaselinePrimitive), on
+// its best layout there (the lowest median); one series when the choice is
+// the baseline.
+//
+// How: S = 2, 4, 8, ... masses (kernels/model_choice.hpp: the chain, as
+// --masses S builds it), at each S the chain's parallel step of every series
+// still going paired with the serial step of the same chain
+// (rk4/model:chainS/serial) by the run's paired machinery (paired_blocks.hpp:
+// measure_pairs, a comparison of kind crossover: serial / parallel, the
+// speedup), in rounds of alternating blocks. The sides run with accounting
+// on: a pair in which another process took a CPU of either side (its threads
+// waited on a run queue for more than 1 % of the block: paired_blocks.cpp,
+// kCpuTakenShare) is set aside and counted, never averaged in; a point with
+// more threads than CPUs is marked oversubscribed instead, without that check
+// (its waits are its own team's).
+//
+// When a series stops: two points in a row with the whole interval above 1
+// (the crossover confirmed; with through_masses, not before that size), the
+// largest size (max_masses), or the sweep's
+// budget (whichever comes first; the budget covers the whole sweep, every
+// series, and is checked before each size).
+//
+// The model beside each point: serial_ns / threads + kernels::kRk4Stages x the
+// stage sync the run measured for the series' entry at its thread count
+// (its sync_ns_per_stage median, rk4_entries.hpp), the step of a perfectly
+// shared chain whose synchronisation costs what the matrix measured.
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "bench/run/crossover.hpp"
+#include "bench/run/headline.hpp"
+#include "bench/run/paired_blocks.hpp"
+#include "bench/run/run_book.hpp"
+#include "bench/run/team_driver.hpp"
+
+namespace lockstep::bench {
+
+// The sweep's defaults: at most 2 minutes on the 2-vCPU development VM, up
+// to 65536 masses (131072 equations; a serial step of about a millisecond
+// there), 16 pairs of 4 ms blocks per point (the speedup's interval a few
+// percent wide on a quiet machine).
+inline constexpr std::int64_t kCrossoverBudgetNs = 120'000'000'000;
+inline constexpr std::size_t kCrossoverMaxMasses = 65536;
+inline constexpr std::size_t kCrossoverFirstMasses = 2;  // the paper's two masses
+inline constexpr unsigned kCrossoverPairs = 16;
+inline constexpr std::int64_t kCrossoverBlockNs = 4'000'000;
+// Points in a row whose whole interval is above 1 that stop a series.
+inline constexpr unsigned kCrossoverClearPoints = 2;
+
+struct crossover_settings {
+  std::int64_t budget_ns = kCrossoverBudgetNs;
+  std::size_t max_masses = kCrossoverMaxMasses;
+  // A series confirmed below this size goes on up to it (0: it stops once
+  // confirmed): the speedup at a size of interest, measured the same way.
+  std::size_t through_masses = 0;
+  unsigned pairs = kCrossoverPairs;
+  std::int64_t block_ns = kCrossoverBlockNs;
+  double noise = kDefaultNoise;
+};
+
+// The series (above) from the run book and its headline's choices; the
+// points are empty.
+std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices);
+
+// For --plan: the series a run of these thread counts would sweep (two a
+// thread count above 1) and its time: every series to the largest size
+// (a series that confirms its crossover stops earlier), at most the budget.
+double estimate_crossover_s(std::size_t series, const crossover_settings& settings);
+
+// Measures the series (the harness's block runners and units are added to);
+// `progress(masses, elapsed_s)` after each size.
+crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_series> series,
+                                 const crossover_settings& settings,
+                                 const std::function<void(std::size_t, double)>& progress);
+
+}  // namespace lockstep::bench
