@@ -56,6 +56,8 @@ struct matrix_request {
   int pairs = -1;                    // pairs per paired comparison; -1: the mode's default
   double noise = kDefaultNoise;      // the noise band (a fraction)
   std::vector<std::string> benchmark_flags;  // Google Benchmark's own, after --
+  int run_index = 0;                 // --runs: this run's index, 1..runs (0: a run on its own)
+  int runs = 0;                      // --runs: how many runs the group holds (0: a run on its own)
 };
 
 // --plan: what the run would measure and how long it would take, from the
