@@ -19,6 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numpy as np
+
 from . import statistics
 from .comparison import aggregate_groups
 from .fields import MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT
@@ -69,6 +71,7 @@ def read_pilot(files: list[RunFile], time_kind: str, noise: float) -> Pilot:
         if math.isnan(found.between):
             found = Components(assumed_drift(noise) ** 2, found.within, found.runs, found.repetitions)
         entries.append(_Entry(key, found, tuple(sum(g) / len(g) if g else math.nan for g in groups)))
+    entries = _moderated(entries)
     repetitions = round(statistics.median([e.components.repetitions for e in entries])) if entries else 0
     matrix = [f.context_number(MATRIX_SECONDS_CONTEXT) for f in files]
     wall = [f.context_number(WALL_SECONDS_CONTEXT) for f in files]
@@ -77,6 +80,30 @@ def read_pilot(files: list[RunFile], time_kind: str, noise: float) -> Pilot:
         repetition_s = statistics.median(matrix) / repetitions
         fixed_s = max(statistics.median(wall) - statistics.median(matrix), 0.0)
     return Pilot(entries, len(files), repetitions, repetition_s, fixed_s, assumed_between=len(files) < 2)
+
+
+def _moderated(entries: list[_Entry]) -> list[_Entry]:
+    """With two or more pilot runs, each entry's variance of its run means (K - 1 degrees: a few runs estimate it
+    poorly) moderated towards the entries' (statistics.prior_variance, as compare moderates it), and its between-run
+    component taken from that: max(0, moderated - Var(e) / n0). Unchanged with one run or too few entries."""
+    spreads = []
+    for entry in entries:
+        means = [m for m in entry.run_means if math.isfinite(m)]
+        spreads.append((float(np.var(means, ddof=1)), len(means) - 1) if len(means) >= 2 else (None, 0))
+    prior = statistics.prior_variance([v for v, _ in spreads], [d for _, d in spreads])
+    if prior is None:
+        return entries
+    result = []
+    for entry, (variance, degrees) in zip(entries, spreads):
+        if variance is None:
+            result.append(entry)
+            continue
+        moderated, _ = statistics.moderated_variance(variance, degrees, prior)
+        found = entry.components
+        between = max(0.0, moderated - found.within / found.repetitions)
+        result.append(_Entry(entry.key, Components(between, found.within, found.runs, found.repetitions),
+                             entry.run_means))
+    return result
 
 
 def plan_errors(entries: list[_Entry], runs: int, repetitions: int) -> list[float]:

@@ -52,6 +52,10 @@ class Replicated:
 
 
 def _merged_run(key, runs: list[Run]) -> Run:
+    """The runs' repetitions together; a run in which the entry errored is left out (its times are not a
+    measurement), and the entry is errored only when it errored in every run."""
+    measured = [run for run in runs if not run.errored]
+    runs = measured or runs
     first = runs[0]
     return Run(key, names=list(first.names),
                repetitions=[dataclasses.replace(r, pace=None) for run in runs for r in run.repetitions],
@@ -113,12 +117,16 @@ def _entry_intervals(comparison: Comparison, time_kind: str) -> dict:
     return errors
 
 
+def _measured_everywhere(comparison: Comparison, keys) -> list:
+    """The keys measured (present, not errored) in every run of both sides."""
+    runs = comparison.baseline.replicates + comparison.contender.replicates
+    return [key for key in keys if all(key in f.runs and not f.runs[key].errored for f in runs)]
+
+
 def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
-    """Each run's mean, over the keys, of its mean log time (only runs that measured every key)."""
+    """Each run's mean, over the keys, of its mean log time."""
     means = []
     for run_file in side.replicates:
-        if not all(key in run_file.runs and not run_file.runs[key].errored for key in keys):
-            continue
         per_key = run_means([run_file.runs[key].times_ns(time_kind) for key in keys])
         if len(per_key) == len(keys):
             means.append(sum(per_key) / len(per_key))
@@ -130,7 +138,8 @@ def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate]
     standard error of the log ratio (None without one)."""
     result, error = [], None
     for group, rows in aggregate_groups(comparison.combinations).items():
-        keys = [row.key for row in rows if row.pace is not None and row.pace.method == BETWEEN_RUNS]
+        keys = _measured_everywhere(comparison, [row.key for row in rows
+                                                 if row.pace is not None and row.pace.method == BETWEEN_RUNS])
         if not keys:
             continue
         found = RunEvidence(tuple(_group_means(comparison.baseline, keys, time_kind)),

@@ -175,6 +175,38 @@ class RunsASide(unittest.TestCase):
         self.assertIn("without run files", err)
 
 
+def scale_times_module():
+    import importlib.util
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "scripts", "scale_times.py")
+    spec = importlib.util.spec_from_file_location("scale_times", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+class ScaleTimes(unittest.TestCase):
+    def test_it_scales_the_step_and_episode_times_of_rk4_and_barrier_entries_only(self):
+        document = {"benchmarks": [
+            {"name": "rk4/sync:a/threads:2", "real_time": 10.0, "cpu_time": 4.0, "ns_per_step": 10.0},
+            {"name": "barrier/sync:a/threads:2", "real_time": 2.0, "ns_per_episode": 2.0},
+            {"name": "barrier/sync:a/threads:2_cv", "real_time": 0.1, "aggregate_unit": "percentage"},
+            {"name": "c2c/pin:compact/threads:2", "real_time": 100.0, "one_way_ns": 30.0},
+            {"name": "rk4/serial", "real_time": 20.0, "ns_per_step": 20.0}]}
+        scaled = scale_times_module().scaled_document(document, 1.15)["benchmarks"]
+        self.assertAlmostEqual(scaled[0]["real_time"], 11.5)
+        self.assertAlmostEqual(scaled[0]["cpu_time"], 4.6)
+        self.assertAlmostEqual(scaled[0]["ns_per_step"], 11.5)
+        self.assertAlmostEqual(scaled[1]["ns_per_episode"], 2.3)
+        self.assertEqual(scaled[2]["real_time"], 0.1)
+        self.assertEqual(scaled[3], {"name": "c2c/pin:compact/threads:2", "real_time": 100.0, "one_way_ns": 30.0})
+        self.assertAlmostEqual(scaled[4]["real_time"], 23.0)  # rk4/serial is an rk4/ entry: scaled as named
+
+    def test_an_existing_target_is_refused_and_nothing_is_written(self):
+        with tempfile.TemporaryDirectory() as scratch:
+            source = write_group(os.path.join(scratch, "a"), (1, 2))
+            self.assertEqual(scale_times_module().main(["1.15", source, source]), 2)
+
+
 class Planner(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
