@@ -4,7 +4,10 @@
 // The command: its options, checked and turned into a bench::matrix_request
 // (bench/run/matrix_run.hpp, which measures the matrix, the pairs and the
 // pace trace and writes the result file atomically), then the summary on
-// stdout (bench/run/summary.hpp). Progress goes to stderr.
+// stdout (bench/run/summary.hpp). Progress goes to stderr. With --runs K it
+// measures nothing itself: it runs this binary K times, one fresh process
+// after another (run_group), each writing run-I.json into one directory,
+// the replicates lockstep compare takes as one side.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
