@@ -4,17 +4,29 @@
 // The command: its options, checked and turned into a bench::matrix_request
 // (bench/run/matrix_run.hpp, which measures the matrix, the pairs and the
 // pace trace and writes the result file atomically), then the summary on
-// stdout (bench/run/summary.hpp). Progress goes to stderr.
+// stdout (bench/run/summary.hpp). Progress goes to stderr. With --runs K it
+// measures nothing itself: it runs this binary K times, one fresh process
+// after another (run_group), each writing run-I.json into one directory,
+// the replicates lockstep compare takes as one side.
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
+
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "bench/cli/options.hpp"
@@ -55,6 +67,8 @@ struct run_options {
   int pairs = -1;           // -1: the mode's default
   double noise_pct = 100.0 * bench::kDefaultNoise;
   std::vector<std::string> benchmark_flags;
+  std::optional<int> runs;  // --runs K: the matrix in K fresh processes, one file each, in one directory
+  std::string replicate;    // --replicate I/K (hidden): this process is run I of such a group
 };
 
 // The thread counts (run_plan.hpp says which by default and for --scaling),
@@ -96,6 +110,116 @@ platform::topology machine_for(bool plan) {
     throw usage_error("HWLOC_SYNTHETIC or HWLOC_XMLFILE is set, so hwloc describes another machine: only --plan "
                       "can use it (unset it to measure this one)");
   return machine;
+}
+
+// --replicate I/K, which a group's parent hands each run: its index and the
+// group's size, stated in the file's context (lockstep_run_index, lockstep_runs).
+std::pair<int, int> parse_replicate(const std::string& text) {
+  int index = 0;
+  int runs = 0;
+  char slash = '\0';
+  std::istringstream in(text);
+  if (!(in >> index >> slash >> runs) || slash != '/' || !in.eof() || runs < 1 || index < 1 || index > runs)
+    throw usage_error(fmt::format("--replicate: '{}' is not I/K with 1 <= I <= K", text));
+  return {index, runs};
+}
+
+// The words this process was started with, its own name apart (/proc/self/cmdline).
+std::vector<std::string> own_arguments() {
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::vector<std::string> words;
+  for (std::string word; std::getline(in, word, '\0');) words.push_back(word);
+  if (!words.empty()) words.erase(words.begin());
+  return words;
+}
+
+// One run of a group: this command line without --runs and --out (before
+// any --, where Google Benchmark's flags begin), with the run's own --out
+// and its --replicate I/K.
+std::vector<std::string> run_arguments(const std::vector<std::string>& own, const std::string& out, int index,
+                                       int runs) {
+  std::vector<std::string> words;
+  std::size_t i = 0;
+  for (; i < own.size() && own[i] != "--"; ++i) {
+    if (own[i] == "--runs" || own[i] == "--out") {
+      ++i;  // and its value
+      continue;
+    }
+    if (own[i].rfind("--runs=", 0) == 0 || own[i].rfind("--out=", 0) == 0) continue;
+    words.push_back(own[i]);
+  }
+  for (const std::string& word : {std::string("--out"), out, std::string("--replicate"),
+                                  fmt::format("{}/{}", index, runs)})
+    words.push_back(word);
+  words.insert(words.end(), own.begin() + static_cast<std::ptrdiff_t>(i), own.end());
+  return words;
+}
+
+// The directory of a group's run files: --out, or results/<host>-<timestamp>/.
+// Refused (one line, exit 2) when it names a .json file, a file, or a
+// directory that already holds run files; made here, before anything runs.
+std::filesystem::path group_directory(const std::string& out, bool& made) {
+  namespace fs = std::filesystem;
+  std::string name = out;
+  if (name.empty()) {
+    name = bench::default_result_path();
+    name.erase(name.size() - std::string(".json").size());
+  }
+  const fs::path directory(name);
+  if (directory.extension() == ".json")
+    throw usage_error(fmt::format("--out: with --runs, a directory for run-1.json ... run-K.json, not a .json "
+                                  "file ('{}')", name));
+  std::error_code error;
+  if (fs::exists(directory, error)) {
+    if (!fs::is_directory(directory, error)) throw usage_error(fmt::format("--out: '{}' is not a directory", name));
+    for (const auto& item : fs::directory_iterator(directory, error))
+      if (item.path().filename().string().rfind("run-", 0) == 0)
+        throw usage_error(fmt::format("--out: '{}' already holds run files ({})", name,
+                                      item.path().filename().string()));
+    made = false;
+    return directory;
+  }
+  const fs::path parent = directory.has_parent_path() ? directory.parent_path() : fs::path(".");
+  if (!out.empty() && !fs::is_directory(parent, error))
+    throw usage_error(fmt::format("--out: the directory '{}' does not exist", parent.string()));
+  fs::create_directories(directory, error);
+  if (error) throw usage_error(fmt::format("--out: cannot make '{}': {}", name, error.message()));
+  made = true;
+  return directory;
+}
+
+// --runs K: the matrix measured in K fresh processes one after another (this
+// binary again, /proc/self/exe), each writing run-I.json into the group's
+// directory. A run that fails ends the group with its exit status; a
+// directory this call made and no run wrote into is removed again.
+int run_group(const run_options& options) {
+  bool made = false;
+  const std::filesystem::path directory = group_directory(options.out, made);
+  const std::vector<std::string> own = own_arguments();
+  const int runs = *options.runs;
+  for (int index = 1; index <= runs; ++index) {
+    const std::string out = (directory / fmt::format("run-{}.json", index)).string();
+    std::vector<std::string> words{"lockstep"};
+    for (auto& word : run_arguments(own, out, index, runs)) words.push_back(std::move(word));
+    std::vector<char*> argv;
+    for (auto& word : words) argv.push_back(word.data());
+    argv.push_back(nullptr);
+    fmt::print(stderr, "lockstep run: run {} of {} (a fresh process) into {}\n", index, runs, out);
+    std::fflush(stdout);
+    std::fflush(stderr);
+    pid_t child = 0;
+    int status = 0;
+    if (::posix_spawn(&child, "/proc/self/exe", nullptr, nullptr, argv.data(), environ) != 0 ||
+        ::waitpid(child, &status, 0) != child || !WIFEXITED(status) || WEXITSTATUS(status) != kExitOk) {
+      std::error_code error;
+      if (made && std::filesystem::is_empty(directory, error)) std::filesystem::remove(directory, error);
+      fmt::print(stderr, "lockstep run: run {} of {} failed; the group stops\n", index, runs);
+      return WIFEXITED(status) && WEXITSTATUS(status) != kExitOk ? WEXITSTATUS(status) : kExitCheckFailed;
+    }
+  }
+  fmt::print(stderr, "lockstep run: {} runs written to {}/ (compare them as one side: lockstep compare {}/ ...)\n",
+             runs, directory.string(), directory.string());
+  return kExitOk;
 }
 
 int execute(const run_options& options) {
@@ -145,6 +269,14 @@ int execute(const run_options& options) {
     crossover.noise = request.noise;
     request.crossover = crossover;
   }
+  if (!options.replicate.empty()) std::tie(request.run_index, request.runs) = parse_replicate(options.replicate);
+  if (options.runs && options.plan) {
+    fmt::print("{}", bench::plan_text(request, machine));
+    fmt::print("runs: {} (--runs), each a fresh process measuring the plan above, one after another: {} times "
+               "its estimated time\n", *options.runs, *options.runs);
+    return kExitOk;
+  }
+  if (options.runs) return run_group(options);
 
   // Every option is read; now the result file, before anything is measured:
   // a destination that cannot be written fails here, in a millisecond. A
@@ -226,7 +358,7 @@ void add_run(CLI::App& app, int& result) {
                   fmt::format("Measured time per repetition, with a unit (default {}; --quick {}): that many "
                               "timed batches of about 2 ms (--quick 0.5 ms), at least one",
                               bench::kDefaultMinTime, bench::kQuickMinTime));
-  add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json)")->excludes(plan);
+  add_out_option(*run, options->out, "the result JSON (default results/<host>-<timestamp>.json; with --runs, the directory of the run files)")->excludes(plan);
   run->add_flag("--quick", options->quick, "Shorter runs: the whole matrix in well under 30 s on 2 cores");
   run->add_flag("--verbose", options->verbose,
                 "Print every table when the run is over (the full ranking, the bare primitives, every paired ratio, "
@@ -247,6 +379,13 @@ void add_run(CLI::App& app, int& result) {
                    "its edge \"unsure\"");
   run->add_flag("--no-accounting", options->no_accounting,
                 "Per-thread accounting and sync-time instrumentation off (their counters are omitted)");
+  run->add_option("--runs", options->runs,
+                  "Measure the matrix K times, each run a fresh process, one after another: run-1.json ... "
+                  "run-K.json in the directory --out names (default results/<host>-<timestamp>/), each stating its "
+                  "index; lockstep compare takes the directory as one side, its runs as replicates")
+      ->check(CLI::Range(1, 100))
+      ->option_text("K");
+  run->add_option("--replicate", options->replicate, "Run I of K (set by --runs for each run)")->group("");
   run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");
   run->callback([options, &result] { result = execute(*options); });
 }

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <map>
@@ -240,6 +241,12 @@ void add_run_context(const matrix_request& request, const prepared_matrix& run) 
                                                     : "registration order (--no-interleave): every entry's "
                                                       "repetitions back to back");
   benchmark::AddCustomContext("noise_band", fmt::format("{:g}", request.noise));
+  // A run of a group (lockstep run --runs K): its index and the group's size,
+  // which lockstep compare reads to take the group's files as replicates.
+  if (request.runs > 0) {
+    benchmark::AddCustomContext("lockstep_run_index", std::to_string(request.run_index));
+    benchmark::AddCustomContext("lockstep_runs", std::to_string(request.runs));
+  }
   benchmark::AddCustomContext("clock_read_ns", fmt::format("{:.1f}", run.book.clock_read_ns));
   benchmark::AddCustomContext(
       "lockstep_timing",
@@ -348,8 +355,14 @@ context_map in_run_context(const run_book& book, const pace_modes& modes, unsign
 // wrote at the temporary path), with the derived ratios, the pace trace and
 // pairs, the headline, the scaling curve and the machine's context; then the
 // rename.
+// Seconds a run spent: measuring the matrix's repetitions, and in all.
+struct run_seconds {
+  double matrix = 0.0;
+  double wall = 0.0;
+};
+
 void write_result(const matrix_request& request, const platform::topology& machine, const prepared_matrix& run,
-                  const pace_modes& modes, atomic_result_file& result_file) {
+                  const pace_modes& modes, atomic_result_file& result_file, run_seconds seconds) {
   nlohmann::json document;
   {
     std::ifstream written(result_file.temporary_path());
@@ -372,6 +385,8 @@ void write_result(const matrix_request& request, const platform::topology& machi
   // in-run keys.
   merge_into_result(document, machine_context(machine));
   merge_into_result(document, in_run_context(run.book, modes, run.book.cpus));
+  document["context"]["lockstep_matrix_s"] = fmt::format("{:.3f}", seconds.matrix);
+  document["context"]["lockstep_wall_s"] = fmt::format("{:.3f}", seconds.wall);
   result_file.write(document.dump(2) + "\n");
   result_file.commit();
 }
@@ -385,8 +400,14 @@ std::string plan_text(const matrix_request& request, const platform::topology& m
 
 run_book run_matrix(const matrix_request& request, const platform::topology& machine,
                     atomic_result_file& result_file) {
+  // The run's costs, stated in the context for lockstep compare --plan: the
+  // matrix's repetitions (lockstep_matrix_s) and the whole run from here
+  // (lockstep_wall_s), whose difference is a run's fixed part.
+  const auto started = std::chrono::steady_clock::now();
   const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine, result_file.temporary_path());
+  const auto matrix_started = std::chrono::steady_clock::now();
   measure_entries(*run, result_file.destination());
+  const std::chrono::duration<double> matrix = std::chrono::steady_clock::now() - matrix_started;
   measure_comparisons(*run);
   const known_answers probes = measure_known_answers(machine, request.quick);
   if (request.crossover) measure_crossovers(*run, *request.crossover, probes, machine);
@@ -395,7 +416,8 @@ run_book run_matrix(const matrix_request& request, const platform::topology& mac
   assign_pace_modes(run->book, modes);
   run->book.cpus = static_cast<unsigned>(machine.affinity().size());
   run->book.headline = make_headline(run->book, probes, run->book.cpus, result_file.destination());
-  write_result(request, machine, *run, modes, result_file);
+  const std::chrono::duration<double> wall = std::chrono::steady_clock::now() - started;
+  write_result(request, machine, *run, modes, result_file, {matrix.count(), wall.count()});
   return std::move(run->book);
 }
 

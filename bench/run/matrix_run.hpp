@@ -60,6 +60,8 @@ struct matrix_request {
   std::vector<std::string> benchmark_flags;  // Google Benchmark's own, after --
   // --crossover: the sweep after the matrix (crossover_sweep.hpp); empty: none.
   std::optional<crossover_settings> crossover;
+  int run_index = 0;                 // --runs: this run's index, 1..runs (0: a run on its own)
+  int runs = 0;                      // --runs: how many runs the group holds (0: a run on its own)
 };
 
 // --plan: what the run would measure and how long it would take, from the

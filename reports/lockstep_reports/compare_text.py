@@ -18,6 +18,7 @@ from .machine_answers import answer_lines, difference_lines
 from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
+from .replicated import BETWEEN_RUNS, one_run_power
 from .run_analysis import sharing_layout
 from .run_file import RunFile
 from .text_layout import WIDTH, table, wrapped
@@ -29,6 +30,10 @@ def mode_text(mode) -> str:
 
 def pace_note(baseline: RunFile, contender: RunFile, letter: str) -> list[str]:
     """Lines saying in which modes the two runs ran, and whether those differ (pace_statistics.modes_differ)."""
+    grouped = [f.label for f in (baseline, contender) if len(f.replicates) >= 2]
+    if grouped:
+        return [f"pace: {' and '.join(grouped)} hold several runs, each with its own pace trace: the verdicts are on "
+                f"the runs' spread, which holds the pace's changes, not on the pace"]
     missing = [f.label for f in (baseline, contender) if f.pace is None]
     if missing:
         return [f"pace: {UNAVAILABLE} in {' and '.join(missing)} (no lockstep_pace: written before the pace trace); "
@@ -134,7 +139,7 @@ def _row_cells(comparison: Comparison, row: Row) -> list[str]:
 
 
 PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
-            PACE_NORMALISED: "/ pace c2c"}
+            PACE_NORMALISED: "/ pace c2c", BETWEEN_RUNS: "runs"}
 
 
 def pace_how(pace: PaceAware) -> str:
@@ -179,7 +184,7 @@ def aggregate_line(comparison: Comparison, letter: str) -> str:
     if overall is None:
         return head + f"): {UNAVAILABLE}"
     line = head + ("; beyond the pace" if comparison.paced else "") + "): " + aggregate_text(comparison, overall)
-    if overall.verdict in ("slower", "faster"):
+    if overall.verdict in ("slower", "faster") and comparison.replicated is None:
         # Its interval is drawn over the entries of one run a side: a drift of the whole machine between
         # the two runs (a host that wakes sleeping vCPUs slower for a minute) moves every entry alike and
         # reads as a change. Two default runs of one build, back to back on the development VM, gave
@@ -187,6 +192,42 @@ def aggregate_line(comparison: Comparison, letter: str) -> str:
         line += ("\n  (one run a side: a drift of the whole machine between the runs reads as a change here; "
                  "to see its size, run A again and compare A with its rerun)")
     return line
+
+
+def evidence_lines(comparison: Comparison, b: str) -> list[str]:
+    """What the intervals stand on (the runs a side, or one run and the calibrated drift), the smallest uniform
+    change the comparison sees at 80 % power (replicated.py), and, with four runs a side or more, the A against A
+    check of each side's halves."""
+    if comparison.withheld or not comparison.combinations:
+        return []
+    replicated = comparison.replicated
+    if replicated is not None:
+        basis = f"from {replicated.runs_a} and {replicated.runs_b} runs (the variance between runs)"
+        entries, aggregate = replicated.entries_power, replicated.aggregate_power
+    else:
+        basis = ("one run a side, drift calibrated" if comparison.drift is not None else
+                 "one run a side, no drift term") + " (--runs K measures it)"
+        entries, aggregate = one_run_power(comparison)
+    if entries is None and aggregate is None:
+        out = [f"intervals: {basis}"]
+    else:
+        out = [f"power (80 %): {_power_percent(entries)} in 80 % of entries, {_power_percent(aggregate)} on the mean; "
+               f"{basis}"]
+    checks = replicated.against_itself if replicated is not None else []
+    if checks:
+        changed, compared = sum(c.changed for c in checks), sum(c.compared for c in checks)
+        sides = ", ".join(f"{name} {c.changed} of {c.compared}" for name, c in zip(("A", b), checks))
+        out.append(f"A against A: {changed} of {compared} changed, {_rate(changed, compared)} false positives (each "
+                   f"side's first half of runs against its second: {sides})")
+    return out
+
+
+def _power_percent(change: float | None) -> str:
+    return UNAVAILABLE if change is None else f"{change:.1f} %"
+
+
+def _rate(count: int, total: int) -> str:
+    return f"{100.0 * count / total:.1f} %" if total else UNAVAILABLE
 
 
 def aggregate_text(comparison: Comparison, aggregate: Aggregate) -> str:
@@ -234,8 +275,11 @@ def detectable_line(comparison: Comparison) -> str | None:
     median = statistics.median(changes)
     drift = comparison.drift
     line = (f"the {len(unsure)} unsure could not have seen less than {_plus_minus(median)} (median; "
-            f"{_plus_minus(changes[0])} the best, {_plus_minus(changes[-1])} the worst). To see less: more "
-            f"repetitions (lockstep run --repetitions 10 narrows the within-run part by about 1/sqrt(2))")
+            f"{_plus_minus(changes[0])} the best, {_plus_minus(changes[-1])} the worst). To see less: more ")
+    if comparison.replicated is not None:
+        return line + ("runs a side (lockstep compare --plan says how many, and how many repetitions each) or a "
+                       f"wider band (--noise; now {comparison.noise_percent:g} %)")
+    line += "repetitions (lockstep run --repetitions 10 narrows the within-run part by about 1/sqrt(2))"
     if drift is not None and drift * 100 < 0.05:
         line += (", a quieter machine (between these runs the entries spread no more than their own repetitions "
                  "do: no drift beyond them)")
@@ -383,6 +427,7 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
     out += _legend_lines(comparison, b) + [""]
     out += _entries_table(comparison, b) + [""]
     out += _aggregate_lines(comparison, b)
+    out += evidence_lines(comparison, b)
     out += _counts_lines(comparison)
     out += _calibration_lines(comparison, b) + [""]
     return out + _listing_lines(comparison, b)
@@ -468,7 +513,7 @@ def _listed(keys, limit: int = 5) -> list[str]:
 
 # How a pace-aware figure was made, in the summary's words (--all gives pace_how's exact figure).
 PACE_WORDS = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
-              PACE_NORMALISED: "pace-scaled"}
+              PACE_NORMALISED: "pace-scaled", BETWEEN_RUNS: "runs"}
 PACE_WORD_MEANINGS = {
     "one mode": "every repetition of both runs in one pace mode",
     "matching modes": "only the repetitions in pace modes the two runs share",
@@ -476,6 +521,7 @@ PACE_WORD_MEANINGS = {
     "pace-scaled": "each time divided by the core-to-core latency read around it (the serial step on a machine of "
                    "one CPU), as far as its primitive's times follow it (--all gives the power)",
     "raw": "the plain times (no pace read around them)",
+    "runs": "the ratio of the geometric means of the runs, its interval from the variance between runs",
 }
 
 
@@ -532,11 +578,13 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
         out.append(f"no entries in common: A ({_tool(comparison.baseline)}) and {b} ({_tool(comparison.contender)}) "
                    f"name different benchmarks, so nothing is compared")
     out.append(aggregate_line(comparison, b))
+    out += evidence_lines(comparison, b)
     out += group_lines(comparison)
     out.append(calibration_move_line(comparison, b))
     out += pace_note(comparison.baseline, comparison.contender, b)
     counts = comparison.pace_verdict_counts()
-    what = "beyond the pace" if comparison.paced else f"(raw verdicts: pace {UNAVAILABLE})"
+    what = ("between runs" if comparison.replicated is not None else "beyond the pace" if comparison.paced
+            else f"(raw verdicts: pace {UNAVAILABLE})")
     out.append(f"changed {what}: {counts['slower'] + counts['faster']} of {len(comparison.rows)} "
                f"({counts['slower']} slower, {counts['faster']} faster); {counts['unsure']} unsure, "
                f"{counts['within noise']} within noise, {counts['untested']} untested"

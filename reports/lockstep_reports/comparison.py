@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 from . import statistics
 from .comparability import unoptimised
@@ -12,6 +13,9 @@ from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .names import BenchmarkKey
 from .run_analysis import calibration, median_ratio
 from .run_file import RunFile
+
+if TYPE_CHECKING:
+    from .replicated import Replicated
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
 DEFAULT_NOISE_PERCENT = 5.0
@@ -161,6 +165,18 @@ def cluster_drifts(rows: list) -> list[float]:
 AGGREGATE_SEGMENTS = ("sync", "threads", "pin", "exchange")
 
 
+def aggregate_groups(rows: list) -> dict[str, list]:
+    """The groups an aggregate is taken over: every row ("all"), then per primitive, thread count and placement
+    (AGGREGATE_SEGMENTS), each group in its name's order."""
+    groups: dict[str, list] = {"all": list(rows)}
+    for segment in AGGREGATE_SEGMENTS:
+        values = sorted({row.key.get(segment) for row in rows if row.key.get(segment)},
+                        key=lambda value: (len(value), value) if segment == "threads" else (0, value))
+        for value in values:
+            groups[f"{segment}:{value}"] = [row for row in rows if row.key.get(segment) == value]
+    return groups
+
+
 @dataclass
 class Comparison:
     baseline: RunFile
@@ -178,6 +194,9 @@ class Comparison:
     # how many entries' intervals are pooled; None: too few entries, each interval is the entry's own.
     drift: float | None = None
     pooled_entries: int = 0
+    # Both sides of several runs (replicated.apply_replicates): the intervals and aggregates from the variance
+    # between runs, the power, the built-in A/A check; None: one run on a side, the calibrated drift kept.
+    replicated: "Replicated | None" = None
 
     @property
     def combinations(self) -> list[Row]:
@@ -206,12 +225,9 @@ class Comparison:
         when withheld: a Debug build's times would read as its machine's."""
         if self.withheld:
             return []
-        groups: dict[str, list[Row]] = {"all": self.combinations}
-        for segment in AGGREGATE_SEGMENTS:
-            values = sorted({row.key.get(segment) for row in self.combinations if row.key.get(segment)},
-                            key=lambda value: (len(value), value) if segment == "threads" else (0, value))
-            for value in values:
-                groups[f"{segment}:{value}"] = [row for row in self.combinations if row.key.get(segment) == value]
+        if self.replicated is not None:
+            return self.replicated.aggregates
+        groups = aggregate_groups(self.combinations)
         borrowed = cluster_drifts(self.combinations)
         result = []
         for group, rows in groups.items():

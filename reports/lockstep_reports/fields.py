@@ -152,7 +152,13 @@ DIRTY_SUFFIX = "-dirty"
 # fingerprint, not shown in it.
 MODE_CONTEXT = "lockstep_mode"
 QUICK_MODE = "quick"
-RUN_CONTEXT_KEYS = (MODE_CONTEXT,)
+# A run of a group (`lockstep run --runs K`): its index 1..K and K; compare takes a group's runs as replicates.
+RUN_INDEX_CONTEXT = "lockstep_run_index"
+RUNS_CONTEXT = "lockstep_runs"
+# A run's costs in seconds (bench/run/matrix_run.cpp run_matrix): measuring the matrix's repetitions, and in all.
+MATRIX_SECONDS_CONTEXT = "lockstep_matrix_s"
+WALL_SECONDS_CONTEXT = "lockstep_wall_s"
+RUN_CONTEXT_KEYS = (MODE_CONTEXT, RUN_INDEX_CONTEXT, RUNS_CONTEXT, MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT)
 # Google Benchmark writes these as whole numbers; every other fingerprint key is text.
 CONTEXT_INTEGERS = ("num_cpus", "mhz_per_cpu")
 # lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).

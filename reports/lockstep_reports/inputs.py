@@ -159,6 +159,29 @@ def load_any(path: str, label: str | None = None):
                            "and delay results, and verify --csv trajectories)")
 
 
+def run_number(name: str) -> int | None:
+    """I of a group's run-I.json, None for any other name."""
+    stem = name[len("run-"):-len(".json")] if name.startswith("run-") and name.endswith(".json") else ""
+    return int(stem) if stem.isdigit() else None
+
+
+def side_paths(argument: str) -> list[str]:
+    """The files of one side of a comparison: a file; a directory, its run files (run-1.json ... run-K.json of
+    `lockstep run --runs K`) in their order; or files joined by commas (A1.json,A2.json), each a run of the side."""
+    if os.path.isdir(argument):
+        names = sorted((name for name in os.listdir(argument) if run_number(name) is not None), key=run_number)
+        if not names:
+            raise InputError(argument, "is a directory without run files (run-1.json ... run-K.json, as "
+                                       "`lockstep run --runs K --out DIR` writes them)")
+        return [os.path.join(argument, name) for name in names]
+    if "," in argument and not os.path.exists(argument):
+        paths = [path for path in argument.split(",") if path]
+        if not paths:
+            raise InputError(argument, "names no file")
+        return paths
+    return [argument]
+
+
 def unique_labels(paths: list[str]) -> list[str]:
     """Short names for files: the base name, or more of the path where base names collide."""
     labels = [os.path.basename(p) for p in paths]

@@ -12,7 +12,7 @@ import os
 import sys
 
 from .comparability import withheld_text
-from .inputs import InputError, load_for_compare, unique_labels
+from .inputs import InputError, load_for_compare, side_paths, unique_labels
 from .run_file import RunFile
 from .output import OutputError, check_directory_target, check_file_target, write_file
 
@@ -179,9 +179,14 @@ def compare_parser() -> argparse.ArgumentParser:
         "errored. --all prints every entry with its counters, the "
         "calibrations, the whole context and the across-machines tables. The same file twice (or two files "
         "with the same bytes) is one line saying so.",
-        "RESULT.json", "two or more result files, the baseline first",
+        "RESULT.json", "two or more sides, the baseline first: each a result file, a directory of runs (`lockstep "
+                       "run --runs K --out DIR`: its runs are the side's replicates, and the intervals come from the "
+                       "variance between them; with 4 or more a side each side's halves are also compared, A against "
+                       "A) or files joined by commas (A1.json,A2.json); with --plan, the pilot",
         "examples:\n  lockstep compare results/a.json results/b.json\n"
-        "  lockstep compare a.json b.json --noise 2% --fail-above 10 --out comparison.json\n\n"
+        "  lockstep compare a.json b.json --noise 2% --fail-above 10 --out comparison.json\n"
+        "  lockstep compare results/before/ results/after/\n"
+        "  lockstep compare --plan results/pilot/ --detect 15%\n\n"
         "exit status: 0 done; 1 with --fail-above, a combination or a group slower beyond the limit; " + BAD_INPUT)
     parser.add_argument("--noise", type=percentage, default=DEFAULT_NOISE_PERCENT, metavar="PCT",
                         help=f"noise band in percent, the %% sign optional (5 or 5%%; default "
@@ -205,6 +210,15 @@ def compare_parser() -> argparse.ArgumentParser:
                         help="print everything: every matched entry with its interval, q, verdicts and counters, "
                              "the calibrations, the whole context of every file and the across-machines tables "
                              "(the default is the summary, about 40 lines)")
+    parser.add_argument("--plan", action="store_true",
+                        help="plan instead of compare: the files (or directories of runs) are a pilot; print, per "
+                             "thread count and overall, the smallest uniform change a plan of runs x repetitions "
+                             "sees in 80%% of the entries and on their geometric mean (at --noise and 95%% "
+                             "intervals), from the pilot's variance between and within runs")
+    parser.add_argument("--detect", type=percentage, metavar="PCT",
+                        help="with --plan: the cheapest plan (runs a side x repetitions, Kalibera and Jones's "
+                             "allocation) that sees a uniform change of PCT in 80%% of the entries, and its time on "
+                             "the pilot's machine")
     # --out, as in every lockstep command that writes a result; --json, its earlier name, still works.
     parser.add_argument("--out", "--json", dest="json", metavar="FILE",
                         help="also write the whole comparison as JSON to FILE (atomically; its directory must "
@@ -239,6 +253,10 @@ def run_compare(argv: list[str]) -> int:
     from . import compare, compare_text
 
     options = compare_parser().parse_args(argv)
+    if options.detect is not None and not options.plan:
+        raise UsageError("--detect goes with --plan (the change a plan should see)")
+    if options.plan:
+        return run_planner(options)
     if len(options.files) < 2:
         raise UsageError("compare needs at least two result files (the first is the baseline)")
     if not 0.0 < options.alpha < 1.0:
@@ -249,13 +267,13 @@ def run_compare(argv: list[str]) -> int:
                                                 for path in options.files):
             raise UsageError(f"{typed_option(argv, ('--out', '--json'))} {options.json} is one of the result "
                              f"files: give another file")
-    labels = unique_labels(options.files)
-    files = [load_for_compare(path, label) for path, label in zip(options.files, labels)]
+    files = load_sides(options.files)
     # `lockstep run` files are compared, the first against each later one; the other kinds (c2c, delay, ...)
     # only join the machine fingerprint.
     run_files = [f for f in files if isinstance(f, RunFile)]
     context_files = [f for f in files if not isinstance(f, RunFile)]
-    identical = same_bytes(options.files)
+    singles = [side_paths(argument) for argument in options.files]
+    identical = same_bytes([paths[0] for paths in singles]) if all(len(p) == 1 for p in singles) else ""
     if identical and not options.json:
         sys.stdout.write(identical)
         return EXIT_OK
@@ -289,6 +307,39 @@ def run_compare(argv: list[str]) -> int:
                                  f"{comparison.contender.label} ({how}: interval [{shown.interval[0]:.3f}, "
                                  f"{shown.interval[1]:.3f}] beyond the {options.noise:g}% noise band{q})\n")
             return EXIT_REGRESSION
+    return EXIT_OK
+
+
+def load_sides(arguments: list[str]) -> list:
+    """Each argument one side: a file (load_for_compare), or several runs (a directory of `lockstep run --runs K`,
+    or files joined by commas) merged into one side (replicated.merged_side)."""
+    from .replicated import merged_side
+
+    sides = []
+    for argument, label in zip(arguments, unique_labels([os.path.normpath(a) for a in arguments])):
+        paths = side_paths(argument)
+        if len(paths) == 1:
+            sides.append(load_for_compare(paths[0], label))
+            continue
+        runs = [load_for_compare(path, f"{label}/{os.path.basename(path)}") for path in paths]
+        if not all(isinstance(run, RunFile) for run in runs):
+            raise UsageError(f"{argument}: a side of several runs takes `lockstep run` files only")
+        sides.append(merged_side(runs, label, argument))
+    return sides
+
+
+def run_planner(options) -> int:
+    """--plan: the pilot's components, what its plan sees, and with --detect the cheapest plan that sees it."""
+    from . import planner
+
+    runs = []
+    for argument in options.files:
+        for path in side_paths(argument):
+            found = load_for_compare(path, path)
+            if not isinstance(found, RunFile):
+                raise UsageError(f"{path}: a pilot is a `lockstep run` file (or a directory of them)")
+            runs.append(found)
+    sys.stdout.write(planner.plan_text(runs, options.time, options.noise, options.detect))
     return EXIT_OK
 
 

@@ -256,6 +256,9 @@ class RunFile:
     # The answer's parts compare sets side by side across machines (answer_reader.py): the recommendations'
     # baselines, the probes, false sharing per pattern, the crossover; None: a file without lockstep_headline.
     answer: "RunAnswer | None" = None
+    # A side of several runs (`lockstep run --runs K`, or files given together): the runs it merges, each as read;
+    # empty for a single file (replicates.merged_side).
+    replicates: tuple["RunFile", ...] = ()
 
     def context_number(self, key: str) -> float | None:
         """A numeric context value (lockstep writes them as text), or None when unavailable."""

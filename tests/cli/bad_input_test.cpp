@@ -63,6 +63,12 @@ const bad_input kBadInputs[] = {
     {{"verify", "--out", "/proc/lockstep-v.json"}, "--out"},
     {{"verify", "--csv", "@/missing/v.csv"}, "--csv"},
     {{"topology", "--out", "/proc/lockstep-t.json"}, "--out"},
+    // --runs: a count of 1..100; its --out a directory whose parent exists;
+    // the rest of the command checked before the directory is made.
+    {{"run", "--runs", "0", "--out", "@/group"}, "--runs"},
+    {{"run", "--runs", "2", "--out", "@/group.json"}, "--out: with --runs, a directory"},
+    {{"run", "--runs", "2", "--out", "@/missing/group"}, "--out"},
+    {{"run", "--runs", "2", "--sync", "nosuch", "--out", "@/group"}, "--sync"},
     // Counts: zero, negative, not a number.
     {{"run", "--repetitions", "0", "--out", "@/r.json"}, "--repetitions"},
     {{"run", "--repetitions", "-3", "--out", "@/r.json"}, "--repetitions"},

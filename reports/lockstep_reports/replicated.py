@@ -1,0 +1,203 @@
+"""A comparison whose sides hold several runs each (`lockstep run --runs K`, a directory or comma list a side).
+
+merged_side joins a side's runs into one RunFile (every repetition of every run, the first run's context and
+headline; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
+apply_replicates replaces each entry's verdict interval with the one from the variance between runs
+(replicates.py: each run's mean log time is one observation, the runs' spread moderated over the entries), the
+aggregates likewise on each run's mean over a group's entries, states the smallest uniform change the comparison
+could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of each side (runs
+1..K/2 against K/2+1..K) with the same statistics: the comparison's own false-positive rate (A against A).
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import Counter
+from dataclasses import dataclass
+
+from . import statistics
+from .comparison import Aggregate, Comparison, PaceAware, aggregate_groups, clustered, verdict_of
+from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_means,
+                         t_quantile, two_sided_p)
+from .run_file import Run, RunFile
+
+# PaceAware.method of an interval from the spread of the runs.
+BETWEEN_RUNS = "between runs"
+# Runs a side from which compare also compares each side's halves (A against A).
+MIN_HALVES_RUNS = 4
+
+
+@dataclass(frozen=True)
+class AgainstItself:
+    """The built-in A/A check: the entries called changed (slower or faster) when each side's first half of runs is
+    compared with its second half, over both sides."""
+
+    changed: int
+    compared: int
+    runs: tuple[int, int]  # the runs a side had
+
+
+@dataclass
+class Replicated:
+    """What the runs of both sides give a comparison."""
+
+    runs_a: int
+    runs_b: int
+    aggregates: list[Aggregate]
+    # The smallest uniform change (percent) of which POWER of the entries would be called slower, and the one the
+    # "all" aggregate would be called slower on at POWER.
+    entries_power: float | None = None
+    aggregate_power: float | None = None
+    against_itself: list[AgainstItself] = dataclasses.field(default_factory=list)
+
+
+def _merged_run(key, runs: list[Run]) -> Run:
+    """The runs' repetitions together; a run in which the entry errored is left out (its times are not a
+    measurement), and the entry is errored only when it errored in every run."""
+    measured = [run for run in runs if not run.errored]
+    runs = measured or runs
+    first = runs[0]
+    return Run(key, names=list(first.names),
+               repetitions=[dataclasses.replace(r, pace=None) for run in runs for r in run.repetitions],
+               aggregates=dict(first.aggregates),
+               errors=[error for run in runs for error in run.errors],
+               failed=sum(run.failed for run in runs),
+               unavailable=sum((run.unavailable for run in runs), Counter()),
+               step_splits=[split for run in runs for split in run.step_splits])
+
+
+def merged_side(files: list[RunFile], label: str, path: str) -> RunFile:
+    """One side of several runs as one RunFile (replicates: the runs), or the file itself when it is one."""
+    if len(files) == 1:
+        return dataclasses.replace(files[0], label=label)
+    keys: dict = {}
+    for run_file in files:
+        for key in run_file.runs:
+            keys.setdefault(key, []).append(run_file.runs[key])
+    warnings = [warning for run_file in files for warning in run_file.warnings]
+    return dataclasses.replace(files[0], path=path, label=label, warnings=warnings,
+                               runs={key: _merged_run(key, runs) for key, runs in keys.items()}, pace=None, pairs=[],
+                               mode_medians=None, replicates=tuple(files))
+
+
+def _values(side: RunFile, key, time_kind: str) -> list[list[float]]:
+    return [run_file.runs[key].times_ns(time_kind) for run_file in side.replicates
+            if key in run_file.runs and not run_file.runs[key].errored]
+
+
+def _evidence(comparison: Comparison, key, time_kind: str) -> RunEvidence | None:
+    means_a = run_means(_values(comparison.baseline, key, time_kind))
+    means_b = run_means(_values(comparison.contender, key, time_kind))
+    if len(means_a) < 1 or len(means_b) < 1 or len(means_a) + len(means_b) < 3:
+        return None
+    return RunEvidence(tuple(means_a), tuple(means_b))
+
+
+def _entry_intervals(comparison: Comparison, time_kind: str) -> dict:
+    """Each combination's interval from its runs, set as its beyond-the-pace figure (PaceAware, BETWEEN_RUNS) with
+    its t-test p; returns {row key: (standard error of the log ratio, degrees)}."""
+    evidence = {row.key: _evidence(comparison, row.key, time_kind) for row in comparison.combinations}
+    evidence = {key: found for key, found in evidence.items() if found is not None and found.variance is not None}
+    prior = statistics.prior_variance([e.variance for e in evidence.values()], [e.degrees for e in evidence.values()])
+    errors = {}
+    for row in comparison.combinations:
+        found = evidence.get(row.key)
+        if found is None:
+            continue
+        variance, degrees = (statistics.moderated_variance(found.variance, found.degrees, prior) if prior
+                             else (found.variance, float(found.degrees)))
+        sampling = variance * found.scale
+        row.pace = PaceAware(BETWEEN_RUNS, f"{len(found.means_a)} and {len(found.means_b)} runs",
+                             math.exp(found.log_ratio), run_interval(found.log_ratio, sampling, degrees),
+                             row.repetitions_a, row.repetitions_b, pooled=True)
+        row.p_raw = two_sided_p(found.log_ratio, sampling, degrees)
+        errors[row.key] = (math.sqrt(sampling), degrees)
+    for row, adjusted in zip(comparison.rows, statistics.benjamini_hochberg([row.p_raw for row in comparison.rows])):
+        row.p_adjusted = adjusted
+    return errors
+
+
+def _measured_everywhere(comparison: Comparison, keys) -> list:
+    """The keys measured (present, not errored) in every run of both sides."""
+    runs = comparison.baseline.replicates + comparison.contender.replicates
+    return [key for key in keys if all(key in f.runs and not f.runs[key].errored for f in runs)]
+
+
+def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
+    """Each run's mean, over the keys, of its mean log time."""
+    means = []
+    for run_file in side.replicates:
+        per_key = run_means([run_file.runs[key].times_ns(time_kind) for key in keys])
+        if len(per_key) == len(keys):
+            means.append(sum(per_key) / len(per_key))
+    return means
+
+
+def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate], float | None]:
+    """Each group's geometric mean of B/A from its runs' means (Student's t on the runs), and the "all" group's
+    standard error of the log ratio (None without one)."""
+    result, error = [], None
+    for group, rows in aggregate_groups(comparison.combinations).items():
+        keys = _measured_everywhere(comparison, [row.key for row in rows
+                                                 if row.pace is not None and row.pace.method == BETWEEN_RUNS])
+        if not keys:
+            continue
+        found = RunEvidence(tuple(_group_means(comparison.baseline, keys, time_kind)),
+                            tuple(_group_means(comparison.contender, keys, time_kind)))
+        if not found.means_a or not found.means_b:
+            continue
+        variance = found.variance
+        interval = (run_interval(found.log_ratio, variance * found.scale, found.degrees)
+                    if variance is not None else None)
+        if group == "all" and variance is not None:
+            error = (math.sqrt(variance * found.scale), found.degrees)
+        result.append(Aggregate(group, len(keys), math.exp(found.log_ratio), interval,
+                                verdict_of(interval, comparison.noise_percent), len(clustered(rows))))
+    return result, error
+
+
+def apply_replicates(comparison: Comparison, time_kind: str, halves: bool = True) -> None:
+    """Turn a comparison of two merged sides (merged_side, two or more runs each) into one of runs: intervals,
+    p and q, aggregates and power from the runs (Replicated); with MIN_HALVES_RUNS runs a side, the halves too."""
+    runs_a, runs_b = len(comparison.baseline.replicates), len(comparison.contender.replicates)
+    errors = _entry_intervals(comparison, time_kind)
+    aggregates, aggregate_error = _aggregates(comparison, time_kind)
+    noise = comparison.noise_percent / 100.0
+    replicated = Replicated(runs_a, runs_b, aggregates)
+    if errors:
+        degrees = statistics.median([d for _, d in errors.values()])
+        change = change_seen_by_share([e for e, _ in errors.values()], degrees, noise, POWER)
+        replicated.entries_power = None if change is None else change * 100.0
+    if aggregate_error is not None:
+        replicated.aggregate_power = detectable_at_power(aggregate_error[0], aggregate_error[1], noise) * 100.0
+    comparison.replicated = replicated
+    if halves and min(runs_a, runs_b) >= MIN_HALVES_RUNS:
+        replicated.against_itself = [against_itself(side, time_kind, comparison) for side in
+                                     (comparison.baseline, comparison.contender)]
+
+
+def against_itself(side: RunFile, time_kind: str, comparison: Comparison) -> AgainstItself:
+    """One side's first half of runs against its second half, with the comparison's statistics and band."""
+    from .compare import compare_pair
+
+    runs = list(side.replicates)
+    half = len(runs) // 2
+    first = merged_side(runs[:half], f"{side.label} 1..{half}", side.path)
+    second = merged_side(runs[half:], f"{side.label} {half + 1}..{len(runs)}", side.path)
+    halves = compare_pair(first, second, time_kind, comparison.alpha, comparison.noise_percent, halves=False)
+    called = [row for row in halves.combinations if halves.beyond_pace(row) in ("slower", "faster")]
+    return AgainstItself(len(called), len(halves.combinations), (half, len(runs) - half))
+
+
+def one_run_power(comparison: Comparison) -> tuple[float | None, float | None]:
+    """A comparison of one run a side: the smallest uniform change of which POWER of the entries would be called
+    slower, and the "all" aggregate's, each from its interval's width (normal quantiles), in percent."""
+    noise = comparison.noise_percent / 100.0
+    z = t_quantile(0.5 + statistics.CONFIDENCE / 2.0, math.inf)
+    errors = [math.log(i[1] / i[0]) / (2.0 * z) for i in (row.beyond_pace_interval() for row in
+                                                         comparison.combinations) if i and i[0] > 0]
+    change = change_seen_by_share(errors, math.inf, noise, POWER) if errors else None
+    overall = next((a for a in comparison.aggregates() if a.group == "all" and a.interval), None)
+    aggregate = (detectable_at_power(math.log(overall.interval[1] / overall.interval[0]) / (2.0 * z), math.inf, noise)
+                 if overall else None)
+    return (None if change is None else change * 100.0), (None if aggregate is None else aggregate * 100.0)

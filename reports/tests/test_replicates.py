@@ -1,0 +1,249 @@
+"""Runs as replicates: the variance components on constructed data with known components (numpy, fixed seeds),
+the Kalibera-Jones allocation against its formula, the power arithmetic, the planner, and compare with a directory
+of runs a side (its intervals from the runs, the built-in A against A). No timing: seeded data only."""
+import json
+import math
+import os
+import tempfile
+import unittest
+
+import numpy as np
+
+from support import run_tool
+from synthetic_runs import matrix_document
+
+from lockstep_reports import replicates
+from lockstep_reports.inputs import load_run_file
+from lockstep_reports.planner import (MAX_PLAN_REPETITIONS, MIN_PLAN_REPETITIONS, Pilot, _Entry,
+                                      allocated_repetitions, cheapest_plan, entries_change, read_pilot)
+
+
+def nested_data(seed: int, sigmas: tuple[float, ...], counts: tuple[int, ...]) -> np.ndarray:
+    """Balanced nested normal data: sigmas and counts from the outermost level in; every level's effect independent."""
+    generator = np.random.default_rng(seed)
+    data = np.zeros(counts)
+    for level, sigma in enumerate(sigmas):
+        shape = counts[:level + 1] + (1,) * (len(counts) - level - 1)
+        data = data + generator.normal(0.0, sigma, size=shape)
+    return data
+
+
+class VarianceComponents(unittest.TestCase):
+    def test_the_one_way_anova_recovers_known_components(self):
+        data = nested_data(7, (0.05, 0.02), (400, 10))
+        found = replicates.variance_components(list(data))
+        self.assertAlmostEqual(math.sqrt(found.between), 0.05, delta=0.05 * 0.1)
+        self.assertAlmostEqual(math.sqrt(found.within), 0.02, delta=0.02 * 0.05)
+        self.assertEqual(found.runs, 400)
+        self.assertAlmostEqual(found.repetitions, 10.0)
+
+    def test_unbalanced_runs_use_n0(self):
+        generator = np.random.default_rng(11)
+        groups = [generator.normal(generator.normal(0.0, 0.04), 0.03, size=int(n))
+                  for n in generator.integers(3, 15, size=500)]
+        found = replicates.variance_components(groups)
+        self.assertAlmostEqual(math.sqrt(found.between), 0.04, delta=0.04 * 0.1)
+        self.assertAlmostEqual(math.sqrt(found.within), 0.03, delta=0.03 * 0.05)
+
+    def test_no_between_run_variance_reads_near_zero_and_never_below(self):
+        data = nested_data(3, (0.0, 0.02), (300, 8))
+        found = replicates.variance_components(list(data))
+        self.assertGreaterEqual(found.between, 0.0)
+        self.assertLess(math.sqrt(found.between), 0.004)
+
+    def test_one_run_leaves_the_between_run_part_unknown(self):
+        found = replicates.variance_components([[0.1, 0.2, 0.15]])
+        self.assertTrue(math.isnan(found.between))
+        self.assertAlmostEqual(found.within, float(np.var([0.1, 0.2, 0.15], ddof=1)))
+
+    def test_kalibera_jones_three_levels(self):
+        # runs x repetitions x batches, as Kalibera and Jones nest executions and iterations
+        data = nested_data(5, (0.04, 0.02, 0.01), (200, 8, 6))
+        batches, repetitions, runs = replicates.nested_components(data)
+        self.assertAlmostEqual(math.sqrt(runs), 0.04, delta=0.04 * 0.1)
+        self.assertAlmostEqual(math.sqrt(repetitions), 0.02, delta=0.02 * 0.1)
+        self.assertAlmostEqual(math.sqrt(batches), 0.01, delta=0.01 * 0.05)
+
+    def test_two_levels_agree_with_the_one_way_anova_on_balanced_data(self):
+        data = nested_data(9, (0.03, 0.01), (50, 6))
+        within, between = replicates.nested_components(data)
+        found = replicates.variance_components(list(data))
+        self.assertAlmostEqual(within, found.within)
+        self.assertAlmostEqual(between, found.between)
+
+
+class Allocation(unittest.TestCase):
+    def test_the_formula(self):
+        # r_i = ceil(sqrt((c_{i+1} / c_i) T_i^2 / T_{i+1}^2))
+        for costs, components in (([1.0, 9.0], [0.04, 0.01]), ([0.3, 12.5], [0.001, 0.0004]),
+                                  ([2.0, 3.0, 50.0], [0.09, 0.01, 0.002])):
+            expected = [math.ceil(math.sqrt((costs[i + 1] / costs[i]) * components[i] / components[i + 1]))
+                        for i in range(len(costs) - 1)]
+            self.assertEqual(replicates.allocation(costs, components), expected)
+        self.assertEqual(replicates.allocation([1.0, 9.0], [0.04, 0.01]), [6])
+
+    def test_an_upper_level_without_variance_asks_for_every_repetition_there(self):
+        self.assertEqual(replicates.allocation([1.0, 5.0], [0.01, 0.0]), [math.inf])
+
+    def test_the_planner_allocates_by_the_formula_within_its_bounds(self):
+        def pilot(within, between, repetition_s, fixed_s):
+            entry = _Entry(None, replicates.Components(between, within, 2, 5), (0.0, 0.0))
+            return Pilot([entry], 2, 5, repetition_s, fixed_s, False)
+        self.assertEqual(allocated_repetitions(pilot(0.04, 0.01, 1.0, 9.0)), 6)
+        self.assertEqual(allocated_repetitions(pilot(0.0001, 0.01, 1.0, 1.0)), MIN_PLAN_REPETITIONS)
+        self.assertEqual(allocated_repetitions(pilot(0.04, 0.0, 1.0, 9.0)), MAX_PLAN_REPETITIONS)
+
+
+class Power(unittest.TestCase):
+    def test_the_detectable_change_is_seen_at_the_stated_power(self):
+        for error, degrees in ((0.02, math.inf), (0.05, 6.0), (0.01, 2.0)):
+            change = replicates.detectable_at_power(error, degrees, 0.05)
+            self.assertAlmostEqual(replicates.power_of(change, error, degrees, 0.05), replicates.POWER, places=6)
+
+    def test_a_share_of_identical_entries_is_their_own_detectable_change(self):
+        change = replicates.change_seen_by_share([0.03] * 10, math.inf, 0.05)
+        self.assertAlmostEqual(change, replicates.detectable_at_power(0.03, math.inf, 0.05), places=6)
+
+    def test_a_simulated_plan_calls_the_predicted_share(self):
+        # 2 (between + within / n) / K: simulate K runs x n repetitions a side, a uniform change of the predicted size
+        between, within, runs, repetitions, noise = 0.02 ** 2, 0.05 ** 2, 4, 10, 0.05
+        error = math.sqrt(2.0 * (between + within / repetitions) / runs)
+        degrees = 2 * runs - 2
+        change = replicates.detectable_at_power(error, degrees, noise)
+        generator = np.random.default_rng(21)
+        called = 0
+        trials = 4000
+        for _ in range(trials):
+            sides = [nested_data(int(generator.integers(1 << 30)), (math.sqrt(between), math.sqrt(within)),
+                                 (runs, repetitions)).mean(axis=1) + shift for shift in (0.0, math.log1p(change))]
+            evidence = replicates.RunEvidence(tuple(sides[0]), tuple(sides[1]))
+            low, _ = replicates.run_interval(evidence.log_ratio, evidence.variance * evidence.scale, degrees)
+            called += low > 1.0 + noise
+        self.assertAlmostEqual(called / trials, replicates.POWER, delta=0.03)
+
+
+def write_group(directory: str, seeds, shift: float = 1.0, drift: float = 0.02, spread: float = 0.03) -> str:
+    os.makedirs(directory)
+    for index, seed in enumerate(seeds, start=1):
+        document = matrix_document(seed, shift=shift, drift=drift, spread=spread)
+        document["context"].update({"lockstep_run_index": str(index), "lockstep_runs": str(len(seeds)),
+                                    "lockstep_matrix_s": "20.000", "lockstep_wall_s": "26.000"})
+        with open(os.path.join(directory, f"run-{index}.json"), "w") as stream:
+            json.dump(document, stream)
+    return directory
+
+
+class RunsASide(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.scratch = tempfile.TemporaryDirectory()
+        root = cls.scratch.name
+        cls.a = write_group(os.path.join(root, "a"), (101, 102, 103, 104))
+        cls.b = write_group(os.path.join(root, "b"), (201, 202, 203, 204))
+        cls.slower = write_group(os.path.join(root, "slower"), (301, 302, 303, 304), shift=1.30)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.scratch.cleanup()
+
+    def test_a_directory_a_side_reads_its_runs_and_checks_itself(self):
+        status, out, err = run_tool("compare", self.a, self.b)
+        self.assertEqual(status, 0, err)
+        self.assertIn("from 4 and 4 runs (the variance between runs)", out)
+        self.assertRegex(out, r"A against A: \d+ of 192 changed")
+        self.assertRegex(out, r"power \(80 %\): [0-9.]+ % in 80 % of entries, [0-9.]+ % on the mean")
+
+    def test_a_uniform_change_beyond_the_drift_is_called(self):
+        status, out, err = run_tool("compare", self.a, self.slower)
+        self.assertEqual(status, 0, err)
+        first = out.split("== B")[1]
+        self.assertRegex(first, r"geometric mean of B/A over the 96 matched pairs[^\n]*\n?[^\n]*: slower")
+
+    def test_comma_joined_files_are_a_side(self):
+        files = ",".join(os.path.join(self.a, f"run-{i}.json") for i in range(1, 3))
+        others = ",".join(os.path.join(self.b, f"run-{i}.json") for i in range(1, 3))
+        status, out, err = run_tool("compare", files, others)
+        self.assertEqual(status, 0, err)
+        self.assertIn("from 2 and 2 runs", out)
+        self.assertNotIn("A against A", out)
+
+    def test_an_empty_directory_is_refused_in_one_line(self):
+        with tempfile.TemporaryDirectory() as empty:
+            status, out, err = run_tool("compare", empty, self.b)
+        self.assertEqual(status, 2)
+        self.assertEqual(len(err.strip().splitlines()), 1, err)
+        self.assertIn("without run files", err)
+
+
+def scale_times_module():
+    import importlib.util
+    path = os.path.join(os.path.dirname(__file__), "..", "..", "scripts", "scale_times.py")
+    spec = importlib.util.spec_from_file_location("scale_times", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+class ScaleTimes(unittest.TestCase):
+    def test_it_scales_the_step_and_episode_times_of_rk4_and_barrier_entries_only(self):
+        document = {"benchmarks": [
+            {"name": "rk4/sync:a/threads:2", "real_time": 10.0, "cpu_time": 4.0, "ns_per_step": 10.0},
+            {"name": "barrier/sync:a/threads:2", "real_time": 2.0, "ns_per_episode": 2.0},
+            {"name": "barrier/sync:a/threads:2_cv", "real_time": 0.1, "aggregate_unit": "percentage"},
+            {"name": "c2c/pin:compact/threads:2", "real_time": 100.0, "one_way_ns": 30.0},
+            {"name": "rk4/serial", "real_time": 20.0, "ns_per_step": 20.0}]}
+        scaled = scale_times_module().scaled_document(document, 1.15)["benchmarks"]
+        self.assertAlmostEqual(scaled[0]["real_time"], 11.5)
+        self.assertAlmostEqual(scaled[0]["cpu_time"], 4.6)
+        self.assertAlmostEqual(scaled[0]["ns_per_step"], 11.5)
+        self.assertAlmostEqual(scaled[1]["ns_per_episode"], 2.3)
+        self.assertEqual(scaled[2]["real_time"], 0.1)
+        self.assertEqual(scaled[3], {"name": "c2c/pin:compact/threads:2", "real_time": 100.0, "one_way_ns": 30.0})
+        self.assertAlmostEqual(scaled[4]["real_time"], 23.0)  # rk4/serial is an rk4/ entry: scaled as named
+
+    def test_an_existing_target_is_refused_and_nothing_is_written(self):
+        with tempfile.TemporaryDirectory() as scratch:
+            source = write_group(os.path.join(scratch, "a"), (1, 2))
+            self.assertEqual(scale_times_module().main(["1.15", source, source]), 2)
+
+
+class Planner(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.scratch = tempfile.TemporaryDirectory()
+        cls.pilot = write_group(os.path.join(cls.scratch.name, "pilot"), (401, 402, 403, 404))
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.scratch.cleanup()
+
+    def test_the_cheapest_plan_reaches_the_target_and_one_run_less_does_not(self):
+        files = [load_run_file(os.path.join(self.pilot, f"run-{i}.json")) for i in range(1, 5)]
+        pilot = read_pilot(files, "real", 0.05)
+        self.assertAlmostEqual(pilot.repetition_s, 20.0 / 5)
+        self.assertAlmostEqual(pilot.fixed_s, 6.0)
+        runs, repetitions = cheapest_plan(pilot, 0.15, 0.05)
+        self.assertLessEqual(entries_change(pilot.entries, runs, repetitions, 0.05), 0.15)
+        if runs > 2:
+            self.assertGreater(entries_change(pilot.entries, runs - 1, repetitions, 0.05), 0.15)
+
+    def test_the_plan_command(self):
+        status, out, err = run_tool("compare", "--plan", self.pilot, "--detect", "15%")
+        self.assertEqual(status, 0, err)
+        self.assertIn("pilot of 4 run(s) x 5 repetitions", out)
+        self.assertRegex(out, r"--detect 15%: \d+ runs a side x \d+ repetitions")
+        self.assertIn("threads:2", out)
+
+    def test_a_one_run_pilot_says_the_drift_is_assumed(self):
+        status, out, err = run_tool("compare", "--plan", os.path.join(self.pilot, "run-1.json"))
+        self.assertEqual(status, 0, err)
+        self.assertIn("one run: the between-run part is assumed", out)
+
+    def test_detect_without_plan_is_refused(self):
+        status, _, err = run_tool("compare", self.pilot, self.pilot, "--detect", "15%")
+        self.assertEqual(status, 2)
+        self.assertIn("--detect goes with --plan", err)
+
+
+if __name__ == "__main__":
+    unittest.main()
