@@ -305,10 +305,14 @@ void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, 
 void migration_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& probes) {
   if (probes.migration) {
     const migration_probe& probe = *probes.migration;
-    lines.push_back(fmt::format("Migration: one forced move takes {} (p50), refilling {} KiB {} more (probe, CPUs {}, "
+    // The refill is a difference of two medians (with the refill against without): at or below 0 it added
+    // nothing measurable, and the line says so beside the figure.
+    const std::string refill = probe.refill.p50 > 0
+                                   ? format_ns(probe.refill.p50) + " more"
+                                   : "nothing measurable (" + format_ns(probe.refill.p50) + ")";
+    lines.push_back(fmt::format("Migration: one forced move takes {} (p50), refilling {} KiB {} (probe, CPUs {}, "
                                 "{} moves)",
-                                format_ns(probe.move.p50), probe.bytes / 1024, format_ns(probe.refill.p50), probe.cpus,
-                                probe.move.count));
+                                format_ns(probe.move.p50), probe.bytes / 1024, refill, probe.cpus, probe.move.count));
   } else {
     lines.push_back("Migration: probe unavailable (" + probes.migration_unavailable + ")");
   }

@@ -252,6 +252,17 @@ class TheAnswersParts(Scratch):
             row = out.splitlines()[line_index(out, f"  {pattern.name}")]
             self.assertIn(f"{pattern.median:#.3g}x [{pattern.ci_low:#.3g}, {pattern.ci_high:#.3g}]", row)
 
+    def test_a_refill_below_zero_is_read_as_written(self):
+        """The migration probe's refill is a difference of two medians: when refilling added nothing measurable it
+        is below 0, and the file is read, not refused (a run once wrote -338.5 ns)."""
+        with open(XEON, encoding="utf-8") as stream:
+            document = json.load(stream)
+        document["lockstep_headline"]["migration_probe"] = {"cpus": "0,1", "bytes": 262144, "moves": 60,
+                                                            "move_p50_ns": 10230.0, "refill_p50_ns": -338.5}
+        path = self.write("refill.json", document)
+        self.assertEqual(read_answer(path, document).migration.refill_ns, -338.5)
+        compared(path, AMD_DEBUG_QUICK)
+
     def test_a_malformed_part_is_one_line_naming_its_place(self):
         bad = [(dict(self.PATTERNS[0], median="4x"), None, "lockstep_headline.false_sharing_patterns[0].median"),
                ([{"median": 2.0, "ci_low": 1.0, "ci_high": 3.0, "verdict": "penalty", **self.WHERE}], None,
