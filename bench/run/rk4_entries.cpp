@@ -267,8 +267,9 @@ class serial_block_runner final : public block_runner {
   std::optional<double> run_block(std::uint64_t units) override {
     const platform::thread_counters before = accounting_ ? platform::snapshot_current_thread() : platform::thread_counters{};
     if (accounting_ && !schedstat_) schedstat_.emplace();  // on the thread that runs the blocks
-    const std::optional<std::int64_t> waited_before =
-        accounting_ ? schedstat_->read().run_queue_wait_ns : std::optional<std::int64_t>();
+    // The run-queue wait so far, -1 where the kernel does not say (a plain
+    // number: GCC 12 took an optional's difference below for uninitialised).
+    const std::int64_t waited_before = accounting_ ? schedstat_->read().run_queue_wait_ns.value_or(-1) : -1;
     const std::int64_t block_start = platform::now_ns();
     rk4_.run(units);  // warm-up, as a team's block has
     const std::int64_t cpu_start = thread_cpu_ns();
@@ -280,10 +281,11 @@ class serial_block_runner final : public block_runner {
     facts_.reset();
     if (accounting_) {
       const platform::thread_counters after = platform::snapshot_current_thread();
-      const std::optional<std::int64_t> waited_after = schedstat_->read().run_queue_wait_ns;
+      const std::int64_t waited_after = schedstat_->read().run_queue_wait_ns.value_or(-1);
       block_facts facts{(after - before).involuntary_switches,
-                        waited_before && waited_after ? std::optional<std::int64_t>(*waited_after - *waited_before)
-                                                      : std::nullopt,
+                        waited_before >= 0 && waited_after >= 0
+                            ? std::optional<std::int64_t>(waited_after - waited_before)
+                            : std::nullopt,
                         platform::now_ns() - block_start, std::nullopt};
       if (cpu_start >= 0 && cpu_end >= cpu_start && elapsed > 0)
         facts.cpus_busy = static_cast<double>(cpu_end - cpu_start) / static_cast<double>(elapsed);
