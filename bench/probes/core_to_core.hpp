@@ -297,7 +297,8 @@ inline std::vector<double> measure_pair(const pair_request& request) {
     try {
       detail::pin_this_thread(request.cpu_a);
       detail::fresh_page page;
-      // relaxed: published by the release half of the CAS of stage to 1 below.
+      // relaxed, both: published by the release half of the CAS of stage to 1
+      // below, which the responder's acquire load of stage pairs with.
       shared_word.store(&page.word(), std::memory_order_relaxed);
       shared_page.store(&page, std::memory_order_relaxed);
       int expected = 0;
