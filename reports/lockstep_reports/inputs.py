@@ -29,6 +29,7 @@ the place in it and the problem; the command line turns it into exit status 2.
 """
 from __future__ import annotations
 
+import functools
 import json
 import os
 
@@ -87,7 +88,8 @@ def read_document(path: str, text: str | None = None) -> tuple[str, object]:
     """(kind, document) of a lockstep JSON result file, checked against its kind's schema
     (docs/schemas/<kind>.schema.json, schemas.py) before anything reads it. A file without "kind" is a
     `lockstep run` file (Google Benchmark JSON). Every tool reads JSON results through this."""
-    document = parse_json(path, read_text(path) if text is None else text)
+    text = read_text(path) if text is None else text
+    document = parse_json(path, text)
     if not isinstance(document, dict):
         raise InputError(path, f"not Google Benchmark JSON: the top level is {json_kind(document)}, "
                                "not an object with \"context\" and \"benchmarks\"")
@@ -107,10 +109,17 @@ def read_document(path: str, text: str | None = None) -> tuple[str, object]:
         if kind == "run" and not written_by_lockstep(document):
             raise InputError(path, "is Google Benchmark JSON that lockstep did not write (no lockstep_ key in it): "
                                    "compare and report read the files of `lockstep run`")
-    problem = schemas.problem(document, kind)
+    problem = _schema_problem(kind, text)
     if problem is not None:
         raise InputError(path, problem)
     return kind, document
+
+
+@functools.lru_cache(maxsize=16)
+def _schema_problem(kind: str, text: str) -> str | None:
+    """schemas.problem of the document this text holds, once per text in a process: compare reads a side
+    again for each pairing and a test reads the same fixture many times, and the check walks every value."""
+    return schemas.problem(json.loads(text), kind)
 
 
 def written_by_lockstep(document: dict) -> bool:

@@ -19,6 +19,7 @@ times in five (detectable_at_power).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -127,6 +128,7 @@ class RunEvidence:
         return 1.0 / len(self.means_a) + 1.0 / len(self.means_b)
 
 
+@functools.lru_cache(maxsize=256)
 def t_quantile(probability: float, degrees: float) -> float:
     from scipy import stats
 
@@ -177,8 +179,17 @@ def change_seen_by_share(standard_errors, degrees: float, noise: float, share: f
     if not errors:
         return None
 
-    def mean_power(change: float) -> float:
-        return sum(power_of(change, e, degrees, noise) for e in errors) / len(errors)
+    from scipy import stats
+
+    errors = np.asarray(errors, dtype=float)
+    seen = errors > 0
+    critical = t_quantile(0.5 + statistics.CONFIDENCE / 2.0, degrees)
+    distribution = stats.norm() if math.isinf(degrees) else stats.t(degrees)
+
+    def mean_power(change: float) -> float:  # power_of of every entry at once, summed in their order
+        powers = np.full(errors.size, 1.0 if change > noise else 0.0)
+        powers[seen] = distribution.cdf((math.log1p(change) - math.log1p(noise)) / errors[seen] - critical)
+        return sum(powers.tolist()) / errors.size
 
     low, high = noise, noise + 1.0
     while mean_power(high) < share:

@@ -151,23 +151,46 @@ def _splitmix64(seed: int):
         yield z ^ (z >> 31)
 
 
+def _splitmix64_block(seed: int, count: int, start: int = 0) -> np.ndarray:
+    """Outputs start .. start + count - 1 of _splitmix64(seed), at once (uint64): output k is the mix of
+    seed + (k + 1) * gamma alone, so a block of the stream needs none of the outputs before it."""
+    state = (np.arange(start + 1, start + count + 1, dtype=np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+             + np.uint64(seed & _MASK64))
+    z = (state ^ (state >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+    z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+    return z ^ (z >> np.uint64(31))
+
+
+def _indices_of(outputs: np.ndarray, n) -> np.ndarray:
+    """_index_of of each output (n one count, or one per output), exact without 128-bit products: with
+    x = h 2^32 + l, (x n) >> 64 = (h n + ((l n) >> 32)) >> 32 for n below 2^32."""
+    n = np.asarray(n, dtype=np.uint64)
+    if np.any(n >= np.uint64(1 << 32)):
+        raise ValueError("draws into 2^32 values or more")
+    high, low = outputs >> np.uint64(32), outputs & np.uint64(0xFFFFFFFF)
+    return ((high * n + ((low * n) >> np.uint64(32))) >> np.uint64(32)).astype(np.int64)
+
+
+def _row_sums(rows: np.ndarray) -> np.ndarray:
+    """Each row's sum added left to right, as a Python loop adds it (a cumulative sum's last column): the
+    same float, bit for bit, as the per-resample loops these sums replace. Trailing zeros change nothing."""
+    if rows.shape[1] == 0:
+        return np.zeros(rows.shape[0])
+    return np.cumsum(rows, axis=1)[:, -1]
+
+
 def _index_of(output: int, n: int) -> int:
     """An output x of the generator as an index in [0, n): (x n) >> 64 (Lemire's multiply-shift)."""
     return (output * n) >> 64
-
-
-def _resamples_from(outputs, n: int, resamples: int) -> list[list[int]]:
-    """`resamples` lists of n indices in [0, n) from the generator's outputs."""
-    if n < 1:
-        raise ValueError("draws into no values")
-    return [[_index_of(next(outputs), n) for _ in range(n)] for _ in range(resamples)]
 
 
 def bootstrap_indices(n: int, resamples: int, seed: int) -> list[list[int]]:
     """The seeded bootstrap's draws (platform/statistics.hpp, bootstrap_draws): `resamples` lists of n indices in
     [0, n), from splitmix64 started at `seed`, each output x mapped to (x n) >> 64, resample after resample, index
     after index."""
-    return _resamples_from(_splitmix64(seed), n, resamples)
+    if n < 1:
+        raise ValueError("draws into no values")
+    return _indices_of(_splitmix64_block(seed, n * resamples), n).reshape(resamples, n).tolist()
 
 
 def bootstrap_median(values, confidence: float = CONFIDENCE, resamples: int = BOOTSTRAP_RESAMPLES,
@@ -216,6 +239,18 @@ def inverse_verdict(word: str) -> str:
     return {PENALTY: GAIN, GAIN: PENALTY}.get(word, word)
 
 
+def _resample_medians(ordered: list[float], outputs: np.ndarray) -> list[float]:
+    """The median of each resample of the sorted values drawn by `outputs` (len(ordered) draws a resample),
+    as median() takes it: the values of the sorted indices are sorted too."""
+    n = len(ordered)
+    drawn = np.sort(_indices_of(outputs, n).reshape(-1, n), axis=1)
+    values = np.asarray(ordered, dtype=float)
+    middle = n // 2
+    if n % 2:
+        return values[drawn[:, middle]].tolist()
+    return ((values[drawn[:, middle - 1]] + values[drawn[:, middle]]) / 2.0).tolist()
+
+
 def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     """Percentile bootstrap interval of median(b)/median(a); None with fewer than 2 values a side.
     Each side is sorted first, so the interval does not depend on the order of the repetitions in a file. The
@@ -224,11 +259,10 @@ def ratio_interval(a, b, name: str) -> tuple[float, float] | None:
     b = sorted(float(value) for value in b)
     if len(a) < 2 or len(b) < 2:
         return None
-    outputs = _splitmix64(BASE_SEED + zlib.crc32(name.encode("utf-8")))
-    resamples_a = _resamples_from(outputs, len(a), BOOTSTRAP_RESAMPLES)
-    resamples_b = _resamples_from(outputs, len(b), BOOTSTRAP_RESAMPLES)
-    medians_a = [median([a[index] for index in indices]) for indices in resamples_a]
-    medians_b = [median([b[index] for index in indices]) for indices in resamples_b]
+    seed = BASE_SEED + zlib.crc32(name.encode("utf-8"))
+    draws_a = len(a) * BOOTSTRAP_RESAMPLES
+    medians_a = _resample_medians(a, _splitmix64_block(seed, draws_a))
+    medians_b = _resample_medians(b, _splitmix64_block(seed, len(b) * BOOTSTRAP_RESAMPLES, start=draws_a))
     ratios = [of_b / of_a for of_a, of_b in zip(medians_a, medians_b) if of_a != 0.0]
     ratios = [ratio for ratio in ratios if math.isfinite(ratio)]
     if not ratios:
@@ -425,8 +459,8 @@ def geometric_mean_interval(ratios, seed: int, confidence: float = CONFIDENCE,
     whole = math.exp(sum(logs) / len(logs))
     if len(logs) < 2:
         return whole, whole, whole
-    means = [sum(logs[i] for i in indices) / len(indices)
-             for indices in bootstrap_indices(len(logs), resamples, seed)]
+    drawn = _indices_of(_splitmix64_block(seed, len(logs) * resamples), len(logs)).reshape(resamples, len(logs))
+    means = (_row_sums(np.asarray(logs)[drawn]) / len(logs)).tolist()
     low, high = percentile_interval(means, confidence)
     return whole, math.exp(low), math.exp(high)
 
@@ -454,20 +488,48 @@ def cluster_geometric_mean_interval(clusters, seed: int, confidence: float = CON
     borrowed = [float(value) for value in borrowed]
     if len(every) < 2 and not borrowed:
         return whole, whole, whole
-    outputs = _splitmix64(seed)
-    means = []
-    for _ in range(resamples):
-        total, count = 0.0, 0
-        for _ in range(len(groups)):
-            group = groups[_index_of(next(outputs), len(groups))]
-            for _ in range(len(group)):
-                total += group[_index_of(next(outputs), len(group))]
-            count += len(group)
-        shared = (sum(borrowed[_index_of(next(outputs), len(borrowed))] for _ in groups) / len(groups)
-                  if borrowed else 0.0)
-        means.append(total / count + shared)
+    means = _cluster_resample_means(groups, borrowed, seed, resamples)
     low, high = percentile_interval(means, confidence)
     return whole, math.exp(low), math.exp(high)
+
+
+def _cluster_resample_means(groups: list[list[float]], borrowed: list[float], seed: int,
+                            resamples: int) -> list[float]:
+    """The resamples' mean log ratios of cluster_geometric_mean_interval, its draws in its order: per resample,
+    a cluster, then that many of its values, cluster after cluster, then len(groups) borrowed values. Where a
+    cluster's draw starts depends on the sizes drawn before it, so the walk over clusters is a loop; the values
+    are gathered and summed at once, each resample's sum in the loop's order (_row_sums)."""
+    clusters, lengths = len(groups), np.array([len(group) for group in groups], dtype=np.int64)
+    per_resample = clusters * (1 + int(lengths.max())) + (clusters if borrowed else 0)
+    outputs = _splitmix64_block(seed, resamples * per_resample)
+    picks = _indices_of(outputs, clusters)
+    after = (np.arange(outputs.size) + 1 + lengths[picks]).tolist()  # where the draw after a cluster's starts
+    draws, borrowed_starts, position = [], [], 0
+    for _ in range(resamples):
+        for _ in range(clusters):
+            draws.append(position)
+            position = after[position]
+        if borrowed:
+            borrowed_starts.append(position)
+            position += clusters
+    drawn = picks[draws]
+    starts = np.asarray(draws) + 1
+    drawn_sizes = lengths[drawn]
+    first_of = np.concatenate(([0], np.cumsum(drawn_sizes)[:-1]))
+    within = np.arange(int(drawn_sizes.sum())) - np.repeat(first_of, drawn_sizes)
+    cluster_offsets = np.concatenate(([0], np.cumsum(lengths)[:-1]))
+    picked = _indices_of(outputs[np.repeat(starts, drawn_sizes) + within], np.repeat(drawn_sizes, drawn_sizes))
+    values = np.concatenate([np.asarray(group, dtype=float) for group in groups])[
+        np.repeat(cluster_offsets[drawn], drawn_sizes) + picked]
+    counts = drawn_sizes.reshape(resamples, clusters).sum(axis=1)
+    rows = np.zeros((resamples, int(counts.max())))
+    column = np.arange(values.size) - np.repeat(np.concatenate(([0], np.cumsum(counts)[:-1])), counts)
+    rows[np.repeat(np.arange(resamples), counts), column] = values
+    means = _row_sums(rows) / counts
+    if borrowed:
+        at = np.asarray(borrowed_starts)[:, None] + np.arange(clusters)
+        means = means + _row_sums(np.asarray(borrowed)[_indices_of(outputs[at], len(borrowed))]) / clusters
+    return means.tolist()
 
 
 def seed_of(name: str) -> int:

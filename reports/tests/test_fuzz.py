@@ -1,6 +1,6 @@
 """Bad result files by the thousand: seeded mutations of the fixtures and samples, fed to `lockstep compare`
 and `lockstep report` through their real entry point (lockstep_reports.main.main, what reports/cli.py runs
-for the lockstep binary), in this process, so that a thousand cases fit in well under a minute.
+for the lockstep binary), in this process, so that 1200 cases take about two minutes of one CPU.
 
 Each case is one mutation of one base document (a fixture or a sample, run files trimmed to a few
 benchmarks so that a comparison is quick): truncated at a random byte, bytes that are not UTF-8, another
