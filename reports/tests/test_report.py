@@ -24,6 +24,22 @@ ALL_INPUTS = ["machine_a.json", "machine_b.json", "c2c_a.json", "c2c_b.json", "d
 
 
 
+_REAL_SAVEFIG = matplotlib.figure.Figure.savefig
+_stand_in_figures = None
+
+
+def setUpModule():
+    """Every figure is built and none rendered (_stand_in_svg), except in Report, which renders the whole sample
+    report for real, twice: rendering is most of a report's time, and the pages are what these tests read."""
+    global _stand_in_figures
+    _stand_in_figures = mock.patch.object(matplotlib.figure.Figure, "savefig", _stand_in_svg)
+    _stand_in_figures.start()
+
+
+def tearDownModule():
+    _stand_in_figures.stop()
+
+
 def digest_tree(directory):
     digests = {}
     for root, _, files in os.walk(directory):
@@ -35,8 +51,13 @@ def digest_tree(directory):
 
 
 class Report(unittest.TestCase):
+    """The whole sample report with its figures rendered."""
+
     @classmethod
     def setUpClass(cls):
+        cls.rendered = mock.patch.object(matplotlib.figure.Figure, "savefig", _REAL_SAVEFIG)
+        cls.rendered.start()
+        cls.addClassCleanup(cls.rendered.stop)
         cls.directory = tempfile.TemporaryDirectory()
         cls.out = os.path.join(cls.directory.name, "first")
         status, _, err = run_tool("report", *[fixture(name) for name in ALL_INPUTS], "--out", cls.out)
