@@ -3,8 +3,8 @@
 merged_side joins a side's runs into one RunFile (every repetition of every run, the first run's context and
 headline; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
 apply_replicates replaces each entry's verdict interval with the one from the variance between runs
-(replicates.py: each run's mean log time is one observation, the runs' spread moderated over the entries), the
-aggregates likewise on each run's mean over a group's entries, states the smallest uniform change the comparison
+(replicates.py: each run's median log time is one observation, the runs' spread moderated over the entries), the
+aggregates likewise on each run's mean over a group's entries of those medians, states the smallest uniform change the comparison
 could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of each side (runs
 1..K/2 against K/2+1..K) with the same statistics: the comparison's own false-positive rate (A against A).
 """
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from . import statistics
 from .comparison import Aggregate, Comparison, PaceAware, aggregate_groups, clustered, verdict_of
-from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_means,
+from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
                          t_quantile, two_sided_p)
 from .run_file import Run, RunFile
 
@@ -86,8 +86,8 @@ def _values(side: RunFile, key, time_kind: str) -> list[list[float]]:
 
 
 def _evidence(comparison: Comparison, key, time_kind: str) -> RunEvidence | None:
-    means_a = run_means(_values(comparison.baseline, key, time_kind))
-    means_b = run_means(_values(comparison.contender, key, time_kind))
+    means_a = run_medians(_values(comparison.baseline, key, time_kind))
+    means_b = run_medians(_values(comparison.contender, key, time_kind))
     if len(means_a) < 1 or len(means_b) < 1 or len(means_a) + len(means_b) < 3:
         return None
     return RunEvidence(tuple(means_a), tuple(means_b))
@@ -124,17 +124,17 @@ def _measured_everywhere(comparison: Comparison, keys) -> list:
 
 
 def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
-    """Each run's mean, over the keys, of its mean log time."""
+    """Each run's mean, over the keys, of its median log time (replicates.run_summary)."""
     means = []
     for run_file in side.replicates:
-        per_key = run_means([run_file.runs[key].times_ns(time_kind) for key in keys])
+        per_key = run_medians([run_file.runs[key].times_ns(time_kind) for key in keys])
         if len(per_key) == len(keys):
             means.append(sum(per_key) / len(per_key))
     return means
 
 
 def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate], float | None]:
-    """Each group's geometric mean of B/A from its runs' means (Student's t on the runs), and the "all" group's
+    """Each group's geometric mean of B/A from its runs' means of their medians (Student's t on the runs), and the "all" group's
     standard error of the log ratio (None without one)."""
     result, error = [], None
     for group, rows in aggregate_groups(comparison.combinations).items():
