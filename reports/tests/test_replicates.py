@@ -194,12 +194,14 @@ class Power(unittest.TestCase):
         self.assertAlmostEqual(called / trials, replicates.POWER, delta=0.05)
 
 
-def write_group(directory: str, seeds, shift: float = 1.0, drift: float = 0.02, spread: float = 0.03,
+def write_group(directory: str, seeds, shift=1.0, drift: float = 0.02, spread: float = 0.03,
                 slow_first: float = 1.0) -> str:
-    """Runs of matrix_document; slow_first multiplies every entry's first repetition (a change of pace in it)."""
+    """Runs of matrix_document; shift one factor, or one per run; slow_first multiplies every entry's first
+    repetition (a change of pace in it)."""
     os.makedirs(directory)
-    for index, seed in enumerate(seeds, start=1):
-        document = matrix_document(seed, shift=shift, drift=drift, spread=spread)
+    shifts = list(shift) if isinstance(shift, (list, tuple)) else [shift] * len(seeds)
+    for index, (seed, factor) in enumerate(zip(seeds, shifts), start=1):
+        document = matrix_document(seed, shift=factor, drift=drift, spread=spread)
         for entry in document["benchmarks"]:
             if entry["repetition_index"] == 0 and entry["repetitions"] > 1:
                 for field in ("real_time", "cpu_time", "ns_per_step"):
@@ -220,6 +222,8 @@ class RunsASide(unittest.TestCase):
         cls.b = write_group(os.path.join(root, "b"), (201, 202, 203, 204))
         cls.slower = write_group(os.path.join(root, "slower"), (301, 302, 303, 304), shift=1.30)
         cls.slow_first = write_group(os.path.join(root, "slow_first"), (201, 202, 203, 204), slow_first=2.0)
+        # The machine 30 % slower for the second half of the side's runs.
+        cls.drifted = write_group(os.path.join(root, "drifted"), range(401, 409), shift=(1.0,) * 4 + (1.3,) * 4)
 
     @classmethod
     def tearDownClass(cls):
@@ -247,6 +251,28 @@ class RunsASide(unittest.TestCase):
         self.assertIn("changed between runs: 0 of 96", first)
         self.assertNotRegex(first, r"geometric mean of B/A over the 96 matched pairs[^:]*: [0-9.]+, 95% interval "
                                    r"\[[0-9.]+, [0-9.]+\]: slower")
+
+    def test_alternate_runs_are_the_false_positive_rate_and_time_order_shows_drift(self):
+        status, out, err = run_tool("compare", self.a, self.b)
+        self.assertEqual(status, 0, err)
+        self.assertIn("odd runs against its even", out)
+        self.assertNotIn("drifted", out)
+        with tempfile.TemporaryDirectory() as scratch:
+            path = os.path.join(scratch, "compare.json")
+            status, out, err = run_tool("compare", self.a, self.drifted, "--json", path)
+            self.assertEqual(status, 0, err)
+            with open(path) as stream:
+                replicates = json.load(stream)["comparisons"][0]["replicates"]
+        text = " ".join(out.split())
+        self.assertIn("the machine drifted while a side ran", text)
+        alternate, in_time_order = (replicates["against_itself"][split] for split in ("alternate runs", "in time order"))
+        self.assertEqual(replicates["runs"], [4, 8])
+        self.assertEqual(alternate["sides"][1]["runs"], [4, 4])
+        # Runs 1, 3, 5, 7 and 2, 4, 6, 8 each hold two runs of either pace: nothing between them; the halves in
+        # time order are the two paces.
+        self.assertEqual(alternate["sides"][1]["changed"], 0)
+        self.assertGreater(in_time_order["sides"][1]["changed"], in_time_order["sides"][1]["compared"] // 2)
+        self.assertRegex(text, rf"A against A: {alternate['changed']} of {alternate['compared']} changed")
 
     def test_comma_joined_files_are_a_side(self):
         files = ",".join(os.path.join(self.a, f"run-{i}.json") for i in range(1, 3))
