@@ -18,7 +18,7 @@ from .machine_answers import answer_lines, difference_lines
 from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
-from .replicated import BETWEEN_RUNS, one_run_power
+from .replicated import ALTERNATE, BETWEEN_RUNS, DRIFT_SHOWN_ABOVE, IN_TIME_ORDER, one_run_power
 from .run_analysis import sharing_layout
 from .run_file import RunFile
 from .text_layout import WIDTH, table, wrapped
@@ -213,12 +213,18 @@ def evidence_lines(comparison: Comparison, b: str) -> list[str]:
     else:
         out = [f"power (80 %): {_power_percent(entries)} in 80 % of entries, {_power_percent(aggregate)} on the mean; "
                f"{basis}"]
-    checks = replicated.against_itself if replicated is not None else []
+    checks = replicated.split(ALTERNATE) if replicated is not None else []
     if checks:
         changed, compared = sum(c.changed for c in checks), sum(c.compared for c in checks)
         sides = ", ".join(f"{name} {c.changed} of {c.compared}" for name, c in zip(("A", b), checks))
-        out.append(f"A against A: {changed} of {compared} changed, {_rate(changed, compared)} false positives (each "
-                   f"side's first half of runs against its second: {sides})")
+        line = (f"A against A: {changed} of {compared} changed, {_rate(changed, compared)} false positives (each "
+                f"side's odd runs against its even: {sides})")
+        drifted = replicated.split(IN_TIME_ORDER)
+        moved, seen = sum(c.changed for c in drifted), sum(c.compared for c in drifted)
+        if seen and moved / seen > DRIFT_SHOWN_ABOVE:
+            line += (f"; in time order, first half against second, {moved} of {seen}: the machine drifted while a side "
+                     "ran, which reads as a change between sides measured one after the other (alternate their runs)")
+        out.append(line)
     return out
 
 

@@ -386,6 +386,21 @@ def row_json(comparison, row) -> dict:
             "counters": {k: list(v) for k, v in sorted(row.counters.items())}}
 
 
+def replicates_json(replicated) -> dict | None:
+    """What the runs of both sides gave (replicated.Replicated): the runs a side, the power, A against A per split;
+    None with one run a side."""
+    if replicated is None:
+        return None
+    splits = {}
+    for split in {check.split: None for check in replicated.against_itself}:
+        checks = replicated.split(split)
+        splits[split] = {"changed": sum(c.changed for c in checks), "compared": sum(c.compared for c in checks),
+                         "sides": [{"changed": c.changed, "compared": c.compared, "runs": list(c.runs)}
+                                   for c in checks]}
+    return {"runs": [replicated.runs_a, replicated.runs_b], "entries_power_pct": replicated.entries_power,
+            "aggregate_power_pct": replicated.aggregate_power, "against_itself": splits}
+
+
 def comparison_json(comparisons) -> str:
     document = {"kind": "compare", "comparisons": []}
     for comparison in comparisons:
@@ -400,6 +415,7 @@ def comparison_json(comparisons) -> str:
                             "detectable_pct": a.detectable(comparison.noise_percent)}
                            for a in comparison.aggregates()],
             "drift": comparison.drift, "pooled_entries": comparison.pooled_entries,
+            "replicates": replicates_json(comparison.replicated),
             "verdicts": comparison.verdict_counts(),
             "verdicts_beyond_pace": comparison.pace_verdict_counts(),
             "pace": ("unavailable" if comparison.different_modes is None

@@ -1,9 +1,9 @@
 """`lockstep compare --plan PILOT [PILOT ...] [--detect PCT]`: what a plan of runs x repetitions can see, from a pilot.
 
 A pilot is any earlier `lockstep run` file, or a group of runs (a directory of `lockstep run --runs K`, or files
-given together). Per entry, the variance components of log step time (replicates.variance_components: between
-runs, within a run) give each plan's standard error of a log ratio B/A, two sides alike:
-Var = 2 (Var(b) + Var(e) / n) / K. Per thread count and overall the planner states the smallest uniform change
+given together). Per entry, the variance components of a run's median log step time, compare's figure for a run
+(replicates.median_components: between runs, within a run from the repetitions' robust spread) give each plan's
+standard error of a log ratio B/A, two sides alike: Var = 2 (Var(b) + Var_m(e) / n) / K. Per thread count and overall the planner states the smallest uniform change
 of which 80 % of the entries would be called slower (replicates.change_seen_by_share, two-sided at compare's
 confidence, against its noise band), and the aggregate's.
 
@@ -24,8 +24,8 @@ import numpy as np
 from . import statistics
 from .comparison import aggregate_groups
 from .fields import MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT
-from .replicates import (POWER, Components, allocation, assumed_drift, change_seen_by_share, detectable_at_power,
-                         variance_components)
+from .replicates import (MEDIAN_EFFICIENCY, POWER, Components, allocation, assumed_drift, change_seen_by_share,
+                         detectable_at_power, median_components, run_summary)
 from .run_analysis import is_calibration
 from .run_file import RunFile
 from .text_layout import wrapped
@@ -40,7 +40,7 @@ MAX_PLAN_RUNS = 100
 class _Entry:
     key: object
     components: Components
-    run_means: tuple[float, ...]  # each pilot run's mean log time, in the pilot's order
+    run_medians: tuple[float, ...]  # each pilot run's median log time (run_summary), in the pilot's order
 
 
 @dataclass(frozen=True)
@@ -65,12 +65,13 @@ def read_pilot(files: list[RunFile], time_kind: str, noise: float) -> Pilot:
     for key in keys:
         groups = [[math.log(t) for t in f.runs[key].times_ns(time_kind) if t > 0] for f in files
                   if key in f.runs and not f.runs[key].errored]
-        found = variance_components(groups)
+        found = median_components(groups)
         if found is None:
             continue
         if math.isnan(found.between):
             found = Components(assumed_drift(noise) ** 2, found.within, found.runs, found.repetitions)
-        entries.append(_Entry(key, found, tuple(sum(g) / len(g) if g else math.nan for g in groups)))
+        medians = (run_summary(g) for g in groups)
+        entries.append(_Entry(key, found, tuple(math.nan if m is None else m for m in medians)))
     entries = _moderated(entries)
     repetitions = round(statistics.median([e.components.repetitions for e in entries])) if entries else 0
     matrix = [f.context_number(MATRIX_SECONDS_CONTEXT) for f in files]
@@ -83,12 +84,12 @@ def read_pilot(files: list[RunFile], time_kind: str, noise: float) -> Pilot:
 
 
 def _moderated(entries: list[_Entry]) -> list[_Entry]:
-    """With two or more pilot runs, each entry's variance of its run means (K - 1 degrees: a few runs estimate it
+    """With two or more pilot runs, each entry's variance of its run medians (K - 1 degrees: a few runs estimate it
     poorly) moderated towards the entries' (statistics.prior_variance, as compare moderates it), and its between-run
     component taken from that: max(0, moderated - Var(e) / n0). Unchanged with one run or too few entries."""
     spreads = []
     for entry in entries:
-        means = [m for m in entry.run_means if math.isfinite(m)]
+        means = [m for m in entry.run_medians if math.isfinite(m)]
         spreads.append((float(np.var(means, ddof=1)), len(means) - 1) if len(means) >= 2 else (None, 0))
     prior = statistics.prior_variance([v for v, _ in spreads], [d for _, d in spreads])
     if prior is None:
@@ -102,7 +103,7 @@ def _moderated(entries: list[_Entry]) -> list[_Entry]:
         found = entry.components
         between = max(0.0, moderated - found.within / found.repetitions)
         result.append(_Entry(entry.key, Components(between, found.within, found.runs, found.repetitions),
-                             entry.run_means))
+                             entry.run_medians))
     return result
 
 
@@ -123,14 +124,14 @@ def entries_change(entries: list[_Entry], runs: int, repetitions: int, noise: fl
 
 def aggregate_change(entries: list[_Entry], runs: int, repetitions: int, noise: float) -> float | None:
     """The smallest uniform change (a fraction) the geometric mean of the entries is called slower on at POWER.
-    Its between-run component is the spread of the pilot's runs' means over the entries (a whole run drifts
+    Its between-run component is the spread of the pilot's runs' means of their medians over the entries (a whole run drifts
     together) less what the repetitions explain; with a one-run pilot, the assumed drift (the median entry's)."""
     if not entries:
         return None
     within = sum(e.components.within for e in entries) / len(entries) / len(entries)
-    pilot_runs = {len(e.run_means) for e in entries}
+    pilot_runs = {len(e.run_medians) for e in entries}
     if len(pilot_runs) == 1 and min(pilot_runs) >= 2:
-        means = [sum(e.run_means[i] for e in entries) / len(entries) for i in range(min(pilot_runs))]
+        means = [sum(e.run_medians[i] for e in entries) / len(entries) for i in range(min(pilot_runs))]
         centre = sum(means) / len(means)
         spread = sum((m - centre) ** 2 for m in means) / (len(means) - 1)
         pilot_repetitions = statistics.median([e.components.repetitions for e in entries])
@@ -205,7 +206,8 @@ def plan_text(files: list[RunFile], time_kind: str, noise_percent: float, detect
            f"{len(pilot.entries)} combinations; power {POWER:.0%}, two-sided {statistics.CONFIDENCE:.0%} intervals "
            f"against the {noise_percent:g} % noise band, the same change on both sides' plan",
            f"variance of log time (median over the entries): between runs {math.sqrt(between) * 100:.2f} % "
-           f"(standard deviation), within a run {math.sqrt(within) * 100:.2f} % per repetition"
+           f"(standard deviation), within a run {math.sqrt(within / MEDIAN_EFFICIENCY) * 100:.2f} % per repetition "
+           f"(robust: from the median absolute deviation; a run's figure is its repetitions' median)"
            + (" (one run: the between-run part is assumed, half the band's log, the drift compare's band stands for;"
               " a pilot of 2 or more runs measures it)" if pilot.assumed_between else ""),
            f"costs: a repetition of the matrix {_duration(pilot.repetition_s)}, a run's fixed part (start-up, "

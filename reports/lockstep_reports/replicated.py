@@ -3,10 +3,13 @@
 merged_side joins a side's runs into one RunFile (every repetition of every run, the first run's context and
 headline; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
 apply_replicates replaces each entry's verdict interval with the one from the variance between runs
-(replicates.py: each run's mean log time is one observation, the runs' spread moderated over the entries), the
-aggregates likewise on each run's mean over a group's entries, states the smallest uniform change the comparison
-could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of each side (runs
-1..K/2 against K/2+1..K) with the same statistics: the comparison's own false-positive rate (A against A).
+(replicates.py: each run's median log time is one observation, the runs' spread moderated over the entries), the
+aggregates likewise on each run's mean over a group's entries of those medians, states the smallest uniform change the comparison
+could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of each side with
+the same statistics (A against A), split two ways. Alternate runs (1, 3, 5 ... against 2, 4, 6 ...) spread over
+the same time as each other, as two sides measured alternately do: the comparison's own false-positive rate. In
+time order (1..K/2 against K/2+1..K): whether the machine drifted while a side ran, which a side measured as one
+block cannot tell from a change (the text says so when it did).
 """
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from dataclasses import dataclass
 
 from . import statistics
 from .comparison import Aggregate, Comparison, PaceAware, aggregate_groups, clustered, verdict_of
-from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_means,
+from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
                          t_quantile, two_sided_p)
 from .run_file import Run, RunFile
 
@@ -27,14 +30,22 @@ BETWEEN_RUNS = "between runs"
 MIN_HALVES_RUNS = 4
 
 
+# The two ways a side's runs are split for A against A.
+ALTERNATE, IN_TIME_ORDER = "alternate runs", "in time order"
+# The share of entries the time-order split calls changed above which compare says the machine drifted: the rate
+# a comparison's false positives are held to (alternate runs stay under it on a machine that keeps its pace).
+DRIFT_SHOWN_ABOVE = 0.05
+
+
 @dataclass(frozen=True)
 class AgainstItself:
-    """The built-in A/A check: the entries called changed (slower or faster) when each side's first half of runs is
-    compared with its second half, over both sides."""
+    """One side's A against A: the entries called changed (slower or faster) when its runs, split one way
+    (ALTERNATE or IN_TIME_ORDER), are compared half against half."""
 
+    split: str
     changed: int
     compared: int
-    runs: tuple[int, int]  # the runs a side had
+    runs: tuple[int, int]  # the runs in each half
 
 
 @dataclass
@@ -48,7 +59,11 @@ class Replicated:
     # "all" aggregate would be called slower on at POWER.
     entries_power: float | None = None
     aggregate_power: float | None = None
-    against_itself: list[AgainstItself] = dataclasses.field(default_factory=list)
+    against_itself: list[AgainstItself] = dataclasses.field(default_factory=list)  # per side and split
+
+    def split(self, split: str) -> list[AgainstItself]:
+        """Each side's A against A of one split (A's, then B's)."""
+        return [check for check in self.against_itself if check.split == split]
 
 
 def _merged_run(key, runs: list[Run]) -> Run:
@@ -86,8 +101,8 @@ def _values(side: RunFile, key, time_kind: str) -> list[list[float]]:
 
 
 def _evidence(comparison: Comparison, key, time_kind: str) -> RunEvidence | None:
-    means_a = run_means(_values(comparison.baseline, key, time_kind))
-    means_b = run_means(_values(comparison.contender, key, time_kind))
+    means_a = run_medians(_values(comparison.baseline, key, time_kind))
+    means_b = run_medians(_values(comparison.contender, key, time_kind))
     if len(means_a) < 1 or len(means_b) < 1 or len(means_a) + len(means_b) < 3:
         return None
     return RunEvidence(tuple(means_a), tuple(means_b))
@@ -124,17 +139,17 @@ def _measured_everywhere(comparison: Comparison, keys) -> list:
 
 
 def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
-    """Each run's mean, over the keys, of its mean log time."""
+    """Each run's mean, over the keys, of its median log time (replicates.run_summary)."""
     means = []
     for run_file in side.replicates:
-        per_key = run_means([run_file.runs[key].times_ns(time_kind) for key in keys])
+        per_key = run_medians([run_file.runs[key].times_ns(time_kind) for key in keys])
         if len(per_key) == len(keys):
             means.append(sum(per_key) / len(per_key))
     return means
 
 
 def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate], float | None]:
-    """Each group's geometric mean of B/A from its runs' means (Student's t on the runs), and the "all" group's
+    """Each group's geometric mean of B/A from its runs' means of their medians (Student's t on the runs), and the "all" group's
     standard error of the log ratio (None without one)."""
     result, error = [], None
     for group, rows in aggregate_groups(comparison.combinations).items():
@@ -172,21 +187,28 @@ def apply_replicates(comparison: Comparison, time_kind: str, halves: bool = True
         replicated.aggregate_power = detectable_at_power(aggregate_error[0], aggregate_error[1], noise) * 100.0
     comparison.replicated = replicated
     if halves and min(runs_a, runs_b) >= MIN_HALVES_RUNS:
-        replicated.against_itself = [against_itself(side, time_kind, comparison) for side in
-                                     (comparison.baseline, comparison.contender)]
+        replicated.against_itself = [against_itself(side, split, time_kind, comparison)
+                                     for split in (ALTERNATE, IN_TIME_ORDER)
+                                     for side in (comparison.baseline, comparison.contender)]
 
 
-def against_itself(side: RunFile, time_kind: str, comparison: Comparison) -> AgainstItself:
-    """One side's first half of runs against its second half, with the comparison's statistics and band."""
+def against_itself(side: RunFile, split: str, time_kind: str, comparison: Comparison) -> AgainstItself:
+    """One side's runs split in two (alternate runs, or in time order), half against half, with the comparison's
+    statistics and band."""
     from .compare import compare_pair
 
     runs = list(side.replicates)
-    half = len(runs) // 2
-    first = merged_side(runs[:half], f"{side.label} 1..{half}", side.path)
-    second = merged_side(runs[half:], f"{side.label} {half + 1}..{len(runs)}", side.path)
+    numbers = list(range(1, len(runs) + 1))
+    if split == ALTERNATE:
+        parts = [(runs[0::2], numbers[0::2]), (runs[1::2], numbers[1::2])]
+    else:
+        half = len(runs) // 2
+        parts = [(runs[:half], numbers[:half]), (runs[half:], numbers[half:])]
+    first, second = (merged_side(part, f"{side.label} runs {','.join(map(str, which))}", side.path)
+                     for part, which in parts)
     halves = compare_pair(first, second, time_kind, comparison.alpha, comparison.noise_percent, halves=False)
     called = [row for row in halves.combinations if halves.beyond_pace(row) in ("slower", "faster")]
-    return AgainstItself(len(called), len(halves.combinations), (half, len(runs) - half))
+    return AgainstItself(split, len(called), len(halves.combinations), (len(parts[0][0]), len(parts[1][0])))
 
 
 def one_run_power(comparison: Comparison) -> tuple[float | None, float | None]:

@@ -6,16 +6,23 @@ level of repetition as an independent component. lockstep's levels are the repet
 repetition j of run i is mu + b_i + e_ij with Var(b) the between-run component and Var(e) the within-run one;
 variance_components estimates both by the one-way random-effects ANOVA (method of moments).
 
-With K >= 2 runs a side, an entry's interval of B/A is on the ratio of the geometric means of its runs: each run's
-mean log time is one observation, so whatever moves a whole run (the drift that repetitions inside one run cannot
-see) is in the spread; the variance of the run means is moderated towards the comparison's (statistics.
-prior_variance, limma's empirical Bayes) and the interval is Student's t (run_interval). An aggregate is the same on
-each run's mean over the group's entries. With one run a side there is no spread of runs: compare keeps the
-calibrated drift term (pace_statistics.pool_evidence) and says so.
+A run's figure for an entry is the median of its repetitions' log times (run_summary), not their mean: the
+repetitions inside one run are heavy-tailed (a repetition that caught the VM changing pace is slower by tens of
+percent), and one such repetition in five moves a run's mean by several percent and its median little. Every
+statistic on runs uses the same figure: each entry's interval, the aggregates, the A against A check and the
+planner, so that what the planner predicts is what compare sees.
 
-The power of a plan (runs x repetitions) follows from the components: Var(log B/A) = 2 (Var(b) + Var(e) / n) / K;
-the smallest uniform change it sees at 80 % power is where its interval's lower end clears the noise band four
-times in five (detectable_at_power).
+With K >= 2 runs a side, an entry's interval of B/A is on the ratio of the geometric means of its runs' medians:
+each run's median log time is one observation, so whatever moves a whole run (the drift that repetitions inside
+one run cannot see) is in the spread; the variance of the run medians is moderated towards the comparison's
+(statistics.prior_variance, limma's empirical Bayes) and the interval is Student's t (run_interval). An aggregate
+is the same on each run's mean, over the group's entries, of their run medians. With one run a side there is no
+spread of runs: compare keeps the calibrated drift term (pace_statistics.pool_evidence) and says so.
+
+The power of a plan (runs x repetitions) follows from the components of the run median: Var(log B/A) =
+2 (Var(b) + Var_m(e) / n) / K, with Var_m(e) = MEDIAN_EFFICIENCY x the repetitions' robust variance
+(summary_within_variance); the smallest uniform change it sees at 80 % power is where its interval's lower end
+clears the noise band four times in five (detectable_at_power).
 """
 from __future__ import annotations
 
@@ -38,7 +45,8 @@ ASSUMED_DRIFT_SHARE_OF_BAND = 0.5
 @dataclass(frozen=True)
 class Components:
     """The variance components of log time: between runs (Var(b)) and within a run (Var(e)), from `runs` runs of
-    `repetitions` repetitions on average (n0 of the unbalanced ANOVA)."""
+    `repetitions` repetitions on average (n0 of the unbalanced ANOVA). From median_components, within is the
+    within-run part of a run median's variance per repetition."""
 
     between: float
     within: float
@@ -46,7 +54,7 @@ class Components:
     repetitions: float
 
     def plan_variance(self, runs: int, repetitions: int) -> float:
-        """The variance of one side's mean log time under a plan of runs x repetitions."""
+        """The variance of one side's mean over its runs (of their figures) under a plan of runs x repetitions."""
         return (self.between + self.within / repetitions) / runs
 
 
@@ -89,20 +97,70 @@ def nested_components(data) -> list[float]:
     return components
 
 
-def run_means(values_per_run) -> list[float]:
-    """Each run's mean log time (runs without a positive value left out)."""
-    means = []
+# Var(median of n) / Var(mean of n) for normal values (asymptotically pi / 2; 1.43 at n = 5): the price of the
+# median's robustness, in the planner's formula for a run median's variance (summary_within_variance).
+MEDIAN_EFFICIENCY = math.pi / 2.0
+# The standard deviation of normal values over their median absolute deviation.
+MAD_TO_SD = 1.4826
+
+
+def run_summary(logs) -> float | None:
+    """A run's figure for an entry: the median of its repetitions' log times (None without one)."""
+    values = [v for v in logs if math.isfinite(v)]
+    return float(np.median(values)) if values else None
+
+
+def run_medians(values_per_run) -> list[float]:
+    """Each run's median log time (run_summary; runs without a positive value left out)."""
+    medians = []
     for values in values_per_run:
-        logs = [math.log(v) for v in values if v > 0 and math.isfinite(v)]
-        if logs:
-            means.append(sum(logs) / len(logs))
-    return means
+        found = run_summary([math.log(v) for v in values if v > 0 and math.isfinite(v)])
+        if found is not None:
+            medians.append(found)
+    return medians
+
+
+def summary_within_variance(groups) -> float | None:
+    """The within-run part of a run median's variance, per repetition (divide by n for n repetitions): the
+    repetitions' robust variance, (MAD_TO_SD x the median absolute deviation of every value from its run's median)
+    squared, times MEDIAN_EFFICIENCY. Robust as the median is: a repetition that caught a change of pace widens it
+    little, as it moves the median little. None without a group of two values."""
+    deviations = []
+    for group in groups:
+        if len(group) < 2:
+            continue
+        centre = float(np.median(group))
+        found = sorted(abs(v - centre) for v in group)
+        # A run of odd length has its median among its values: that deviation is 0 by construction, not a spread.
+        deviations += found[1:] if len(found) % 2 else found
+    if not deviations:
+        return None
+    scale = MAD_TO_SD * float(np.median(deviations))
+    return MEDIAN_EFFICIENCY * scale * scale
+
+
+def median_components(groups) -> Components | None:
+    """The components of a run median's variance from runs of log times (a pilot's): within =
+    summary_within_variance (per repetition), between = max(0, the unbiased variance of the runs' medians -
+    within / n) with n the mean repetitions a run. One run: between unknown, NaN. None without two values in a
+    run."""
+    groups = [[float(v) for v in group] for group in groups if len(group) > 0]
+    within = summary_within_variance(groups)
+    if within is None:
+        return None
+    repetitions = sum(len(group) for group in groups) / len(groups)
+    if len(groups) < 2:
+        return Components(math.nan, within, 1, repetitions)
+    medians = [run_summary(group) for group in groups]
+    spread = float(np.var(medians, ddof=1))
+    return Components(max(0.0, spread - within / repetitions), within, len(groups), repetitions)
 
 
 @dataclass(frozen=True)
 class RunEvidence:
-    """One entry's or group's runs on both sides: the runs' mean log times, the difference of their means, and the
-    pooled variance of a run's mean with its degrees of freedom (before moderation)."""
+    """One entry's or group's runs on both sides: the runs' figures (run_summary: median log times, or a group's
+    mean of them), the difference of their means, and the pooled variance of a run's figure with its degrees of
+    freedom (before moderation)."""
 
     means_a: tuple[float, ...]
     means_b: tuple[float, ...]
