@@ -7,6 +7,8 @@ indented under it), then the rest, each fact a line at column 0 with its details
 migration, pace, what was left out), then the terminal's pointers to the result file and the next commands
 (bench/run/headline.cpp, make_headline). The table replaces the choices' lines; the rest is shown whole,
 wrapped by the page; the pointers are the terminal's, and the report's own "where the rest is" replaces them.
+A run with `--crossover` writes its crossover lines (lockstep_headline.crossover) between the answer first and
+the choices: they are shown as written, under the answer first, and kept out of the grouping of the others.
 """
 from __future__ import annotations
 
@@ -31,13 +33,15 @@ CUT_NOTE = " [cut here in the file, by the lockstep run that wrote it]"
 class Answer:
     """What the page shows first for one `lockstep run` file. A file without a headline: lines empty, and `note`
     says so in one line. Otherwise: `first`, the answer first (lockstep_headline.answer; "" for a file without
-    it); the table of choices (`headings`, `rows`, `caption`); `findings`, the headline's other facts, each a
-    line and the lines under it, whole; `errored`, the entries that errored ("" when none did); `glossary`,
+    it); `crossover`, the crossover lines as the run wrote them (empty without the sweep); the table of choices
+    (`headings`, `rows`, `caption`); `findings`, the headline's other facts, each a line and the lines under it,
+    whole; `errored`, the entries that errored ("" when none did); `glossary`,
     (word, what it means) for the words the answer uses."""
     label: str
     lines: list[str]
     note: str = ""
     first: str = ""
+    crossover: list[str] = field(default_factory=list)  # lockstep_headline.crossover, as written
     headings: list[str] = field(default_factory=list)
     rows: list[list[str]] = field(default_factory=list)
     caption: str = ""
@@ -239,16 +243,27 @@ GLOSSARY = (
 )
 
 
+# Said in the glossary of an answer that has crossover lines.
+CROSSOVER_WORDS = ("crossover, S*", "from what model size a parallel step beats the serial one (`lockstep run "
+                                    "--crossover`): the chain of S masses (2S equations) stepped by the team "
+                                    "against the serial step of the same chain, paired side by side; S* is where "
+                                    "the speedup serial / parallel crosses 1, [low, high] where its 95 % interval "
+                                    "does, confirmed by a size above it whose whole interval clears 1. The section "
+                                    "\"Crossover\" draws every point and the model beside it.")
+
+
 def answer_of(run_file: RunFile, cpus: int | None) -> Answer:
     """The answer box of a run file with a headline (report.answer_of says it when the file has none)."""
     headline = run_file.headline
     headings, rows = choices_table(headline.recommendations, cpus)
     first = first_words(headline.answer) if headline.answer is not None else ""
-    title, facts = findings(headline.lines, bool(rows), bool(first))
+    crossover = set(headline.crossover)
+    title, facts = findings([line for line in headline.lines if line not in crossover], bool(rows), bool(first))
     caption = ""
     if rows:
         caption = ((title + ". ") if title else "") + ("Each ratio is the other's step over the choice's, measured "
                                                        "side by side (above 1: the other is slower).")
-    return Answer(run_file.label, list(headline.lines), first=first, headings=headings, rows=rows,
+    return Answer(run_file.label, list(headline.lines), first=first,
+                  crossover=[whole(line) for line in headline.crossover], headings=headings, rows=rows,
                   caption=caption, findings=facts, errored=errored_words(run_file),
-                  glossary=list(GLOSSARY))
+                  glossary=list(GLOSSARY) + ([CROSSOVER_WORDS] if headline.crossover else []))

@@ -1,14 +1,18 @@
 """The parts of a run's answer that compare sets side by side across machines, as the run's file states them
 (nothing here is recomputed): each recommendation's baseline (the primitive `lockstep run` sets against the
 chosen one, paired) and whether it ran oversubscribed, the known-answer probes (false sharing, migration),
-false sharing per access pattern, and the crossover (the model size from which a parallel step pays off).
+false sharing per access pattern, and the crossover (the model size from which a parallel step pays off), whose
+series and points the report draws (report.crossover_section).
 
 Read leniently (a key not named here is ignored) but checked: what is read must hold what it says, else one line
 naming its JSON path, as the headline's other parts (run_reader.py). A file without a part reads without it:
 `lockstep_headline.false_sharing_patterns` (false sharing per access pattern) is written by `lockstep run` since
 the probe measures each pattern (headline_json in bench/run/headline.cpp; tests/fixtures/run/quick-pairs.headline.json
-is its output), the top-level `lockstep_crossover` by a later revision than the files in tests/fixtures; their
-shapes are the ones below and in reports/README.md ("compare", across machines).
+is its output), the top-level `lockstep_crossover` by `lockstep run --crossover` (crossover_json in
+bench/run/crossover.cpp; reports/tests/fixtures/crossover_a.json is its output). A crossover in the shape this
+reader was written ahead of the writer for, {threads, pin, sync, masses, ci_low, ci_high}, still reads (its status,
+layout and points empty). Their shapes are the ones below, in docs/schemas/run.schema.json and in reports/README.md
+("compare", across machines).
 """
 from __future__ import annotations
 
@@ -25,6 +29,9 @@ HEADLINE = fields.HEADLINE_KEY
 PATTERNS_KEY = "false_sharing_patterns"
 PATTERN_WORDS = "words"
 CROSSOVER_KEY = "lockstep_crossover"  # top level: {crossovers: [{threads, sync, masses, ci_low, ci_high, pin}]}
+# What a crossover's status may say (docs/schemas/run.schema.json; bench/run/crossover.cpp, to_string): "" where
+# the file has no status (written ahead of the writer, in the shape above).
+CROSSOVER_STATUSES = ("crossed", "crossed_unconfirmed", "none_within_sweep", "always")
 
 
 @dataclass(frozen=True)
@@ -53,10 +60,40 @@ class Migration:
 
 
 @dataclass(frozen=True)
+class CrossoverPoint:
+    """One size of a crossover series (lockstep_crossover.crossovers[].points[]), as the run wrote it: the chain of
+    `masses` masses, its serial step and the series' parallel step (medians of the pairs), the paired speedup
+    serial / parallel with its interval and verdict, the pairs it stands on, and the model's step (serial / T +
+    the stages' syncs; None: the file has none there) with the measured step over it. `failure` non-empty: no
+    speedup was measured at this size, and why (its numbers are then the writer's zeros, never drawn)."""
+
+    masses: int
+    serial_ns: float
+    parallel_ns: float
+    speedup: float
+    ci_low: float
+    ci_high: float
+    verdict: str | None
+    pairs: int
+    pairs_set_aside: int
+    model_ns: float | None
+    measured_over_model: float | None
+    failure: str
+
+    @property
+    def measured(self) -> bool:
+        """A speedup was measured here (bench/run/crossover.hpp, crossover_sweep_point::measured)."""
+        return not self.failure and self.pairs > 0
+
+
+@dataclass(frozen=True)
 class Crossover:
     """One crossover of lockstep_crossover: at this thread count (and placement, when the file gives one) and
     with this primitive, the model size (masses) from which the parallel step beats the serial one, with its
-    interval; masses None: no crossover within what the run swept."""
+    interval; masses None: no crossover within what the run swept. Where the file has them (lockstep run writes
+    them; a file in the earlier shape has none): the layout, whether the primitive is the run's leader, the
+    status (CROSSOVER_STATUSES), the sizes that confirmed or contradicted it, why the series stopped, the
+    measured sync of a stage the model uses, and every point in the order written."""
 
     threads: int
     pin: str
@@ -64,6 +101,27 @@ class Crossover:
     masses: float | None
     ci_low: float | None
     ci_high: float | None
+    layout: str = ""
+    leader: bool = False
+    status: str = ""
+    confirmed_at: float | None = None
+    contradicted_at: float | None = None
+    stop_reason: str = ""
+    stage_sync_ns: float | None = None
+    points: tuple[CrossoverPoint, ...] = ()
+
+
+@dataclass(frozen=True)
+class CrossoverSweep:
+    """The sweep as a whole (lockstep_crossover's top level, where the file has it): its budget and the time it
+    spent in seconds, the pairs it asked per point, why it stopped (None: the file does not say), and its lines
+    (the answer's crossover lines, as lockstep run wrote them)."""
+
+    budget_s: float | None
+    spent_s: float | None
+    pairs_per_point: int | None
+    stop_reason: str
+    lines: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -80,6 +138,7 @@ class RunAnswer:
     migration: Migration | None = None
     migration_unavailable: str | None = None
     crossovers: tuple[Crossover, ...] = ()
+    sweep: CrossoverSweep | None = None  # None: a file without lockstep_crossover
 
 
 def _object(path: str, place: tuple, value) -> dict:
@@ -176,22 +235,85 @@ def _migration(path: str, block: dict) -> Migration | None:
                      _text(path, place, raw, "cpus", required=False) or "")
 
 
-def _crossovers(path: str, document: dict) -> tuple[Crossover, ...]:
+def _line(path: str, place: tuple, value) -> str:
+    if not isinstance(value, str) or not value:
+        fail(path, place, f"is {shown(value)}, not a line of text")
+    return value
+
+
+def _whole(path: str, place: tuple, block: dict, key: str, low: int) -> int:
+    value = block.get(key)
+    if not isinstance(value, int) or isinstance(value, bool) or not low <= value <= fields.LARGEST_AMOUNT:
+        fail(path, place + (key,), "is missing" if key not in block
+             else f"is {shown(value)}, not a whole number from {low}")
+    return value
+
+
+def _flag(path: str, place: tuple, block: dict, key: str) -> bool:
+    value = block.get(key, False)
+    if not isinstance(value, bool):
+        fail(path, place + (key,), f"is {json_kind(value)}, not true or false")
+    return value
+
+
+def _point(path: str, place: tuple, raw) -> CrossoverPoint:
+    """One point of a series: every key the writer always writes is required (docs/schemas/run.schema.json)."""
+    raw = _object(path, place, raw)
+    times = [_number(path, place, raw, key, 0.0, fields.LONGEST_NS) for key in ("serial_ns", "parallel_ns")]
+    ratios = [_number(path, place, raw, key, 0.0, fields.LARGEST_AMOUNT) for key in ("speedup", "ci_low", "ci_high")]
+    model = [_number(path, place, raw, key, -fields.LONGEST_NS, fields.LONGEST_NS, nullable=True)
+             for key in ("model_ns", "measured_over_model")]
+    failure = raw.get("failure", "")
+    if not isinstance(failure, str):
+        fail(path, place + ("failure",), f"is {json_kind(failure)}, not text")
+    verdict = _text(path, place, raw, "verdict", required=False)
+    if verdict is not None and verdict not in fields.PAIR_VERDICTS:
+        fail(path, place + ("verdict",), f"is {shown(verdict)}, not one of {', '.join(fields.PAIR_VERDICTS)}")
+    point = CrossoverPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, verdict,
+                           _whole(path, place, raw, "pairs", 0), _whole(path, place, raw, "pairs_set_aside", 0),
+                           *model, failure)
+    if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
+        fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
+                                         f"[{point.ci_low:g}, {point.ci_high:g}]")
+    return point
+
+
+def _crossover(path: str, here: tuple, raw) -> Crossover:
+    raw = _object(path, here, raw)
+    threads = raw.get("threads")
+    if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
+        fail(path, here + ("threads",), f"is {shown(threads)}, not a thread count (a whole number from 1)")
+    masses = [_number(path, here, raw, key, 1.0, fields.LARGEST_AMOUNT, nullable=True)
+              for key in ("masses", "ci_low", "ci_high", "confirmed_at", "contradicted_at")]
+    status = _text(path, here, raw, "status", required=False) or ""
+    if status and status not in CROSSOVER_STATUSES:
+        fail(path, here + ("status",), f"is {shown(status)}, not one of {', '.join(CROSSOVER_STATUSES)}")
+    points = tuple(_point(path, here + ("points", index), point)
+                   for index, point in enumerate(_list(path, here + ("points",), raw.get("points", []))))
+    return Crossover(threads, _text(path, here, raw, "pin", required=False) or "", _text(path, here, raw, "sync"),
+                     *masses[:3], layout=_text(path, here, raw, "layout", required=False) or "",
+                     leader=_flag(path, here, raw, "leader"), status=status, confirmed_at=masses[3],
+                     contradicted_at=masses[4], stop_reason=_text(path, here, raw, "stop_reason", required=False) or "",
+                     stage_sync_ns=_number(path, here, raw, "stage_sync_ns", -fields.LONGEST_NS, fields.LONGEST_NS,
+                                           nullable=True),
+                     points=points)
+
+
+def _crossovers(path: str, document: dict) -> tuple[tuple[Crossover, ...], CrossoverSweep | None]:
     if CROSSOVER_KEY not in document:
-        return ()
+        return (), None
     block = _object(path, (CROSSOVER_KEY,), document[CROSSOVER_KEY])
-    result = []
-    for index, raw in enumerate(_list(path, (CROSSOVER_KEY, "crossovers"), block.get("crossovers", []))):
-        here = (CROSSOVER_KEY, "crossovers", index)
-        raw = _object(path, here, raw)
-        threads = raw.get("threads")
-        if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
-            fail(path, here + ("threads",), f"is {shown(threads)}, not a thread count (a whole number from 1)")
-        masses = [_number(path, here, raw, key, 1.0, fields.LARGEST_AMOUNT, nullable=True)
-                  for key in ("masses", "ci_low", "ci_high")]
-        result.append(Crossover(threads, _text(path, here, raw, "pin", required=False) or "",
-                                _text(path, here, raw, "sync"), *masses))
-    return tuple(result)
+    crossovers = tuple(_crossover(path, (CROSSOVER_KEY, "crossovers", index), raw)
+                       for index, raw in enumerate(_list(path, (CROSSOVER_KEY, "crossovers"),
+                                                         block.get("crossovers", []))))
+    lines = tuple(_line(path, (CROSSOVER_KEY, "lines", index), line)
+                  for index, line in enumerate(_list(path, (CROSSOVER_KEY, "lines"), block.get("lines", []))))
+    pairs = block.get("pairs_per_point")
+    sweep = CrossoverSweep(_number(path, (CROSSOVER_KEY,), block, "budget_s", 0.0, fields.LARGEST_AMOUNT, True),
+                           _number(path, (CROSSOVER_KEY,), block, "spent_s", 0.0, fields.LARGEST_AMOUNT, True),
+                           None if pairs is None else _whole(path, (CROSSOVER_KEY,), block, "pairs_per_point", 0),
+                           _text(path, (CROSSOVER_KEY,), block, "stop_reason", required=False) or "", lines)
+    return crossovers, sweep
 
 
 def read_answer(path: str, document: dict) -> RunAnswer | None:
@@ -199,9 +321,9 @@ def read_answer(path: str, document: dict) -> RunAnswer | None:
     lockstep_crossover (written before them)."""
     if HEADLINE not in document and CROSSOVER_KEY not in document:
         return None
-    crossovers = _crossovers(path, document)
+    crossovers, sweep = _crossovers(path, document)
     if HEADLINE not in document:
-        return RunAnswer(crossovers=crossovers)
+        return RunAnswer(crossovers=crossovers, sweep=sweep)
     block = _object(path, (HEADLINE,), document[HEADLINE])
     baselines, oversubscribed = _recommendation_parts(path, block)
     probe = block.get("false_sharing_probe")
@@ -211,4 +333,4 @@ def read_answer(path: str, document: dict) -> RunAnswer | None:
     return RunAnswer(baselines, oversubscribed,
                      None if probe is None else _paired(path, (HEADLINE, "false_sharing_probe"), probe, ""),
                      _reason(path, block, "false_sharing_probe_unavailable"), patterns, _migration(path, block),
-                     _reason(path, block, "migration_probe_unavailable"), crossovers)
+                     _reason(path, block, "migration_probe_unavailable"), crossovers, sweep)

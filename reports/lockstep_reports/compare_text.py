@@ -14,7 +14,7 @@ from .fields import C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS,
 from .formatting import format_ns, format_number
 from .mpi_context import mpi_difference_lines
 from .names import BenchmarkKey
-from .machine_answers import answer_lines, difference_lines
+from .machine_answers import answer_lines, crossover_lines, difference_lines
 from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
@@ -642,6 +642,13 @@ def _answers_first(run_files: list[RunFile]) -> list[str]:
     return [""] + answer_lines(run_files) + [""] + difference_lines(run_files)
 
 
+def _crossovers(run_files: list[RunFile], across: bool) -> list[str]:
+    """The files' crossovers side by side, after a blank line, where two files swept it; across machines the
+    answers' table has them already."""
+    lines = [] if across else crossover_lines(run_files)
+    return [""] + lines if lines else []
+
+
 def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_kind: str = "real",
                 context_files=(), everything: bool = False) -> str:
     """The comparison as text: by default the summary (summary_lines per comparison, the context's differences),
@@ -673,6 +680,7 @@ def render_text(run_files: list[RunFile], comparisons: list[Comparison], time_ki
         out.append("")
     if run_files and not all(run_file.mpi for run_file in run_files):  # MPI files hold no rk4 entries to normalise
         out += across_machines_lines(run_files, time_kind)
+    out += wrapped(_crossovers(run_files, across_machines(run_files)))
     if warnings:
         out.append("")
         out += [f"warning: {w}" for w in warnings]
@@ -726,6 +734,7 @@ def render_summary(run_files: list[RunFile], comparisons: list[Comparison], cont
         out.append("")
         same = same_machine(comparison.baseline, comparison.contender)
         out += (summary_lines if same or not across else across_lines)(comparison, file_letter(index))
+    out += _crossovers(run_files, across)
     warnings = [w for f in all_files for w in f.warnings]
     if warnings:
         out.append("")

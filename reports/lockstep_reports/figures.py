@@ -884,6 +884,64 @@ def scaling_curve(curve) -> str:
     return to_svg(figure)
 
 
+def _crossover_span(axes, crossover, color, edges: tuple[float, float]) -> None:
+    """A series' crossover S* as a dotted vertical line, its interval shaded (an open end, null in the file, runs
+    to the edge of the sizes drawn, shaded lighter)."""
+    if crossover.masses is None:
+        return
+    low = crossover.ci_low if crossover.ci_low is not None else edges[0]
+    high = crossover.ci_high if crossover.ci_high is not None else edges[1]
+    closed = crossover.ci_low is not None and crossover.ci_high is not None
+    if high > low:
+        axes.axvspan(low, high, color=color, alpha=0.12 if closed else 0.06, lw=0, zorder=1)
+    axes.axvline(crossover.masses, color=color, lw=1.2, ls=":", zorder=2)
+
+
+def crossover_curves(series, labels, title: str) -> str:
+    """`lockstep run --crossover` at one thread count: step time against the chain's size S (masses) on log-log
+    axes, per series (answer_reader.Crossover: a primitive on its layout) its measured points as the file holds
+    them: the parallel step (solid, filled markers), the serial step it was paired with (black, the series'
+    marker hollow), the model's step (dashed, the series' colour), and the crossover S* (dotted) with its
+    interval (shaded). A size that measured nothing (CrossoverPoint.measured false) is not drawn. labels: one
+    legend text per series."""
+    figure, axes = plt.subplots(figsize=(7.2, 4.2))
+    palette = plt.get_cmap("tab10")
+    markers = ("o", "s", "^", "D", "v", "P")
+    sizes, values = [], []
+    for index, crossover in enumerate(series):
+        color, marker = palette(index % 10), markers[index % len(markers)]
+        points = sorted((p for p in crossover.points if p.measured), key=lambda p: p.masses)
+        masses = [p.masses for p in points]
+        axes.plot(masses, [p.parallel_ns for p in points], color=color, lw=1.6, marker=marker, ms=4,
+                  label=labels[index], zorder=4)
+        axes.plot(masses, [p.serial_ns for p in points], color="black", lw=0.8, marker=marker, ms=4,
+                  markerfacecolor="white", label=f"serial step, paired with {crossover.sync}", zorder=3)
+        modelled = [p for p in points if p.model_ns is not None and p.model_ns > 0]
+        axes.plot([p.masses for p in modelled], [p.model_ns for p in modelled], color=color, lw=1.0, ls="--",
+                  marker="x", ms=4, label=f"model beside {crossover.sync}", zorder=3)
+        sizes += [p.masses for p in crossover.points]
+        values += [p.parallel_ns for p in points] + [p.serial_ns for p in points] + [p.model_ns for p in modelled]
+    edges = (min(sizes), max(sizes)) if sizes else (1.0, 2.0)
+    for index, crossover in enumerate(series):
+        _crossover_span(axes, crossover, palette(index % 10), edges)
+    axes.set_xscale("log", base=2)
+    axes.set_xlim(edges[0] / 1.3, edges[1] * 1.3)
+    grid = sorted(set(sizes))
+    axes.set_xticks(grid if len(grid) <= 12 else grid[::2])
+    axes.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    if values:
+        axes.set_yscale("log")
+        axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
+        duration_axis(axes.yaxis)
+    axes.set_xlabel("S, the chain's masses (2S equations)")
+    axes.set_ylabel("step time")
+    axes.grid(color="#eeeeee", lw=0.6)
+    axes.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
+    axes.set_title(title, fontsize=9)
+    return to_svg(figure)
+
+
 def mpi_distributions(exchanges, field: str, keys, title: str, reference_ns: float | None = None,
                       reference_label: str = "", ylabel: str = "") -> str:
     """Grouped bars on a log axis: one group per exchange of a `lockstep mpi` file (mpi_reader.MpiExchange),

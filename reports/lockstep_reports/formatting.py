@@ -75,3 +75,16 @@ def format_rate(value, missing: str = UNAVAILABLE) -> str:
     if not is_number(value):
         return missing
     return re.sub(r"e([+-])0*(\d)", r"e\1\2", f"{value:.3g}")
+
+
+def format_crossover(crossover) -> str:
+    """A crossover S* in masses with its interval, as the run found it (answer_reader.Crossover): "25 [21, 60]"; an
+    open end (null in the file: beyond the sizes measured) as the run's line says it, "[below 4, 60]", "[25,
+    beyond 4096]", or no interval where the file has no measured point to name; "none" without a crossover."""
+    if crossover.masses is None:
+        return "none"
+    measured = [point.masses for point in crossover.points if point.measured]
+    low = f"{crossover.ci_low:.0f}" if crossover.ci_low is not None else f"below {min(measured)}" if measured else ""
+    high = (f"{crossover.ci_high:.0f}" if crossover.ci_high is not None else f"beyond {max(measured)}" if measured
+            else "")
+    return f"{crossover.masses:.0f}" + (f" [{low}, {high}]" if low and high else "")

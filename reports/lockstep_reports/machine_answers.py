@@ -13,7 +13,7 @@ from .answer_reader import Crossover, PairedRatio, RunAnswer
 from .comparability import letter, unoptimised
 from .fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE_CONTEXT, QUICK_MODE, SERIAL_CONTEXT,
                      UNAVAILABLE)
-from .formatting import format_ns
+from .formatting import format_crossover, format_ns
 from .run_analysis import calibration
 from .run_file import Recommendation, RunFile
 from .text_layout import WIDTH, column_width, table
@@ -96,13 +96,25 @@ def _crowded(run_file: RunFile, group: tuple) -> str:
     return f" ({group[1]} on {cpus} CPUs)" if cpus else " (more threads than CPUs)"
 
 
-def _crossover_text(crossover: Crossover) -> str:
+def crossover_words(crossover: Crossover) -> str:
+    """A crossover as the file states it, without its primitive: "from 25 masses [21, 60]", ", unconfirmed" when
+    no size above it confirmed it, "at every size measured, from 512 masses", "none within the sweep (up to 4096
+    masses)", "nothing measured" (every size's pairs set aside)."""
     if crossover.masses is None:
-        return f"{crossover.sync}: none within the sweep"
-    text = f"{crossover.sync} from {crossover.masses:.0f} masses"
-    if crossover.ci_low is not None and crossover.ci_high is not None:
-        text += f" [{crossover.ci_low:.0f}, {crossover.ci_high:.0f}]"
-    return text
+        measured = [point.masses for point in crossover.points if point.measured]
+        if crossover.points and not measured:
+            return "nothing measured"
+        return "none within the sweep" + (f" (up to {max(measured)} masses)" if measured else "")
+    if crossover.status == "always":
+        return f"at every size measured, from {crossover.masses:.0f} masses"
+    masses = f"{crossover.masses:.0f}"
+    interval = format_crossover(crossover)[len(masses):]  # " [21, 60]", or "" where the file gives none
+    return f"from {masses} masses{interval}" + (", unconfirmed" if crossover.status == "crossed_unconfirmed" else "")
+
+
+def _crossover_text(crossover: Crossover) -> str:
+    words = crossover_words(crossover)
+    return f"{crossover.sync}{':' if crossover.masses is None else ''} {words}"
 
 
 def _crossovers(run_file: RunFile) -> dict[tuple, str]:
@@ -111,6 +123,25 @@ def _crossovers(run_file: RunFile) -> dict[tuple, str]:
     for crossover in _answer(run_file).crossovers:
         found.setdefault(("", crossover.threads, crossover.pin), []).append(_crossover_text(crossover))
     return {group: "; ".join(texts) for group, texts in found.items()}
+
+
+def crossover_lines(files: list[RunFile]) -> list[str]:
+    """Two or more files that each swept the crossover (lockstep_crossover): per thread count, placement and
+    primitive each file's crossover as it wrote it, side by side (one column per file, its letter); none
+    otherwise. Compare between runs of one machine shows it (across machines the answers' table has the
+    crossover rows)."""
+    found = [{(c.threads, c.pin, c.sync): crossover_words(c) for c in _answer(run_file).crossovers}
+             for run_file in files]
+    if sum(1 for each in found if each) < 2:
+        return []
+    rows = [[_group_label(("", threads, pin)) + f", {sync}"] + [each.get((threads, pin, sync), ABSENT)
+                                                                 for each in found]
+            for threads, pin, sync in sorted({key for each in found for key in each},
+                                             key=lambda key: (_group_order(("", key[0], key[1])), key[2]))]
+    room = column_width(max(len(row[0]) for row in rows), len(files))
+    headings = [""] + [_heading(letter(index), run_file.label, room) for index, run_file in enumerate(files)]
+    return (["Crossovers (S* in masses [interval], as each run wrote it; -: not swept there):"]
+            + table(headings, rows, width=WIDTH))
 
 
 def _recommendation_rows(files: list[RunFile]) -> list[list[str]]:

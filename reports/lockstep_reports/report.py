@@ -27,7 +27,7 @@ from .answer import Answer
 from .normalisation import fingerprint, layout_effects, rank_tables
 from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
                      SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
-from .formatting import format_count, format_duration, format_ns, format_number, format_rate
+from .formatting import format_count, format_crossover, format_duration, format_ns, format_number, format_rate
 from .c2c_reader import C2cFile
 from .delay_reader import DelayExtras, DelayFile
 from .inputs import load_any, unique_labels
@@ -204,6 +204,9 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         sections.append(penalty)
     if run_file.scaling is not None and len(run_file.scaling.threads) >= 2:
         sections.append(scaling_section(run_file, counter))
+    crossover = crossover_section(run_file, counter)
+    if crossover:
+        sections.append(crossover)
     if run_file.pace is not None:
         sections.append(pace_section(run_file, counter))
     if run_file.pairs:
@@ -424,6 +427,97 @@ def scaling_section(run_file: RunFile, counter: list[int]) -> Section:
                    figures=[Figure(f"scaling-{counter[0]}", f"{what} against threads",
                                    figures.scaling_curve(curve))],
                    tables=[Table(["primitive"] + [f"{t} threads" for t in curve.threads], rows)])
+
+
+# Why a crossover series or the sweep stopped (lockstep_crossover's stop_reason: bench/run/crossover.cpp), in words.
+CROSSOVER_STOPS = {"confirmed": "two sizes in a row clear of 1", "budget": "the sweep's budget ran out",
+                   "largest_size": "the largest size"}
+# A crossover's status (answer_reader.CROSSOVER_STATUSES) in words.
+CROSSOVER_STATUS_WORDS = {"crossed": "crossed", "crossed_unconfirmed": "crossed, unconfirmed",
+                          "none_within_sweep": "none within the sweep", "always": "pays off at every size measured"}
+# A point's verdict (fields.PAIR_VERDICTS) is its speedup's, serial / parallel, against the noise band: above it
+# ("penalty": the serial step is the slower) the parallel step is faster.
+SPEEDUP_VERDICTS = {"penalty": "parallel faster", "gain": "parallel slower", "within noise": "within noise",
+                    "unsure": "unsure"}
+
+
+def _masses(value: float | None) -> str:
+    return f"{value:.0f}" if value is not None else ""
+
+
+def _series_name(crossover) -> str:
+    return f"{crossover.sync} + {crossover.layout}" if crossover.layout else crossover.sync
+
+
+def _crossover_rows(series) -> tuple[list[list[str]], list[list[str]]]:
+    """(one row per series, one row per point) for the crossover section's tables."""
+    rows, points = [], []
+    for crossover in series:
+        where = f"{crossover.threads} threads" + (f", pin:{crossover.pin}" if crossover.pin else "")
+        checked = (f"confirmed at {_masses(crossover.confirmed_at)}" if crossover.confirmed_at is not None else
+                   f"contradicted at {_masses(crossover.contradicted_at)}" if crossover.contradicted_at is not None
+                   else "")
+        rows.append([where, _series_name(crossover) + (" (the run's leader)" if crossover.leader else ""),
+                     format_crossover(crossover), CROSSOVER_STATUS_WORDS.get(crossover.status, crossover.status),
+                     checked,
+                     format_ns(crossover.stage_sync_ns) if crossover.stage_sync_ns is not None else UNAVAILABLE,
+                     CROSSOVER_STOPS.get(crossover.stop_reason, crossover.stop_reason)])
+        for point in crossover.points:
+            head = [f"{crossover.threads}, {crossover.sync}", str(point.masses)]
+            pairs = f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)
+            if not point.measured:
+                points.append(head + ["", "", point.failure or "not measured", "", pairs, "", ""])
+                continue
+            points.append(head + [format_ns(point.serial_ns), format_ns(point.parallel_ns),
+                                  f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
+                                  f"{format_number(point.ci_high, 2)}]",
+                                  SPEEDUP_VERDICTS.get(point.verdict, point.verdict or ""), pairs,
+                                  format_ns(point.model_ns) if point.model_ns is not None else UNAVAILABLE,
+                                  format_number(point.measured_over_model, 2, "x", missing=UNAVAILABLE)])
+    return rows, points
+
+
+def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
+    """`lockstep run --crossover`: the run's crossover lines as written, one figure per thread count (step time
+    against S, the crossover marked, the model beside), the series and their points as the file holds them; None
+    for a file without the sweep."""
+    found = run_file.answer.crossovers if run_file.answer else ()
+    if not found:
+        return None
+    sweep = run_file.answer.sweep
+    lines = (run_file.headline.crossover if run_file.headline and run_file.headline.crossover
+             else sweep.lines if sweep else ())
+    paragraphs = [f"The run's answer: {line}" for line in lines]
+    paragraphs.append(
+        "`lockstep run --crossover`: from what model size a parallel step pays off. Per thread count, the step time "
+        "of the chain of S masses (2S equations) against S, log-log: each primitive on its layout (solid), the "
+        "serial step of the same S it was paired with side by side (black, hollow markers), and beside each series "
+        "the model's step (dashed: the serial step / T plus the measured sync of each RK4 stage). Dotted: the "
+        "crossover S*, where the speedup serial / parallel crosses 1; shaded: its interval, where the speedup's 95 % "
+        "interval crosses 1 (an open end, beyond the sizes measured, runs to the edge, lighter). A size whose pairs "
+        "were all set aside (another process took a CPU) has no point.")
+    if sweep and sweep.spent_s is not None:
+        budget = f" of its {sweep.budget_s:g} s budget" if sweep.budget_s is not None else ""
+        per_point = f", {sweep.pairs_per_point} pairs a size" if sweep.pairs_per_point is not None else ""
+        stop = CROSSOVER_STOPS.get(sweep.stop_reason, sweep.stop_reason)
+        paragraphs.append(f"The sweep took {sweep.spent_s:.1f} s{budget}{per_point}"
+                          + (f"; stopped: {stop}." if stop else "."))
+    section = Section(f"Crossover: {run_file.label}", paragraphs=paragraphs)
+    for threads in sorted({crossover.threads for crossover in found}):
+        series = [crossover for crossover in found if crossover.threads == threads]
+        pins = sorted({crossover.pin for crossover in series if crossover.pin})
+        title = f"step time against S, {threads} threads" + (f", pin:{', '.join(pins)}" if pins else "")
+        labels = [f"{_series_name(crossover)}: S* {format_crossover(crossover)}" for crossover in series]
+        section.figures.append(Figure(f"crossover-{counter[0]}-{threads}", title,
+                                      figures.crossover_curves(series, labels, title)))
+    rows, points = _crossover_rows(found)
+    section.tables += [
+        Table(["threads, placement", "primitive + layout", "S* (masses) [interval]", "status", "checked",
+               "a stage's sync (model)", "stopped"], rows, caption="Each series' crossover as the run found it."),
+        Table(["threads, primitive", "S", "serial step", "parallel step", "speedup [95 % interval]", "verdict",
+               "pairs", "model", "measured / model"], points,
+              caption="Every size swept, as the file holds it: the medians of the pairs and the paired speedup.")]
+    return section
 
 
 def penalty_table(rows: list[matrix.PenaltyRow]) -> Table:

@@ -318,8 +318,13 @@ def _read_headline(path: str, document: dict) -> Headline | None:
             keys.add(key)
     recommendations = [_read_recommendation(path, at + ("recommendations", index), raw)
                        for index, raw in enumerate(_headline_list(path, block, "recommendations"))]
+    crossover = block.get("crossover", [])
+    if not isinstance(crossover, list):
+        fail(path, at + ("crossover",), f"is {json_kind(crossover)}, not a list")
     return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys),
-                    _read_answer(path, at + ("answer",), block.get("answer")))
+                    _read_answer(path, at + ("answer",), block.get("answer")),
+                    tuple(_headline_text(path, at + ("crossover", index), line)
+                          for index, line in enumerate(crossover)))
 
 
 class _Entries:

@@ -281,3 +281,54 @@ class TheAnswersParts(Scratch):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class CrossoversSideBySide(Scratch):
+    """Two files of one machine that both swept the crossover (lockstep run --crossover; the real files
+    fixtures/crossover_a.json and crossover_b.json, test_report.Crossover says how they were made): compare sets
+    their crossovers side by side as each file wrote them, after the comparison; a file without the sweep gets a
+    "-" in its column, and nothing is shown unless two files have one."""
+
+    A, B = fixture("crossover_a.json"), fixture("crossover_b.json")
+
+    def written(self, path):
+        with open(path, encoding="utf-8") as stream:
+            return json.load(stream)["lockstep_crossover"]["crossovers"]
+
+    def test_both_sides_crossovers_as_written(self):
+        out = compared(self.A, self.B)
+        lines = out.splitlines()
+        title = line_index(out, "Crossovers (S* in masses [interval]")
+        self.assertGreater(title, line_index(out, "== B (crossover_b.json) against A (crossover_a.json)"))
+        heading = lines[title + 1]
+        columns = (slice(heading.index("[A]"), heading.index("[B]")), slice(heading.index("[B]"), None))
+        for a, b in zip(self.written(self.A), self.written(self.B)):
+            self.assertEqual((a["threads"], a["pin"], a["sync"]), (b["threads"], b["pin"], b["sync"]))
+            row = line_index(out, f"2 threads, pin:compact, {a['sync']}")
+            end = next(index for index in range(row + 1, len(lines) + 1)
+                       if index == len(lines) or not lines[index].startswith(" "))  # the row's wrapped lines
+            cells = [" ".join(line[column].strip() for line in lines[row:end]).strip() for column in columns]
+            for cell, series in zip(cells, (a, b)):
+                if series["status"] == "crossed":
+                    self.assertEqual(cell, f"from {series['masses']:.0f} masses [{series['ci_low']:.0f}, "
+                                           f"{series['ci_high']:.0f}]")
+                elif series["status"] == "always":
+                    self.assertEqual(cell, f"at every size measured, from {series['masses']:.0f} masses")
+        self.assertTrue(all(len(line) <= WIDTH for line in lines))
+
+    def test_a_file_without_the_sweep(self):
+        self.assertNotIn("Crossovers (", compared(self.A, AMD_QUICK))  # only one file swept
+        with open(self.B, encoding="utf-8") as stream:
+            document = json.load(stream)
+        document["lockstep_crossover"]["crossovers"][0]["sync"] = "ck_centralized"
+        for point in document["lockstep_crossover"]["crossovers"][0]["points"]:
+            point.update(pairs=0, failure="every pair set aside: another process took a CPU")
+        document["lockstep_crossover"]["crossovers"][0].update(masses=None, ci_low=None, ci_high=None,
+                                                               status="none_within_sweep")
+        out = compared(self.A, self.write("other.json", document))
+        self.assertRegex(out.splitlines()[line_index(out, "2 threads, pin:compact, ck_centralized")],
+                         r"^2 threads, pin:compact, ck_centralized +- +nothing measured$")
+        mailbox = next(series for series in self.written(self.A) if series["sync"] == "mailbox")
+        self.assertRegex(out.splitlines()[line_index(out, "2 threads, pin:compact, mailbox")],
+                         rf"from {mailbox['masses']:.0f} masses \[{mailbox['ci_low']:.0f}, "
+                         rf"{mailbox['ci_high']:.0f}\] +-$")

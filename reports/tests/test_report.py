@@ -626,6 +626,111 @@ class DelayCauses(Scratch):
         self.assertNotIn("causes of the tail", html)
 
 
+# Two real `lockstep run --quick --repetitions 1 --threads 2 --pin compact --sync mailbox,std_barrier
+# --layout per_thread --pairs 2 --crossover --crossover-max-masses 4096 --crossover-budget 40s` files, written whole
+# (about 50 KB each) by a Debug build (the dev preset) on the 2-vCPU Intel Xeon guest while other processes shared
+# it (most pairs set aside: points with nothing measured), 2026-11-27: mailbox crossed and std_barrier paid off at
+# every size measured.
+CROSSOVER_A = "crossover_a.json"
+CROSSOVER_B = "crossover_b.json"
+
+
+class Crossover(Scratch):
+    """`lockstep run --crossover` in the report: the answer shows the run's crossover lines as written
+    (lockstep_headline.crossover), and a section draws step time against S per thread count (figures.crossover_curves,
+    placed by report.crossover_section) with the series and their points as tables; a file without the sweep gets
+    neither."""
+
+    def document(self, name=CROSSOVER_A):
+        with open(fixture(name), encoding="utf-8") as stream:
+            return json.load(stream)
+
+    def test_the_line_is_shown_as_written_and_the_figure_drawn(self):
+        written = self.document()["lockstep_headline"]["crossover"]
+        self.assertEqual(len(written), 1)
+        html, markdown = self.report(fixture(CROSSOVER_A))
+        line = written[0]
+        answer = markdown[:markdown.index("\n## ", markdown.index("## The answer") + 1)]
+        # Under the answer first, before the table of choices, and not taken for the choices' title.
+        self.assertLess(answer.index("**Best of the run"), answer.index(line))
+        self.assertLess(answer.index(line), answer.index("| threads, placement |"))
+        self.assertNotIn("*Crossover at", answer)
+        self.assertIn("*Best here: ", answer)  # the choices' title is still theirs
+        self.assertIn(f'<p class="crossover">{html_escaped(line)}</p>', html)
+        self.assertIn("**crossover, S***", answer)  # the word is said in the glossary
+        self.assertIn(f"The run's answer: {line}", markdown)  # and again in its section
+        self.assertIn("## Crossover: crossover_a.json", markdown)
+        self.assertIn('<figure id="crossover-0-2"', html)
+        self.assertIn("](figures/crossover-0-2.svg)", markdown)
+        self.assertTrue(os.path.isfile(os.path.join(self.directory.name, "report", "figures", "crossover-0-2.svg")))
+
+    def test_a_file_without_the_sweep_shows_nothing_of_it(self):
+        html, markdown = self.report(fixture(REAL_SPLIT))
+        self.assertNotIn("## Crossover", markdown)
+        self.assertNotIn('<p class="crossover">', html)
+        for page in (html, markdown):
+            self.assertNotIn("Crossover at", page)
+            self.assertNotIn("crossover, S*", page)
+        self.assertFalse(any(name.startswith("crossover-")
+                             for name in os.listdir(os.path.join(self.directory.name, "report", "figures"))))
+
+    def test_the_tables_hold_what_the_file_holds(self):
+        written = self.document()["lockstep_crossover"]["crossovers"]
+        _, markdown = self.report(fixture(CROSSOVER_A))
+        start = markdown.index("## Crossover: ")
+        section = markdown[start:markdown.index("\n## ", start)].splitlines()
+        rows = [line for line in section if line.startswith("| 2 threads, pin:compact | ")]
+        self.assertEqual(len(rows), len(written))
+        for row, series in zip(rows, written):
+            self.assertIn(f"{series['sync']} + {series['layout']}", row)
+            if series["ci_low"] is not None and series["ci_high"] is not None:
+                self.assertIn(f"| {series['masses']:.0f} [{series['ci_low']:.0f}, {series['ci_high']:.0f}] |", row)
+        points = [line for line in section if line.startswith("| 2, ")]
+        self.assertEqual(len(points), sum(len(series["points"]) for series in written))
+        unmeasured = [point for series in written for point in series["points"] if point["failure"]]
+        self.assertTrue(unmeasured)  # the real run set pairs aside: those sizes say why, with no numbers
+        self.assertEqual(sum(1 for line in points if unmeasured[0]["failure"] in line), len(unmeasured))
+
+    def test_the_figure_draws_each_series_its_serial_step_its_model_and_its_crossover(self):
+        run_file = load_run_file(fixture(CROSSOVER_A))
+        series = run_file.answer.crossovers
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            report.crossover_section(run_file, [0])
+        self.assertEqual(len(captured), 1)  # one thread count swept
+        axes = captured[0].axes[0]
+        self.assertEqual((axes.get_xscale(), axes.get_yscale()), ("log", "log"))
+        lines = {line.get_label(): line for line in axes.get_lines()}
+        for crossover in series:
+            measured = [point for point in crossover.points if point.measured]
+            self.assertTrue(measured)
+            label = f"{crossover.sync} + {crossover.layout}: S* {report.format_crossover(crossover)}"
+            self.assertEqual(list(lines[label].get_ydata()), [point.parallel_ns for point in measured])
+            serial = lines[f"serial step, paired with {crossover.sync}"]
+            self.assertEqual(list(serial.get_ydata()), [point.serial_ns for point in measured])
+            model = lines[f"model beside {crossover.sync}"]
+            self.assertEqual(model.get_linestyle(), "--")
+            self.assertEqual(list(model.get_ydata()), [point.model_ns for point in measured])
+            # S*: a dotted vertical line at the file's value.
+            self.assertTrue(any(line.get_linestyle() == ":" and list(line.get_xdata()) == [crossover.masses] * 2
+                                for line in axes.get_lines()))
+
+    def test_a_damaged_point_is_one_line_naming_it(self):
+        document = self.document()
+        document["lockstep_crossover"]["crossovers"][0]["points"][1]["serial_ns"] = "1 us"
+        out = os.path.join(self.directory.name, "never")
+        status, _, err = run_tool("report", self.write("damaged.json", document), "--out", out)
+        self.assertEqual(status, 2)
+        self.assertEqual(err.count("\n"), 1, err)
+        self.assertIn("lockstep_crossover.crossovers[0].points[1]", err)
+        self.assertFalse(os.path.exists(out))
+
+
+def html_escaped(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace("'", "&#39;").replace(
+        '"', "&#34;")
+
+
 # ---------------------------------------------------------------- what a person reads, over the real run files
 
 REPOSITORY = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
