@@ -42,13 +42,23 @@ bool all_above_one(const std::vector<crossover_point>& points, const speedup_of&
   return std::all_of(points.begin(), points.end(), [&](const crossover_point& point) { return value(point.speedup) > 1.0; });
 }
 
+// Which end of S*'s interval end_crossing finds.
+enum class interval_end { low, high };
+
 // One end of S*'s interval, from one end of the speedup's: empty when the
 // grid does not reach it (the end above 1 from the first point, or not above 1
-// at the last point).
-std::optional<double> end_crossing(const std::vector<crossover_point>& points, const speedup_of& value) {
+// at the last point). Where that end rises between measured sizes more than
+// one doubling apart (the sizes between had every pair set aside), the
+// interpolation is a guess over the gap: the end is the gap's own (the size
+// below for the low end, the one above for the high end).
+std::optional<double> end_crossing(const std::vector<crossover_point>& points, const speedup_of& value,
+                                   interval_end end) {
   if (points.empty() || all_above_one(points, value) || !(value(points.back().speedup) > 1.0)) return std::nullopt;
   const auto rise = last_rise(points, value);
   if (!rise) return std::nullopt;
+  const double below = points[*rise - 1].masses;
+  const double above = points[*rise].masses;
+  if (above > 2.0 * below * (1.0 + 1e-9)) return end == interval_end::low ? below : above;
   return interpolated(points, *rise, value);
 }
 
@@ -81,7 +91,7 @@ crossover_estimate find_crossover(const std::vector<crossover_point>& points) {
     // Below the grid, at most the first point; the interval's upper end is
     // where its low end clears 1.
     found.high = points.front().speedup.low > 1.0 ? std::optional<double>(points.front().masses)
-                                                  : end_crossing(points, low);
+                                                  : end_crossing(points, low, interval_end::high);
     found.confirmed_at = points.front().speedup.low > 1.0 ? std::optional<double>(points.front().masses)
                                                           : first_confirming(points.front().masses);
     return found;
@@ -90,8 +100,8 @@ crossover_estimate find_crossover(const std::vector<crossover_point>& points) {
   if (!rise) return found;  // none within the sweep
   const double crossing = interpolated(points, *rise, median);
   found.masses = crossing;
-  found.low = end_crossing(points, high);
-  found.high = end_crossing(points, low);
+  found.low = end_crossing(points, high, interval_end::low);
+  found.high = end_crossing(points, low, interval_end::high);
   // The interval holds its estimate (interpolations of three curves on a
   // coarse grid can cross each other).
   if (found.low) found.low = std::min(*found.low, crossing);

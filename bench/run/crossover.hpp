@@ -12,7 +12,9 @@
 //   * the interval of S*: the same crossing of the interval's ends. Where the
 //     low end crosses 1 is the interval's upper end (from there on the whole
 //     interval is above 1), where the high end crosses 1 its lower end (below
-//     it the whole interval is below 1). An end the grid does not reach is
+//     it the whole interval is below 1). An end that crosses between measured
+//     sizes more than one doubling apart (those between set aside) is the
+//     size measured on that side of the gap. An end the grid does not reach is
 //     open (empty): the high end above 1 from the first point, or the low end
 //     never above 1 within the sweep;
 //   * confirmed: a measured point above S* has its whole interval above 1

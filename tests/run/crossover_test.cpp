@@ -38,6 +38,25 @@ TEST(CrossoverFinder, OneCrossingIsInterpolatedInLogMassesAndConfirmedAbove) {
   EXPECT_FALSE(found.contradicted_at);
 }
 
+TEST(CrossoverFinder, ACrossingOverSizesSetAsideIsOnlyKnownToLieBetweenTheSizesMeasured) {
+  // 8 and 256 measured, 16 to 128 set aside: the speedup's narrow intervals
+  // would interpolate to a narrow S*; the interval is the gap's.
+  const std::vector<crossover_point> points{
+      {4.0, {0.3, 0.29, 0.31}}, {8.0, {0.5, 0.49, 0.51}}, {256.0, {2.0, 1.98, 2.02}}, {512.0, {3.0, 2.9, 3.1}}};
+  const auto found = find_crossover(points);
+  EXPECT_EQ(found.status, crossover_status::crossed);
+  ASSERT_TRUE(found.masses && found.low && found.high);
+  EXPECT_GT(*found.masses, 8.0);
+  EXPECT_LT(*found.masses, 256.0);
+  EXPECT_EQ(*found.low, 8.0);
+  EXPECT_EQ(*found.high, 256.0);
+  // On the doubling grid the same curve's ends are interpolated.
+  const auto adjacent = find_crossover(curve({{0.5, 0.49, 0.51}, {2.0, 1.98, 2.02}, {3.0, 2.9, 3.1}}));
+  ASSERT_TRUE(adjacent.low && adjacent.high);
+  EXPECT_GT(*adjacent.low, 2.0);
+  EXPECT_LT(*adjacent.high, 4.0);
+}
+
 TEST(CrossoverFinder, NoneWithinTheBudgetWhenTheMedianNeverRisesAboveOne) {
   const auto found = find_crossover(curve({{0.1, 0.08, 0.12}, {0.3, 0.2, 0.4}, {0.6, 0.5, 0.7}, {0.9, 0.8, 1.05}}));
   EXPECT_EQ(found.status, crossover_status::none_within_sweep);
