@@ -228,6 +228,7 @@ def plan_text(files: list[RunFile], time_kind: str, noise_percent: float, detect
                        f"{_duration(seconds)} a side, {_duration(None if seconds is None else 2 * seconds)} for "
                        f"both; it sees:")
             out += _group_lines(pilot, runs, repetitions, noise)
-            out.append(f"  run it: lockstep run ... --runs {runs} --repetitions {repetitions} --out DIR (each side), "
-                       f"then lockstep compare DIR_A DIR_B")
+            out.append(f"  run it: the sides' runs alternated, lockstep run ... --repetitions {repetitions} --out "
+                       f"DIR_A/run-I.json then the same for B, I = 1 .. {runs} (or --runs {runs} --out DIR for each "
+                       f"side, if the machine holds its pace between them), then lockstep compare DIR_A DIR_B")
     return "\n".join(wrapped(out)) + "\n"
