@@ -274,6 +274,18 @@ class RunsASide(unittest.TestCase):
         self.assertGreater(in_time_order["sides"][1]["changed"], in_time_order["sides"][1]["compared"] // 2)
         self.assertRegex(text, rf"A against A: {alternate['changed']} of {alternate['compared']} changed")
 
+    def test_a_side_of_runs_reads_its_calibrations_as_their_median(self):
+        from lockstep_reports.fields import SERIAL_CONTEXT
+        from lockstep_reports.replicated import merged_side
+        from lockstep_reports.run_analysis import calibration
+
+        runs = [load_run_file(os.path.join(self.a, f"run-{i}.json")) for i in range(1, 5)]
+        for run_file, serial in zip(runs, ("90.0", "30.0", "31.0", "32.0")):
+            run_file.context[SERIAL_CONTEXT] = serial
+        side = merged_side(runs, "a", self.a)
+        # The first run's context alone would read 90 ns; the runs' median is 31.5 ns.
+        self.assertEqual(calibration(side, SERIAL_CONTEXT), 31.5)
+
     def test_comma_joined_files_are_a_side(self):
         files = ",".join(os.path.join(self.a, f"run-{i}.json") for i in range(1, 3))
         others = ",".join(os.path.join(self.b, f"run-{i}.json") for i in range(1, 3))
