@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 from . import statistics
 from .comparison import Aggregate, Comparison, PaceAware, aggregate_groups, clustered, verdict_of
+from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
                          t_quantile, two_sided_p)
 from .run_file import Run, RunFile
@@ -81,6 +82,17 @@ def _merged_run(key, runs: list[Run]) -> Run:
                step_splits=[split for run in runs for split in run.step_splits])
 
 
+def _merged_context(files: list[RunFile]) -> dict:
+    """The first run's context, its in-run calibrations (the serial step, the c2c one-way latency) the median over the
+    runs: a side's runs alternate with the other side's, and its first run's reading is one of many."""
+    context = dict(files[0].context)
+    for key in (SERIAL_CONTEXT, C2C_CONTEXT):
+        values = [value for value in (run_file.context_number(key) for run_file in files) if value is not None]
+        if values:
+            context[key] = f"{statistics.median(values):.2f}"
+    return context
+
+
 def merged_side(files: list[RunFile], label: str, path: str) -> RunFile:
     """One side of several runs as one RunFile (replicates: the runs), or the file itself when it is one."""
     if len(files) == 1:
@@ -90,7 +102,7 @@ def merged_side(files: list[RunFile], label: str, path: str) -> RunFile:
         for key in run_file.runs:
             keys.setdefault(key, []).append(run_file.runs[key])
     warnings = [warning for run_file in files for warning in run_file.warnings]
-    return dataclasses.replace(files[0], path=path, label=label, warnings=warnings,
+    return dataclasses.replace(files[0], path=path, label=label, warnings=warnings, context=_merged_context(files),
                                runs={key: _merged_run(key, runs) for key, runs in keys.items()}, pace=None, pairs=[],
                                mode_medians=None, replicates=tuple(files))
 

@@ -83,11 +83,7 @@ def mode_medians(run_file: RunFile, key: BenchmarkKey) -> tuple[dict[int, tuple[
 
 def calibration(run_file: RunFile, context_key: str) -> float | None:
     """serial_step_ns or c2c_one_way_ns: the context's value, else the median of the in-run entry
-    (for c2c, of its one_way_ns counter when it has one: its iteration time includes thread start-up). A side of
-    several runs (replicated.merged_side, the first run's context): the median of its runs' values."""
-    if run_file.replicates:
-        values = [value for value in (calibration(run, context_key) for run in run_file.replicates) if value is not None]
-        return statistics.median(values) if values else None
+    (for c2c, of its one_way_ns counter when it has one: its iteration time includes thread start-up)."""
     value = run_file.context_number(context_key)
     if value is not None:
         return value
