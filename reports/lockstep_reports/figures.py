@@ -839,6 +839,19 @@ def pace_trace(readings, modes, title: str) -> str:
     return to_svg(figure)
 
 
+def _log_log_axes(axes, ticks, values) -> None:
+    """A time against a doubling count: x on a log2 scale with the given ticks written plainly, y on a log scale
+    spanning the values as durations (none: y left as it is)."""
+    axes.set_xscale("log", base=2)
+    axes.set_xticks(ticks)
+    axes.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
+    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+    if values:
+        axes.set_yscale("log")
+        axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
+        duration_axis(axes.yaxis)
+
+
 def scaling_curve(curve) -> str:
     """`lockstep run --scaling`: the curve's counter against threads on log-log axes, one line per primitive on
     its best layout at each count (a bar: the min..max over repetitions), hollow markers where the threads
@@ -868,14 +881,7 @@ def scaling_curve(curve) -> str:
         axes.axhline(curve.c2c_one_way_ns, color="#555555", lw=0.8, ls="--",
                      label=f"c2c one-way {format_ns(curve.c2c_one_way_ns)}")
         values.append(curve.c2c_one_way_ns)
-    axes.set_xscale("log", base=2)
-    axes.set_xticks(list(curve.threads))
-    axes.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
-    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    if values:
-        axes.set_yscale("log")
-        axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
-        duration_axis(axes.yaxis)
+    _log_log_axes(axes, list(curve.threads), values)
     axes.set_xlabel("threads (hollow: more threads than CPUs)")
     axes.set_ylabel("sync time per stage" if curve.counter == "sync_ns_per_stage" else "step time")
     axes.grid(color="#eeeeee", lw=0.6)
@@ -924,16 +930,9 @@ def crossover_curves(series, labels, title: str) -> str:
     edges = (min(sizes), max(sizes)) if sizes else (1.0, 2.0)
     for index, crossover in enumerate(series):
         _crossover_span(axes, crossover, palette(index % 10), edges)
-    axes.set_xscale("log", base=2)
     axes.set_xlim(edges[0] / 1.3, edges[1] * 1.3)
     grid = sorted(set(sizes))
-    axes.set_xticks(grid if len(grid) <= 12 else grid[::2])
-    axes.xaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
-    axes.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-    if values:
-        axes.set_yscale("log")
-        axes.set_ylim(log_floor(min(values) * 0.9), log_ceiling(max(values) * 1.1))
-        duration_axis(axes.yaxis)
+    _log_log_axes(axes, grid if len(grid) <= 12 else grid[::2], values)
     axes.set_xlabel("S, the chain's masses (2S equations)")
     axes.set_ylabel("step time")
     axes.grid(color="#eeeeee", lw=0.6)
