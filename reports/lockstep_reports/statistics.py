@@ -171,6 +171,11 @@ def _indices_of(outputs: np.ndarray, n) -> np.ndarray:
     return ((high * n + ((low * n) >> np.uint64(32))) >> np.uint64(32)).astype(np.int64)
 
 
+def _starts(sizes: np.ndarray) -> np.ndarray:
+    """Where each of consecutive blocks of these sizes starts: 0, then the running total before each."""
+    return np.concatenate(([0], np.cumsum(sizes)[:-1])).astype(np.int64)
+
+
 def _row_sums(rows: np.ndarray) -> np.ndarray:
     """Each row's sum added left to right, as a Python loop adds it (a cumulative sum's last column): the
     same float, bit for bit, as the per-resample loops these sums replace. Trailing zeros change nothing."""
@@ -188,9 +193,14 @@ def bootstrap_indices(n: int, resamples: int, seed: int) -> list[list[int]]:
     """The seeded bootstrap's draws (platform/statistics.hpp, bootstrap_draws): `resamples` lists of n indices in
     [0, n), from splitmix64 started at `seed`, each output x mapped to (x n) >> 64, resample after resample, index
     after index."""
+    return _bootstrap_draws(n, resamples, seed).tolist()
+
+
+def _bootstrap_draws(n: int, resamples: int, seed: int) -> np.ndarray:
+    """bootstrap_indices as an array of `resamples` rows of n indices."""
     if n < 1:
         raise ValueError("draws into no values")
-    return _indices_of(_splitmix64_block(seed, n * resamples), n).reshape(resamples, n).tolist()
+    return _indices_of(_splitmix64_block(seed, n * resamples), n).reshape(resamples, n)
 
 
 def bootstrap_median(values, confidence: float = CONFIDENCE, resamples: int = BOOTSTRAP_RESAMPLES,
@@ -459,8 +469,7 @@ def geometric_mean_interval(ratios, seed: int, confidence: float = CONFIDENCE,
     whole = math.exp(sum(logs) / len(logs))
     if len(logs) < 2:
         return whole, whole, whole
-    drawn = _indices_of(_splitmix64_block(seed, len(logs) * resamples), len(logs)).reshape(resamples, len(logs))
-    means = (_row_sums(np.asarray(logs)[drawn]) / len(logs)).tolist()
+    means = (_row_sums(np.asarray(logs)[_bootstrap_draws(len(logs), resamples, seed)]) / len(logs)).tolist()
     low, high = percentile_interval(means, confidence)
     return whole, math.exp(low), math.exp(high)
 
@@ -515,15 +524,13 @@ def _cluster_resample_means(groups: list[list[float]], borrowed: list[float], se
     drawn = picks[draws]
     starts = np.asarray(draws) + 1
     drawn_sizes = lengths[drawn]
-    first_of = np.concatenate(([0], np.cumsum(drawn_sizes)[:-1]))
-    within = np.arange(int(drawn_sizes.sum())) - np.repeat(first_of, drawn_sizes)
-    cluster_offsets = np.concatenate(([0], np.cumsum(lengths)[:-1]))
+    within = np.arange(int(drawn_sizes.sum())) - np.repeat(_starts(drawn_sizes), drawn_sizes)
     picked = _indices_of(outputs[np.repeat(starts, drawn_sizes) + within], np.repeat(drawn_sizes, drawn_sizes))
     values = np.concatenate([np.asarray(group, dtype=float) for group in groups])[
-        np.repeat(cluster_offsets[drawn], drawn_sizes) + picked]
+        np.repeat(_starts(lengths)[drawn], drawn_sizes) + picked]
     counts = drawn_sizes.reshape(resamples, clusters).sum(axis=1)
     rows = np.zeros((resamples, int(counts.max())))
-    column = np.arange(values.size) - np.repeat(np.concatenate(([0], np.cumsum(counts)[:-1])), counts)
+    column = np.arange(values.size) - np.repeat(_starts(counts), counts)
     rows[np.repeat(np.arange(resamples), counts), column] = values
     means = _row_sums(rows) / counts
     if borrowed:
