@@ -107,7 +107,7 @@ MAD_TO_SD = 1.4826
 def run_summary(logs) -> float | None:
     """A run's figure for an entry: the median of its repetitions' log times (None without one)."""
     values = [v for v in logs if math.isfinite(v)]
-    return float(np.median(values)) if values else None
+    return statistics.median(values) if values else None
 
 
 def run_medians(values_per_run) -> list[float]:
@@ -129,13 +129,13 @@ def summary_within_variance(groups) -> float | None:
     for group in groups:
         if len(group) < 2:
             continue
-        centre = float(np.median(group))
+        centre = statistics.median(group)
         found = sorted(abs(v - centre) for v in group)
         # A run of odd length has its median among its values: that deviation is 0 by construction, not a spread.
         deviations += found[1:] if len(found) % 2 else found
     if not deviations:
         return None
-    scale = MAD_TO_SD * float(np.median(deviations))
+    scale = MAD_TO_SD * statistics.median(deviations)
     return MEDIAN_EFFICIENCY * scale * scale
 
 
