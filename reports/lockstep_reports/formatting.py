@@ -83,8 +83,13 @@ def format_crossover(crossover) -> str:
     beyond 4096]", or no interval where the file has no measured point to name; "none" without a crossover."""
     if crossover.masses is None:
         return "none"
+    return f"{crossover.masses:.0f}" + crossover_interval(crossover)
+
+
+def crossover_interval(crossover) -> str:
+    """format_crossover's interval alone, with its leading space: " [21, 60]", "" where the file gives none."""
     measured = [point.masses for point in crossover.points if point.measured]
     low = f"{crossover.ci_low:.0f}" if crossover.ci_low is not None else f"below {min(measured)}" if measured else ""
     high = (f"{crossover.ci_high:.0f}" if crossover.ci_high is not None else f"beyond {max(measured)}" if measured
             else "")
-    return f"{crossover.masses:.0f}" + (f" [{low}, {high}]" if low and high else "")
+    return f" [{low}, {high}]" if low and high else ""

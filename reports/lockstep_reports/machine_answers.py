@@ -13,7 +13,7 @@ from .answer_reader import Crossover, PairedRatio, RunAnswer
 from .comparability import letter, unoptimised
 from .fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE_CONTEXT, QUICK_MODE, SERIAL_CONTEXT,
                      UNAVAILABLE)
-from .formatting import format_crossover, format_ns
+from .formatting import crossover_interval, format_ns
 from .run_analysis import calibration
 from .run_file import Recommendation, RunFile
 from .text_layout import WIDTH, column_width, table
@@ -107,9 +107,8 @@ def crossover_words(crossover: Crossover) -> str:
         return "none within the sweep" + (f" (up to {max(measured)} masses)" if measured else "")
     if crossover.status == "always":
         return f"at every size measured, from {crossover.masses:.0f} masses"
-    masses = f"{crossover.masses:.0f}"
-    interval = format_crossover(crossover)[len(masses):]  # " [21, 60]", or "" where the file gives none
-    return f"from {masses} masses{interval}" + (", unconfirmed" if crossover.status == "crossed_unconfirmed" else "")
+    return (f"from {crossover.masses:.0f} masses{crossover_interval(crossover)}"
+            + (", unconfirmed" if crossover.status == "crossed_unconfirmed" else ""))
 
 
 def _crossover_text(crossover: Crossover) -> str:
