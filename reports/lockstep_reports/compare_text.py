@@ -215,12 +215,11 @@ def evidence_lines(comparison: Comparison, b: str) -> list[str]:
                f"{basis}"]
     checks = replicated.split(ALTERNATE) if replicated is not None else []
     if checks:
-        changed, compared = sum(c.changed for c in checks), sum(c.compared for c in checks)
+        changed, compared = replicated.total(ALTERNATE)
         sides = ", ".join(f"{name} {c.changed} of {c.compared}" for name, c in zip(("A", b), checks))
         line = (f"A against A: {changed} of {compared} changed, {_rate(changed, compared)} false positives (each "
                 f"side's odd runs against its even: {sides})")
-        drifted = replicated.split(IN_TIME_ORDER)
-        moved, seen = sum(c.changed for c in drifted), sum(c.compared for c in drifted)
+        moved, seen = replicated.total(IN_TIME_ORDER)
         if seen and moved / seen > DRIFT_SHOWN_ABOVE:
             line += (f"; in time order, first half against second, {moved} of {seen}: the machine drifted while a side "
                      "ran, which reads as a change between sides measured one after the other (alternate their runs)")

@@ -392,11 +392,11 @@ def replicates_json(replicated) -> dict | None:
     if replicated is None:
         return None
     splits = {}
-    for split in {check.split: None for check in replicated.against_itself}:
-        checks = replicated.split(split)
-        splits[split] = {"changed": sum(c.changed for c in checks), "compared": sum(c.compared for c in checks),
+    for split in dict.fromkeys(check.split for check in replicated.against_itself):
+        changed, compared = replicated.total(split)
+        splits[split] = {"changed": changed, "compared": compared,
                          "sides": [{"changed": c.changed, "compared": c.compared, "runs": list(c.runs)}
-                                   for c in checks]}
+                                   for c in replicated.split(split)]}
     return {"runs": [replicated.runs_a, replicated.runs_b], "entries_power_pct": replicated.entries_power,
             "aggregate_power_pct": replicated.aggregate_power, "against_itself": splits}
 

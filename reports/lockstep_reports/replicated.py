@@ -4,10 +4,11 @@ merged_side joins a side's runs into one RunFile (every repetition of every run,
 headline; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
 apply_replicates replaces each entry's verdict interval with the one from the variance between runs
 (replicates.py: each run's median log time is one observation, the runs' spread moderated over the entries), the
-aggregates likewise on each run's mean over a group's entries of those medians, states the smallest uniform change the comparison
-could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of each side with
-the same statistics (A against A), split two ways. Alternate runs (1, 3, 5 ... against 2, 4, 6 ...) spread over
-the same time as each other, as two sides measured alternately do: the comparison's own false-positive rate. In
+aggregates likewise on each run's mean over a group's entries of those medians, states the smallest uniform change
+the comparison could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of
+each side with the same statistics (A against A), split two ways. Alternate runs (1, 3, 5 ... against 2, 4, 6
+...) spread over the same time as each other, as two sides measured alternately do: the comparison's own
+false-positive rate. In
 time order (1..K/2 against K/2+1..K): whether the machine drifted while a side ran, which a side measured as one
 block cannot tell from a change (the text says so when it did).
 """
@@ -65,6 +66,11 @@ class Replicated:
     def split(self, split: str) -> list[AgainstItself]:
         """Each side's A against A of one split (A's, then B's)."""
         return [check for check in self.against_itself if check.split == split]
+
+    def total(self, split: str) -> tuple[int, int]:
+        """(changed, compared) of one split over both sides."""
+        checks = self.split(split)
+        return sum(c.changed for c in checks), sum(c.compared for c in checks)
 
 
 def _merged_run(key, runs: list[Run]) -> Run:
@@ -161,8 +167,8 @@ def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
 
 
 def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate], float | None]:
-    """Each group's geometric mean of B/A from its runs' means of their medians (Student's t on the runs), and the "all" group's
-    standard error of the log ratio (None without one)."""
+    """Each group's geometric mean of B/A from its runs' means of their medians (Student's t on the runs), and the
+    "all" group's standard error of the log ratio (None without one)."""
     result, error = [], None
     for group, rows in aggregate_groups(comparison.combinations).items():
         keys = _measured_everywhere(comparison, [row.key for row in rows
