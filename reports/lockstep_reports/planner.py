@@ -3,9 +3,9 @@
 A pilot is any earlier `lockstep run` file, or a group of runs (a directory of `lockstep run --runs K`, or files
 given together). Per entry, the variance components of a run's median log step time, compare's figure for a run
 (replicates.median_components: between runs, within a run from the repetitions' robust spread) give each plan's
-standard error of a log ratio B/A, two sides alike: Var = 2 (Var(b) + Var_m(e) / n) / K. Per thread count and overall the planner states the smallest uniform change
-of which 80 % of the entries would be called slower (replicates.change_seen_by_share, two-sided at compare's
-confidence, against its noise band), and the aggregate's.
+standard error of a log ratio B/A, two sides alike: Var = 2 (Var(b) + Var_m(e) / n) / K. Per thread count and
+overall the planner states the smallest uniform change of which 80 % of the entries would be called slower
+(replicates.change_seen_by_share, two-sided at compare's confidence, against its noise band), and the aggregate's.
 
 --detect PCT: the cheapest plan that sees a uniform change of PCT in 80 % of the entries. The repetitions per run
 follow Kalibera and Jones's allocation (replicates.allocation) from the pooled components and the costs: a
@@ -124,8 +124,9 @@ def entries_change(entries: list[_Entry], runs: int, repetitions: int, noise: fl
 
 def aggregate_change(entries: list[_Entry], runs: int, repetitions: int, noise: float) -> float | None:
     """The smallest uniform change (a fraction) the geometric mean of the entries is called slower on at POWER.
-    Its between-run component is the spread of the pilot's runs' means of their medians over the entries (a whole run drifts
-    together) less what the repetitions explain; with a one-run pilot, the assumed drift (the median entry's)."""
+    Its between-run component is the spread of the pilot's runs' means of their medians over the entries (a whole
+    run drifts together) less what the repetitions explain; with a one-run pilot, the assumed drift (the median
+    entry's)."""
     if not entries:
         return None
     within = sum(e.components.within for e in entries) / len(entries) / len(entries)

@@ -265,7 +265,8 @@ class RunsASide(unittest.TestCase):
                 replicates = json.load(stream)["comparisons"][0]["replicates"]
         text = " ".join(out.split())
         self.assertIn("the machine drifted while a side ran", text)
-        alternate, in_time_order = (replicates["against_itself"][split] for split in ("alternate runs", "in time order"))
+        splits = replicates["against_itself"]
+        alternate, in_time_order = splits["alternate runs"], splits["in time order"]
         self.assertEqual(replicates["runs"], [4, 8])
         self.assertEqual(alternate["sides"][1]["runs"], [4, 4])
         # Runs 1, 3, 5, 7 and 2, 4, 6, 8 each hold two runs of either pace: nothing between them; the halves in
