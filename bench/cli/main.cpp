@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", fmt::format("lockstep {} (result schema {}, {})",
                                                 lockstep::build_info::kVersion,
                                                 lockstep::build_info::kResultSchema,
-                                                lockstep::build_info::kGitRevision));
+                                                lockstep::build_info::git_revision()));
   app.require_subcommand(1);
 
   int result = lockstep::cli::kExitOk;

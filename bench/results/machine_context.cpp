@@ -95,7 +95,7 @@ nlohmann::json machine_context(const platform::topology& machine) {
   nlohmann::json context = nlohmann::json::object();
   context["lockstep_version"] = build_info::kVersion;
   context["lockstep_schema"] = std::to_string(build_info::kResultSchema);
-  context["git_revision"] = build_info::kGitRevision;
+  context["git_revision"] = build_info::git_revision();
   context["compiler"] = build_info::kCompiler;
   context["cxx_flags"] = build_info::kCxxFlags;
   context["build_type"] = build_info::kBuildType;
