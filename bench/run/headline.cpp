@@ -119,8 +119,12 @@ std::vector<headline_choice> choose(const run_book& book) {
     choice.sync = chosen->field("sync");
     choice.layout = chosen->field("layout");
     choice.ns_per_step = chosen->median("ns_per_step").value_or(0.0);
-    if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0)
+    choice.fastest_ns = choice.slowest_ns = choice.ns_per_step;
+    if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0) {
       choice.spread_pct = (range->second - range->first) / 2.0 / choice.ns_per_step * 100.0;
+      choice.fastest_ns = range->first;
+      choice.slowest_ns = range->second;
+    }
     for (const auto& [mode, values] : chosen->by_pace_mode("ns_per_step")) {
       if (mode < 0) choice.straddles_pace_change = true;
       else ++choice.paces;
@@ -192,10 +196,11 @@ std::optional<headline_answer> answer_of(const run_book& book, const std::vector
   }
   if (best == nullptr) return std::nullopt;
   headline_answer answer{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}, {}};
-  const double best_highest = best->ns_per_step * (1.0 + best->spread_pct / 100.0);
+  // The repetitions themselves, not the median -+ half their range: the
+  // range of a choice with one slow repetition lies mostly above its median.
   for (const auto& choice : choices) {
     if (&choice == best || choice.model != best->model) continue;
-    if (choice.ns_per_step * (1.0 - choice.spread_pct / 100.0) <= best_highest)
+    if (choice.fastest_ns <= best->slowest_ns)
       answer.level.push_back({choice.threads, choice.pin, choice.entry, choice.ns_per_step});
   }
   std::sort(answer.level.begin(), answer.level.end(),

@@ -39,7 +39,8 @@
 // the run (which thread count and placement) and its step against the serial
 // step of the same model (headline_answer). No pair compares choices across
 // thread counts or placements, so one whose repetitions overlap the fastest's
-// is named beside it as a tie.
+// (its fastest repetition no slower than the fastest choice's slowest) is
+// named beside it as a tie.
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -76,6 +77,10 @@ struct headline_choice {
   std::string layout;
   double ns_per_step = 0.0;
   double spread_pct = 0.0;          // half the min..max range over repetitions, of the median
+  // The fastest and the slowest repetition's step (the median's when the
+  // entry has none): whether two choices' repetitions overlap.
+  double fastest_ns = 0.0;
+  double slowest_ns = 0.0;
   // The pace modes its repetitions ran in (run_book.hpp: by_pace_mode; 0
   // before the trace is analysed) and whether one straddled a change: a
   // spread over two paces is the machine's, not the combination's.
