@@ -32,24 +32,40 @@ if [ -n "$build" ] && [ ! -f "$build/CMakeCache.txt" ]; then
   exit 2
 fi
 
+# A step whose output would only be noise, shown whole (on stderr) when it
+# fails: ninja prints a failing command's errors on its standard output.
+quietly() {
+  local log
+  log=$(mktemp)
+  if ! "$@" >"$log" 2>&1; then
+    echo "bundle: failed: $*" >&2
+    cat "$log" >&2
+    rm -f "$log"
+    exit 1
+  fi
+  rm -f "$log"
+}
+
 if [ -z "$build" ]; then
   scripts/setup.sh
   cmake --preset release >/dev/null
   cmake --build --preset release -j "$(nproc)" --target lockstep
   build=build/release
 else
-  cmake --build "$build" --target lockstep >/dev/null
+  quietly cmake --build "$build" --target lockstep
 fi
 command -v patchelf >/dev/null || { echo "bundle: needs patchelf (scripts/setup.sh installs it)" >&2; exit 2; }
 
-revision=$(git describe --always --dirty 2>/dev/null || echo unknown)
+# The revision the binary names (found when it was built: cmake/build_revision.cmake).
+revision=$("$build/bench/lockstep" --version | sed -n 's/.*, \([^,)]*\))$/\1/p')
+[ -n "$revision" ] || revision=unknown
 name="lockstep-$revision-$(uname -m)-linux"
 [ -n "$out" ] || out="build/$name.tar.gz"
 staging=$(mktemp -d)
 trap 'rm -rf "$staging"' EXIT
 root="$staging/$name"
 
-cmake --install "$build" --component bundle --prefix "$root" --strip >/dev/null
+quietly cmake --install "$build" --component bundle --prefix "$root" --strip
 # Open MPI's libraries name their own directory as their run path
 # (DT_RUNPATH), which hides the binary's from their dependencies: beside each
 # other in lib/, theirs becomes $ORIGIN.
