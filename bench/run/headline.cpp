@@ -121,7 +121,6 @@ std::vector<headline_choice> choose(const run_book& book) {
     choice.ns_per_step = chosen->median("ns_per_step").value_or(0.0);
     choice.fastest_ns = choice.slowest_ns = choice.ns_per_step;
     if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0) {
-      choice.spread_pct = (range->second - range->first) / 2.0 / choice.ns_per_step * 100.0;
       choice.fastest_ns = range->first;
       choice.slowest_ns = range->second;
     }
@@ -152,7 +151,7 @@ std::vector<headline_choice> choose(const run_book& book) {
 // under the repetitions (lockstep run --verbose splits them: "Median per pace
 // mode"): then the figure itself is uncertain, and the line says so.
 std::string spread_words(const headline_choice& choice) {
-  std::string words = fmt::format("+-{:.1f} %", choice.spread_pct);
+  std::string words = fmt::format("+-{:.1f} %", choice.spread_pct());
   if (choice.paces >= 2) return words + fmt::format(" over {} paces of the machine: uncertain", choice.paces);
   if (choice.straddles_pace_change) return words + ", straddles a pace change";
   return words;
@@ -494,7 +493,7 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"sync", choice.sync},
                                {"layout", choice.layout},
                                {"ns_per_step", choice.ns_per_step},
-                               {"spread_pct", choice.spread_pct},
+                               {"spread_pct", choice.spread_pct()},
                                {"paces", choice.paces},
                                {"straddles_pace_change", choice.straddles_pace_change},
                                {"vs_c2c", choice.vs_c2c ? nlohmann::json(*choice.vs_c2c) : nlohmann::json(nullptr)},

@@ -76,11 +76,14 @@ struct headline_choice {
   std::string sync;
   std::string layout;
   double ns_per_step = 0.0;
-  double spread_pct = 0.0;          // half the min..max range over repetitions, of the median
   // The fastest and the slowest repetition's step (the median's when the
-  // entry has none): whether two choices' repetitions overlap.
+  // entry has none): whether two choices' repetitions overlap, and the spread.
   double fastest_ns = 0.0;
   double slowest_ns = 0.0;
+  // Half the min..max range over repetitions, of the median.
+  [[nodiscard]] double spread_pct() const noexcept {
+    return ns_per_step > 0.0 ? (slowest_ns - fastest_ns) / 2.0 / ns_per_step * 100.0 : 0.0;
+  }
   // The pace modes its repetitions ran in (run_book.hpp: by_pace_mode; 0
   // before the trace is analysed) and whether one straddled a change: a
   // spread over two paces is the machine's, not the combination's.

@@ -231,7 +231,7 @@ TEST(Headline, SaysWhenTheSpreadComesFromTheMachinesPace) {
     const bench::headline_choice& choice = headline.choices.front();
     EXPECT_EQ(choice.paces, answer.paces);
     EXPECT_EQ(choice.straddles_pace_change, answer.straddles);
-    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct, answer.words);
+    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct(), answer.words);
     EXPECT_NE(bench::headline_text(headline).find(spread), std::string::npos) << spread << "\n"
                                                                               << bench::headline_text(headline);
     const nlohmann::json json = bench::headline_json(headline);
