@@ -1,9 +1,9 @@
 # The source revision a binary is built from, found on every build (not when
 # CMake configures: a build after a commit, or after an edit, names what it
-# compiled), written to a header only when it changed, so that a build with
-# nothing new recompiles nothing:
+# compiled), written into a generated source only when it changed, so that a
+# build with nothing new recompiles nothing:
 #
-#   cmake -DSOURCE_DIR=<repo> -DTEMPLATE=<header.in> -DOUTPUT=<header> -P build_revision.cmake
+#   cmake -DSOURCE_DIR=<repo> -DTEMPLATE=<source.in> -DOUTPUT=<source> -P build_revision.cmake
 #
 # The revision: `git describe --always --dirty --abbrev=12` of SOURCE_DIR
 # (-dirty: the working tree has changes not committed, so the binary is not

@@ -57,7 +57,8 @@ fi
 command -v patchelf >/dev/null || { echo "bundle: needs patchelf (scripts/setup.sh installs it)" >&2; exit 2; }
 
 # The revision the binary names (found when it was built: cmake/build_revision.cmake).
-revision=$("$build/bench/lockstep" --version | sed -n 's/.*, \([^,)]*\))$/\1/p')
+version=$("$build/bench/lockstep" --version) || { echo "bundle: $build/bench/lockstep --version failed" >&2; exit 1; }
+revision=$(sed -n 's/.*, \([^,)]*\))$/\1/p' <<<"$version")
 [ -n "$revision" ] || revision=unknown
 name="lockstep-$revision-$(uname -m)-linux"
 [ -n "$out" ] || out="build/$name.tar.gz"
