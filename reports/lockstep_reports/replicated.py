@@ -8,9 +8,8 @@ aggregates likewise on each run's mean over a group's entries of those medians, 
 the comparison could see at 80 % power, and, with MIN_HALVES_RUNS or more runs a side, compares the halves of
 each side with the same statistics (A against A), split two ways. Alternate runs (1, 3, 5 ... against 2, 4, 6
 ...) spread over the same time as each other, as two sides measured alternately do: the comparison's own
-false-positive rate. In
-time order (1..K/2 against K/2+1..K): whether the machine drifted while a side ran, which a side measured as one
-block cannot tell from a change (the text says so when it did).
+false-positive rate. In time order (1..K/2 against K/2+1..K): whether the machine drifted while a side ran, which
+a side measured as one block cannot tell from a change (the text says so when it did).
 """
 from __future__ import annotations
 
