@@ -195,7 +195,70 @@ nlohmann::json optional_json(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
+// The ceiling's line at one thread count, at the largest size where both it
+// and the leader were measured (the ceiling's largest alone when the leader
+// has none there); empty when the ceiling has no measured point.
+std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const crossover_ceiling& ceiling,
+                                        const crossover_series* leader) {
+  const crossover_sweep_point* at = nullptr;
+  const crossover_sweep_point* reached = nullptr;
+  for (const auto& point : ceiling.points) {
+    if (!point.measured()) continue;
+    const crossover_sweep_point* leader_point = nullptr;
+    if (leader != nullptr)
+      for (const auto& candidate : leader->points)
+        if (candidate.masses == point.masses && candidate.measured()) leader_point = &candidate;
+    if (leader_point != nullptr || reached == nullptr) {
+      at = &point;
+      if (leader_point != nullptr) reached = leader_point;
+    }
+  }
+  if (at == nullptr) return std::nullopt;
+  std::string line = fmt::format(
+      "Ceiling at {} threads (pin:{}), {} masses: {} blocks of the chain stepped at once with no exchange and no "
+      "sync (the most an even split reaches here) give {:.2f}x [{:.2f}, {:.2f}] the serial step's speed",
+      ceiling.threads, ceiling.pin, at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
+      at->speedup.high);
+  if (reached != nullptr && reached->masses == at->masses) {
+    if (const auto share = share_of_ceiling(sweep, *reached))
+      line += fmt::format("; {} gives {:.2f}x [{:.2f}, {:.2f}], {:.2f} of it", leader->sync, reached->speedup.median,
+                          reached->speedup.low, reached->speedup.high, *share);
+  }
+  return line;
+}
+
+nlohmann::json point_json(const crossover_sweep_point& point) {
+  return {{"masses", point.masses},
+          {"equations_per_thread", point.equations_per_thread()},
+          {"serial_ns", point.serial_ns},
+          {"speedup", point.speedup.median},
+          {"ci_low", point.speedup.low},
+          {"ci_high", point.speedup.high},
+          {"verdict", point.measured() ? nlohmann::json(to_string(point.verdict)) : nlohmann::json(nullptr)},
+          {"pairs", point.pairs},
+          {"pairs_set_aside", point.pairs_set_aside},
+          {"cpu_taken", point.pairs_set_aside > 0},
+          {"cpus_busy", optional_json(point.cpus_busy)},
+          {"oversubscribed", point.oversubscribed},
+          {"failure", point.failure}};
+}
+
 }  // namespace
+
+const crossover_sweep_point* ceiling_at(const crossover_sweep& sweep, const crossover_sweep_point& point) {
+  for (const auto& ceiling : sweep.ceilings) {
+    if (ceiling.threads != point.threads) continue;
+    for (const auto& candidate : ceiling.points)
+      if (candidate.masses == point.masses && candidate.measured()) return &candidate;
+  }
+  return nullptr;
+}
+
+std::optional<double> share_of_ceiling(const crossover_sweep& sweep, const crossover_sweep_point& point) {
+  const crossover_sweep_point* ceiling = ceiling_at(sweep, point);
+  if (ceiling == nullptr || !point.measured() || !(ceiling->speedup.median > 0.0)) return std::nullopt;
+  return point.speedup.median / ceiling->speedup.median;
+}
 
 std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
   // threads -> its series, in the sweep's order (the leader first)
@@ -216,6 +279,10 @@ std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
     if (set_aside > 0)
       line += fmt::format(" ({} pairs set aside: another process took a CPU)", set_aside);
     lines.push_back(std::move(line));
+    for (const auto& ceiling : sweep.ceilings)
+      if (ceiling.threads == threads)
+        if (auto said = ceiling_line(sweep, ceiling, all.front()->leader ? all.front() : nullptr))
+          lines.push_back(std::move(*said));
   }
   return lines;
 }
@@ -228,22 +295,12 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
     for (const auto& point : series.points) {
       std::optional<double> over_model;
       if (point.model_ns && *point.model_ns > 0.0 && point.parallel_ns > 0.0) over_model = point.parallel_ns / *point.model_ns;
-      points.push_back({{"masses", point.masses},
-                        {"equations_per_thread", point.equations_per_thread()},
-                        {"serial_ns", point.serial_ns},
-                        {"parallel_ns", point.parallel_ns},
-                        {"speedup", point.speedup.median},
-                        {"ci_low", point.speedup.low},
-                        {"ci_high", point.speedup.high},
-                        {"verdict", point.measured() ? nlohmann::json(to_string(point.verdict)) : nlohmann::json(nullptr)},
-                        {"pairs", point.pairs},
-                        {"pairs_set_aside", point.pairs_set_aside},
-                        {"cpu_taken", point.pairs_set_aside > 0},
-                        {"cpus_busy", optional_json(point.cpus_busy)},
-                        {"oversubscribed", point.oversubscribed},
-                        {"model_ns", optional_json(point.model_ns)},
-                        {"measured_over_model", optional_json(over_model)},
-                        {"failure", point.failure}});
+      nlohmann::json written = point_json(point);
+      written["parallel_ns"] = point.parallel_ns;
+      written["model_ns"] = optional_json(point.model_ns);
+      written["measured_over_model"] = optional_json(over_model);
+      written["of_ceiling"] = optional_json(share_of_ceiling(sweep, point));
+      points.push_back(std::move(written));
     }
     const bool crossed = found.masses.has_value();
     crossovers.push_back({{"threads", series.threads},
@@ -265,6 +322,16 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
                           {"stages_per_step", kernels::kRk4Stages},
                           {"points", points}});
   }
+  nlohmann::json ceilings = nlohmann::json::array();
+  for (const auto& ceiling : sweep.ceilings) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& point : ceiling.points) {
+      nlohmann::json written = point_json(point);
+      written["blocks_ns"] = point.parallel_ns;
+      points.push_back(std::move(written));
+    }
+    ceilings.push_back({{"threads", ceiling.threads}, {"pin", ceiling.pin}, {"points", points}});
+  }
   return {{"budget_s", static_cast<double>(sweep.budget_ns) / 1e9},
           {"max_masses", sweep.max_masses},
           {"pairs_per_point", sweep.pairs},
@@ -273,7 +340,8 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
           {"stop_reason", sweep.stop_reason},
           {"confidence", kConfidence},
           {"lines", crossover_lines(sweep)},
-          {"crossovers", crossovers}};
+          {"crossovers", crossovers},
+          {"ceilings", ceilings}};
 }
 
 }  // namespace lockstep::bench

@@ -99,6 +99,19 @@ struct crossover_series {
   crossover_estimate crossover;  // find_crossover of the points measured
 };
 
+// The machine's ceiling at one thread count and placement (the sweep
+// measures it beside the series): at each size, the serial step against T
+// independent blocks of the chain stepped at once (crossover_sweep_point with
+// parallel_ns the blocks' time and speedup serial / blocks; model_ns empty):
+// the parallel step's blocks with no exchange and no sync, the most an even
+// split reaches here. Below T / ideal it is the machine (unequal CPUs, shared
+// caches and memory), not the synchronisation.
+struct crossover_ceiling {
+  unsigned threads = 2;
+  std::string pin;
+  std::vector<crossover_sweep_point> points;
+};
+
 struct crossover_sweep {
   std::int64_t budget_ns = 0;
   std::size_t max_masses = 0;
@@ -107,7 +120,15 @@ struct crossover_sweep {
   double spent_s = 0.0;
   std::string stop_reason;   // why the sweep as a whole ended
   std::vector<crossover_series> series;
+  std::vector<crossover_ceiling> ceilings;  // one per thread count swept (none in a sweep without them)
 };
+
+// The ceiling's point at a series point's size and thread count, when it was
+// measured (nullptr otherwise).
+const crossover_sweep_point* ceiling_at(const crossover_sweep& sweep, const crossover_sweep_point& point);
+// The share of the ceiling a series point reached: its speedup over the
+// ceiling's at the same size (medians); empty where either is not measured.
+std::optional<double> share_of_ceiling(const crossover_sweep& sweep, const crossover_sweep_point& point);
 
 // The points a finder reads: the measured ones of a series.
 std::vector<crossover_point> crossover_points(const crossover_series& series);

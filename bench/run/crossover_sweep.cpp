@@ -52,11 +52,13 @@ std::optional<double> median_of(const std::vector<double>& values) {
   return platform::median(kept);
 }
 
-crossover_sweep_point point_of(const paired_result& pair, const crossover_series& series, std::size_t masses,
-                               bool oversubscribed) {
+// A point of a series (stage_sync_ns: the model's, when the run measured
+// it) or of a ceiling (none: no model).
+crossover_sweep_point point_of(const paired_result& pair, unsigned threads, std::size_t masses, bool oversubscribed,
+                               const std::optional<double>& stage_sync_ns) {
   crossover_sweep_point point;
   point.masses = masses;
-  point.threads = series.threads;
+  point.threads = threads;
   point.oversubscribed = oversubscribed;
   point.failure = pair.failure;
   point.pairs = pair.ratios.size();
@@ -69,8 +71,8 @@ crossover_sweep_point point_of(const paired_result& pair, const crossover_series
   point.serial_ns = median_of(pair.unit_ns_a).value_or(0.0);
   point.parallel_ns = median_of(pair.unit_ns_b).value_or(0.0);
   point.cpus_busy = median_of(pair.cpus_busy_b);
-  if (series.stage_sync_ns)
-    point.model_ns = point.serial_ns / static_cast<double>(series.threads) + kernels::kRk4Stages * *series.stage_sync_ns;
+  if (stage_sync_ns)
+    point.model_ns = point.serial_ns / static_cast<double>(threads) + kernels::kRk4Stages * *stage_sync_ns;
   return point;
 }
 
@@ -120,11 +122,11 @@ std::vector<crossover_series> plan_crossover_series(const run_book& book, const 
   return planned;
 }
 
-double estimate_crossover_s(std::size_t series, const crossover_settings& settings) {
+double estimate_crossover_s(std::size_t series, std::size_t ceilings, const crossover_settings& settings) {
   std::size_t sizes = 0;
   for (std::size_t masses = kCrossoverFirstMasses; masses <= settings.max_masses; masses *= 2) ++sizes;
   const double per_point_ns = kPairOverBlocks * 2.0 * static_cast<double>(settings.block_ns) * settings.pairs;
-  const double all_ns = static_cast<double>(series * sizes) * per_point_ns;
+  const double all_ns = static_cast<double>((series + ceilings) * sizes) * per_point_ns;
   return std::min(all_ns, static_cast<double>(settings.budget_ns)) / 1e9;
 }
 
@@ -137,6 +139,11 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
   sweep.pairs = settings.pairs;
   sweep.block_ns = settings.block_ns;
   sweep.series = std::move(series);
+  // One ceiling per thread count, at its series' placement (they share it).
+  for (const auto& one : sweep.series)
+    if (std::none_of(sweep.ceilings.begin(), sweep.ceilings.end(),
+                     [&](const crossover_ceiling& ceiling) { return ceiling.threads == one.threads; }))
+      sweep.ceilings.push_back({one.threads, one.pin, {}});
   // The sweep's pairs take no pace readings: each pair's two blocks share the
   // pace, and the pace trace is the matrix's.
   pace_probe* const pace = harness.pace;
@@ -195,6 +202,27 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
       which.push_back(index);
     }
     if (plan.empty()) continue;
+    // The ceiling of every thread count with a series measured at this size.
+    std::vector<std::size_t> ceilings_here;
+    for (std::size_t index = 0; index < sweep.ceilings.size(); ++index) {
+      const crossover_ceiling& ceiling = sweep.ceilings[index];
+      const bool wanted = std::any_of(which.begin(), which.end(), [&](std::size_t measured) {
+        return sweep.series[measured].threads == ceiling.threads;
+      });
+      block_runner_factory factory =
+          wanted ? chain_split_runner(harness, platform::parse_placement(ceiling.pin), ceiling.threads, masses,
+                                      ceiling.threads <= cpus)
+                 : block_runner_factory{};
+      if (!factory) continue;
+      const std::string name =
+          fmt::format("crossover/model:chain{}/blocks_at_once/pin:{}/threads:{}", masses, ceiling.pin, ceiling.threads);
+      harness.units_per_batch[name] = probe_units(factory, harness.settings);
+      harness.block_runners[name] = std::move(factory);
+      plan.push_back({comparison_kind::crossover,
+                      fmt::format("ceiling pin:{} threads:{} masses:{}", ceiling.pin, ceiling.threads, masses),
+                      serial_name, name});
+      ceilings_here.push_back(index);
+    }
     harness.block_runners[serial_name] = chain_serial_runner(masses);
     harness.units_per_batch[serial_name] = probe_units(harness.block_runners[serial_name], harness.settings);
     std::vector<paired_result>& pairs = harness.book->pairs;
@@ -203,7 +231,8 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
     for (std::size_t item = 0; item < which.size() && before + item < pairs.size(); ++item) {
       const std::size_t index = which[item];
       crossover_series& one = sweep.series[index];
-      crossover_sweep_point point = point_of(pairs[before + item], one, masses, one.threads > cpus);
+      crossover_sweep_point point =
+          point_of(pairs[before + item], one.threads, masses, one.threads > cpus, one.stage_sync_ns);
       if (!point.failure.empty() && point.pairs_set_aside == 0) {
         one.stop_reason = "failed: " + point.failure;
         going[index] = false;
@@ -214,6 +243,11 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
         one.stop_reason = "confirmed";
         going[index] = false;
       }
+    }
+    for (std::size_t item = 0; item < ceilings_here.size() && before + which.size() + item < pairs.size(); ++item) {
+      crossover_ceiling& ceiling = sweep.ceilings[ceilings_here[item]];
+      ceiling.points.push_back(point_of(pairs[before + which.size() + item], ceiling.threads, masses,
+                                        ceiling.threads > cpus, std::nullopt));
     }
     // The sweep's pairs are its own section, not the run's lockstep_pairs.
     pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(before), pairs.end());

@@ -73,9 +73,10 @@ struct crossover_settings {
 std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices);
 
 // For --plan: the series a run of these thread counts would sweep (two a
-// thread count above 1) and its time: every series to the largest size
-// (a series that confirms its crossover stops earlier), at most the budget.
-double estimate_crossover_s(std::size_t series, const crossover_settings& settings);
+// thread count above 1) and the ceilings beside them (one a thread count),
+// and its time: every series to the largest size (a series that confirms its
+// crossover stops earlier), at most the budget.
+double estimate_crossover_s(std::size_t series, std::size_t ceilings, const crossover_settings& settings);
 
 // Measures the series (the harness's block runners and units are added to);
 // `progress(masses, elapsed_s)` after each size.

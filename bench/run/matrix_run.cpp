@@ -91,11 +91,12 @@ std::string plan_of(const platform::topology& machine, const matrix_request& req
     const std::size_t series = 2 * counts;
     crossover = fmt::format(
         "crossover sweep (--crossover): up to {} series (per thread count above 1, the run's choice and "
-        "std_barrier at pin:compact), S = {} to {} masses doubling, {} pairs of {} blocks a point; estimated at "
+        "std_barrier at pin:compact, and beside them the machine's ceiling: the chain's blocks stepped at once "
+        "with no sync), S = {} to {} masses doubling, {} pairs of {} blocks a point; estimated at "
         "most {} (every series to the largest size; a series stops once two points clear 1), budget {}\n",
         series, kCrossoverFirstMasses, request.crossover->max_masses, request.crossover->pairs,
         format_ns(static_cast<double>(request.crossover->block_ns)),
-        format_seconds(estimate_crossover_s(series, *request.crossover)),
+        format_seconds(estimate_crossover_s(series, counts, *request.crossover)),
         format_seconds(static_cast<double>(request.crossover->budget_ns) / 1e9));
   }
   return fmt::format("lockstep run --plan (nothing measured)\n"

@@ -8,6 +8,7 @@
 #include <tuple>
 #include <type_traits>
 #include <exception>
+#include <optional>
 #include <vector>
 
 #include "bench/probes/core_to_core.hpp"
@@ -15,10 +16,13 @@
 #include "kernels/oscillator.hpp"
 #include "kernels/parallel_step.hpp"
 #include "kernels/rk4.hpp"
+#include "layouts/partition.hpp"
 #include "layouts/registry.hpp"
+#include "platform/cache_line.hpp"
 #include "platform/clock.hpp"
 #include "platform/stats.hpp"
 #include "sync/registry.hpp"
+#include "sync/team.hpp"
 
 namespace lockstep::bench {
 
@@ -304,6 +308,43 @@ class serial_block_runner final : public block_runner {
   std::optional<block_facts> facts_;
 };
 
+// T independent serial chains stepped at once, one per participant, each of
+// the masses the partition gives that participant of the S-mass chain
+// (layouts::block_of in whole masses): the blocks of the parallel step with
+// no exchange and no sync between them (chain_split_runner).
+class split_chains {
+ public:
+  split_chains(std::size_t masses, unsigned threads) : slots_(threads) {
+    for (unsigned participant = 0; participant < threads; ++participant)
+      slots_[participant].masses =
+          layouts::block_of(2 * masses, threads, participant, kernels::chain_model::block_grain()).size() / 2;
+  }
+
+  void run(unsigned participant, std::uint64_t steps) {
+    slot& own = slots_[participant];
+    // Built by its own participant on its first block (the warm-up batch):
+    // its arrays then come from that thread's allocations, never on a line
+    // beside another participant's (a 1-mass chain's arrays are 16 bytes).
+    if (!own.rk4)
+      own.rk4.emplace(kernels::chain_model(kernels::model_choice{own.masses}.chain()), kBenchmarkStepSeconds);
+    own.rk4->run(steps);
+    benchmark::DoNotOptimize(own.rk4->state().data());
+  }
+
+ private:
+  struct alignas(platform::kCacheLine) slot {
+    std::size_t masses = 0;
+    std::optional<kernels::staged_rk4<kernels::chain_model>> rk4;
+  };
+  std::vector<slot> slots_;
+};
+
+struct run_split {
+  void operator()(split_chains& chains, sync::participant& self, std::uint64_t count) const {
+    chains.run(self.id, count);
+  }
+};
+
 bool selected(const std::vector<std::string>& names, std::string_view name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
@@ -479,6 +520,18 @@ block_runner_factory chain_step_runner(const harness_state& harness, const std::
     });
   });
   return factory;
+}
+
+block_runner_factory chain_split_runner(const harness_state& harness, platform::placement pin, unsigned threads,
+                                        std::size_t masses, bool accounting) {
+  if (threads == 0 || !layouts::cut_by_grain(2 * masses, threads, kernels::chain_model::block_grain())) return {};
+  block_runner_factory bare =
+      block_runner_of<sync::std_thread_team, split_chains>(harness, pin, threads, run_split{}, masses, threads);
+  return [bare, accounting]() {
+    std::unique_ptr<block_runner> runner = bare();
+    runner->set_accounting(accounting);
+    return runner;
+  };
 }
 
 block_runner_factory chain_serial_runner(std::size_t masses) {

@@ -91,6 +91,15 @@ std::vector<std::string> register_overhead_pair(const run_selection& selection, 
 block_runner_factory chain_step_runner(const harness_state& harness, const std::string& sync,
                                        const std::string& layout, platform::placement pin, unsigned threads,
                                        std::size_t masses, bool accounting);
+// The machine's ceiling for a split of the same chain: `threads` independent
+// serial chains stepped at once, one per participant placed by `pin`, each of
+// the masses the partition gives that participant (layouts/partition.hpp, in
+// whole masses): the parallel step's blocks with no exchange and no sync, so
+// the most any even split into `threads` blocks can reach here. Empty when
+// the chain has fewer masses than threads (the blocks would not be whole
+// masses).
+block_runner_factory chain_split_runner(const harness_state& harness, platform::placement pin, unsigned threads,
+                                        std::size_t masses, bool accounting);
 // The serial staged step of the same chain (rk4/model:chainS/serial) on the
 // calling thread, unpinned, as the serial entry runs: a warm-up batch, then
 // the timed one; accounting on.

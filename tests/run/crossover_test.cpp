@@ -1,12 +1,20 @@
 // The crossover finder (bench/run/crossover.hpp) on constructed curves: the
-// speedups and intervals are made up, so every answer is known.
+// speedups and intervals are made up, so every answer is known. And the
+// ceiling's side of a pair (chain_split_runner) runs.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "bench/run/crossover.hpp"
+#include "bench/run/rk4_entries.hpp"
+#include "bench/run/team_driver.hpp"
+#include "platform/placement.hpp"
+#include "platform/topology.hpp"
+#include "tests/support/watchdog.hpp"
 
 namespace lockstep::bench {
 namespace {
@@ -210,6 +218,92 @@ TEST(CrossoverJson, TheReadersNamesWithEveryPointAndTheModel) {
   EXPECT_TRUE(baseline["ci_low"].is_null());
   EXPECT_EQ(baseline["points"][3]["cpu_taken"], true);
   EXPECT_EQ(json["lines"].size(), 1u);
+}
+
+// The ceiling at 2 threads beside two_series(): 1.8x at every size, measured
+// up to `largest` masses.
+crossover_sweep with_ceiling(std::size_t largest) {
+  crossover_sweep sweep = two_series();
+  crossover_ceiling ceiling{2, "compact", {}};
+  for (std::size_t masses = 2; masses <= largest; masses *= 2) {
+    crossover_sweep_point point;
+    point.masses = masses;
+    point.threads = 2;
+    point.serial_ns = 10.0 * static_cast<double>(masses);
+    point.parallel_ns = point.serial_ns / 1.8;
+    point.speedup = {1.8, 1.7, 1.9};
+    point.pairs = 16;
+    ceiling.points.push_back(point);
+  }
+  sweep.ceilings.push_back(ceiling);
+  return sweep;
+}
+
+TEST(CrossoverLines, TheCeilingAtTheLargestSizeTheLeaderMeasuredAndTheShareItReached) {
+  const auto lines = crossover_lines(with_ceiling(16));
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].rfind("Crossover at 2 threads", 0), 0u) << lines[0];
+  const std::string& line = lines[1];
+  EXPECT_EQ(line.rfind("Ceiling at 2 threads (pin:compact), 16 masses: 2 blocks of the chain stepped at once", 0), 0u)
+      << line;
+  EXPECT_NE(line.find("give 1.80x [1.70, 1.90] the serial step's speed; mailbox gives 4.00x [3.00, 5.00], 2.22 of it"),
+            std::string::npos)
+      << line;
+}
+
+TEST(CrossoverLines, ACeilingBeyondTheLeadersSizesIsQuotedWhereTheLeaderWasMeasured) {
+  crossover_sweep sweep = with_ceiling(64);
+  sweep.series.front().points.pop_back();  // the leader measured up to 8 masses
+  const auto lines = crossover_lines(sweep);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find("), 8 masses:"), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find("mailbox gives 2.00x [1.50, 2.50], 1.11 of it"), std::string::npos) << lines[1];
+}
+
+TEST(CrossoverLines, NoCeilingLineWithoutAMeasuredCeiling) {
+  crossover_sweep sweep = with_ceiling(16);
+  for (auto& point : sweep.ceilings.front().points) {
+    point.pairs = 0;
+    point.failure = "every pair set aside: another process took a CPU";
+  }
+  EXPECT_EQ(crossover_lines(sweep).size(), 1u);
+  EXPECT_FALSE(share_of_ceiling(sweep, sweep.series.front().points.back()).has_value());
+}
+
+TEST(CrossoverJson, TheCeilingAndEachPointsShareOfIt) {
+  const nlohmann::json json = crossover_json(with_ceiling(16));
+  ASSERT_EQ(json["ceilings"].size(), 1u);
+  const auto& ceiling = json["ceilings"][0];
+  EXPECT_EQ(ceiling["threads"], 2);
+  EXPECT_EQ(ceiling["pin"], "compact");
+  ASSERT_EQ(ceiling["points"].size(), 4u);
+  EXPECT_DOUBLE_EQ(ceiling["points"][3]["blocks_ns"].get<double>(), 160.0 / 1.8);
+  EXPECT_DOUBLE_EQ(ceiling["points"][3]["speedup"].get<double>(), 1.8);
+  EXPECT_DOUBLE_EQ(json["crossovers"][0]["points"][3]["of_ceiling"].get<double>(), 4.0 / 1.8);
+  EXPECT_TRUE(crossover_json(two_series())["crossovers"][0]["points"][3]["of_ceiling"].is_null());
+  EXPECT_EQ(json["lines"].size(), 2u);
+}
+
+// The ceiling's side: every participant steps its own block of the chain,
+// with no sync, in blocks of units like any side of a pair; a chain with
+// fewer masses than threads has no such split.
+TEST(CeilingRunner, StepsTheBlocksAtOnceAndRefusesAChainWithFewerMassesThanThreads) {
+  using namespace std::chrono_literals;
+  const lockstep::testing::watchdog guard(60s * lockstep::testing::kSlowdown, "the ceiling's block runner");
+  const platform::topology machine = platform::topology::this_machine();
+  harness_state harness;
+  harness.machine = &machine;
+  for (const unsigned threads : {1u, 2u, 4u}) {
+    const block_runner_factory factory =
+        chain_split_runner(harness, platform::placement::compact, threads, 8, true);
+    ASSERT_TRUE(factory) << threads << " threads";
+    const std::unique_ptr<block_runner> runner = factory();
+    const auto unit_ns = runner->run_block(32);
+    ASSERT_TRUE(unit_ns.has_value()) << threads << " threads";
+    EXPECT_GT(*unit_ns, 0.0);
+    EXPECT_TRUE(runner->last_facts().has_value()) << "accounting on: the block says what it saw";
+  }
+  EXPECT_FALSE(chain_split_runner(harness, platform::placement::compact, 4, 3, true));
 }
 
 }  // namespace
