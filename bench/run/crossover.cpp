@@ -195,31 +195,34 @@ nlohmann::json optional_json(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-// The ceiling's line at one thread count, at the largest size where both it
-// and the leader were measured (the ceiling's largest alone when the leader
-// has none there); empty when the ceiling has no measured point.
-std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const crossover_ceiling& ceiling,
-                                        const crossover_series* leader) {
-  const crossover_sweep_point* at = nullptr;
-  const crossover_sweep_point* reached = nullptr;
-  for (const auto& point : ceiling.points) {
-    if (!point.measured()) continue;
-    const crossover_sweep_point* leader_point = nullptr;
-    if (leader != nullptr)
-      for (const auto& candidate : leader->points)
-        if (candidate.masses == point.masses && candidate.measured()) leader_point = &candidate;
-    if (leader_point != nullptr || reached == nullptr) {
-      at = &point;
-      if (leader_point != nullptr) reached = leader_point;
-    }
-  }
+// The leader of a thread count: its first series when that is the run's
+// choice (the sweep plans it first), else none.
+const crossover_series* leader_at(const crossover_sweep& sweep, unsigned threads) {
+  for (const auto& series : sweep.series)
+    if (series.threads == threads) return series.leader ? &series : nullptr;
+  return nullptr;
+}
+
+// The leader's measured point at a size, or nullptr.
+const crossover_sweep_point* measured_at(const crossover_series* series, std::size_t masses) {
+  if (series == nullptr) return nullptr;
+  for (const auto& point : series->points)
+    if (point.masses == masses && point.measured()) return &point;
+  return nullptr;
+}
+
+// The ceiling's line at one thread count (ceiling_quoted says at which size);
+// empty when the ceiling has no measured point.
+std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const crossover_ceiling& ceiling) {
+  const crossover_sweep_point* at = ceiling_quoted(sweep, ceiling);
   if (at == nullptr) return std::nullopt;
   std::string line = fmt::format(
       "Ceiling at {} threads (pin:{}), {} masses: {} blocks of the chain stepped at once with no exchange and no "
       "sync (the most an even split reaches here) give {:.2f}x [{:.2f}, {:.2f}] the serial step's speed",
       ceiling.threads, ceiling.pin, at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
       at->speedup.high);
-  if (reached != nullptr && reached->masses == at->masses) {
+  const crossover_series* leader = leader_at(sweep, ceiling.threads);
+  if (const crossover_sweep_point* reached = measured_at(leader, at->masses)) {
     if (const auto share = share_of_ceiling(sweep, *reached))
       line += fmt::format("; {} gives {:.2f}x [{:.2f}, {:.2f}], {:.2f} of it", leader->sync, reached->speedup.median,
                           reached->speedup.low, reached->speedup.high, *share);
@@ -244,6 +247,19 @@ nlohmann::json point_json(const crossover_sweep_point& point) {
 }
 
 }  // namespace
+
+const crossover_sweep_point* ceiling_quoted(const crossover_sweep& sweep, const crossover_ceiling& ceiling) {
+  const crossover_series* leader = leader_at(sweep, ceiling.threads);
+  const crossover_sweep_point* quoted = nullptr;
+  bool with_leader = false;
+  for (const auto& point : ceiling.points) {
+    if (!point.measured()) continue;
+    const bool here = measured_at(leader, point.masses) != nullptr;
+    if (here || !with_leader) quoted = &point;
+    with_leader = with_leader || here;
+  }
+  return quoted;
+}
 
 const crossover_sweep_point* ceiling_at(const crossover_sweep& sweep, const crossover_sweep_point& point) {
   for (const auto& ceiling : sweep.ceilings) {
@@ -281,7 +297,7 @@ std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
     lines.push_back(std::move(line));
     for (const auto& ceiling : sweep.ceilings)
       if (ceiling.threads == threads)
-        if (auto said = ceiling_line(sweep, ceiling, all.front()->leader ? all.front() : nullptr))
+        if (auto said = ceiling_line(sweep, ceiling))
           lines.push_back(std::move(*said));
   }
   return lines;
@@ -330,7 +346,11 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
       written["blocks_ns"] = point.parallel_ns;
       points.push_back(std::move(written));
     }
-    ceilings.push_back({{"threads", ceiling.threads}, {"pin", ceiling.pin}, {"points", points}});
+    const crossover_sweep_point* quoted = ceiling_quoted(sweep, ceiling);
+    ceilings.push_back({{"threads", ceiling.threads},
+                        {"pin", ceiling.pin},
+                        {"quoted_masses", quoted != nullptr ? nlohmann::json(quoted->masses) : nlohmann::json(nullptr)},
+                        {"points", points}});
   }
   return {{"budget_s", static_cast<double>(sweep.budget_ns) / 1e9},
           {"max_masses", sweep.max_masses},

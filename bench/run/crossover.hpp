@@ -123,6 +123,10 @@ struct crossover_sweep {
   std::vector<crossover_ceiling> ceilings;  // one per thread count swept (none in a sweep without them)
 };
 
+// The ceiling's point the answer quotes: the largest size where both it and
+// the thread count's leader were measured (the ceiling's largest measured
+// when the leader has none there); nullptr when none was measured.
+const crossover_sweep_point* ceiling_quoted(const crossover_sweep& sweep, const crossover_ceiling& ceiling);
 // The ceiling's point at a series point's size and thread count, when it was
 // measured (nullptr otherwise).
 const crossover_sweep_point* ceiling_at(const crossover_sweep& sweep, const crossover_sweep_point& point);

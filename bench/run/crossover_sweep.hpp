@@ -27,6 +27,12 @@
 // budget (whichever comes first; the budget covers the whole sweep, every
 // series, and is checked before each size).
 //
+// The machine's ceiling beside the series (crossover.hpp, crossover_ceiling):
+// at each size where a series of a thread count was measured, one more pair
+// in the same rounds, the serial step against the chain's blocks stepped at
+// once on the series' placement with no exchange and no sync
+// (rk4_entries.hpp, chain_split_runner): the most an even split reaches.
+//
 // The model beside each point: serial_ns / threads + kernels::kRk4Stages x the
 // stage sync the run measured for the series' entry at its thread count
 // (its sync_ns_per_stage median, rk4_entries.hpp), the step of a perfectly

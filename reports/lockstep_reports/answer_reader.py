@@ -79,11 +79,48 @@ class CrossoverPoint:
     model_ns: float | None
     measured_over_model: float | None
     failure: str
+    of_ceiling: float | None = None  # its speedup over the ceiling's at this size (None: not measured, or no ceiling)
 
     @property
     def measured(self) -> bool:
         """A speedup was measured here (bench/run/crossover.hpp, crossover_sweep_point::measured)."""
         return not self.failure and self.pairs > 0
+
+
+@dataclass(frozen=True)
+class CeilingPoint:
+    """One size of the machine's ceiling (lockstep_crossover.ceilings[].points[]): the serial step paired with the
+    chain's blocks stepped at once with no exchange and no sync (blocks_ns), the speedup serial / blocks with its
+    interval; `failure` non-empty: not measured here."""
+
+    masses: int
+    serial_ns: float
+    blocks_ns: float
+    speedup: float
+    ci_low: float
+    ci_high: float
+    pairs: int
+    pairs_set_aside: int
+    failure: str
+
+    @property
+    def measured(self) -> bool:
+        return not self.failure and self.pairs > 0
+
+
+@dataclass(frozen=True)
+class Ceiling:
+    """The machine's ceiling at one thread count and placement (bench/run/crossover.hpp, crossover_ceiling): the
+    most an even split of the chain reaches there, per size."""
+
+    threads: int
+    pin: str
+    points: tuple[CeilingPoint, ...] = ()
+    quoted_masses: int | None = None  # the size the run's ceiling line quotes (None: nothing measured)
+
+    def quoted(self) -> CeilingPoint | None:
+        """The point the run's ceiling line quotes, as written."""
+        return next((point for point in self.points if point.masses == self.quoted_masses and point.measured), None)
 
 
 @dataclass(frozen=True)
@@ -122,6 +159,7 @@ class CrossoverSweep:
     pairs_per_point: int | None
     stop_reason: str
     lines: tuple[str, ...]
+    ceilings: tuple[Ceiling, ...] = ()  # none in a file written before the sweep measured them
 
 
 @dataclass(frozen=True)
@@ -271,11 +309,32 @@ def _point(path: str, place: tuple, raw) -> CrossoverPoint:
         fail(path, place + ("verdict",), f"is {shown(verdict)}, not one of {', '.join(fields.PAIR_VERDICTS)}")
     point = CrossoverPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, verdict,
                            _whole(path, place, raw, "pairs", 0), _whole(path, place, raw, "pairs_set_aside", 0),
-                           *model, failure)
+                           *model, failure,
+                           _number(path, place, raw, "of_ceiling", 0.0, fields.LARGEST_AMOUNT, nullable=True))
     if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
         fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
                                          f"[{point.ci_low:g}, {point.ci_high:g}]")
     return point
+
+
+def _ceiling_point(path: str, place: tuple, raw) -> CeilingPoint:
+    raw = _object(path, place, raw)
+    times = [_number(path, place, raw, key, 0.0, fields.LONGEST_NS) for key in ("serial_ns", "blocks_ns")]
+    ratios = [_number(path, place, raw, key, 0.0, fields.LARGEST_AMOUNT) for key in ("speedup", "ci_low", "ci_high")]
+    failure = raw.get("failure", "")
+    if not isinstance(failure, str):
+        fail(path, place + ("failure",), f"is {json_kind(failure)}, not text")
+    return CeilingPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, _whole(path, place, raw, "pairs", 0),
+                        _whole(path, place, raw, "pairs_set_aside", 0), failure)
+
+
+def _ceiling(path: str, here: tuple, raw) -> Ceiling:
+    raw = _object(path, here, raw)
+    quoted = raw.get("quoted_masses")
+    return Ceiling(_whole(path, here, raw, "threads", 1), _text(path, here, raw, "pin"),
+                   tuple(_ceiling_point(path, here + ("points", index), point)
+                         for index, point in enumerate(_list(path, here + ("points",), raw.get("points", [])))),
+                   None if quoted is None else _whole(path, here, raw, "quoted_masses", 1))
 
 
 def _crossover(path: str, here: tuple, raw) -> Crossover:
@@ -312,7 +371,10 @@ def _crossovers(path: str, document: dict) -> tuple[tuple[Crossover, ...], Cross
     sweep = CrossoverSweep(_number(path, (CROSSOVER_KEY,), block, "budget_s", 0.0, fields.LARGEST_AMOUNT, True),
                            _number(path, (CROSSOVER_KEY,), block, "spent_s", 0.0, fields.LARGEST_AMOUNT, True),
                            None if pairs is None else _whole(path, (CROSSOVER_KEY,), block, "pairs_per_point", 0),
-                           _text(path, (CROSSOVER_KEY,), block, "stop_reason", required=False) or "", lines)
+                           _text(path, (CROSSOVER_KEY,), block, "stop_reason", required=False) or "", lines,
+                           tuple(_ceiling(path, (CROSSOVER_KEY, "ceilings", index), raw)
+                                 for index, raw in enumerate(_list(path, (CROSSOVER_KEY, "ceilings"),
+                                                                   block.get("ceilings", [])))))
     return crossovers, sweep
 
 

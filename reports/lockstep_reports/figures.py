@@ -903,13 +903,14 @@ def _crossover_span(axes, crossover, color, edges: tuple[float, float]) -> None:
     axes.axvline(crossover.masses, color=color, lw=1.2, ls=":", zorder=2)
 
 
-def crossover_curves(series, labels, title: str) -> str:
+def crossover_curves(series, labels, title: str, ceiling=None) -> str:
     """`lockstep run --crossover` at one thread count: step time against the chain's size S (masses) on log-log
     axes, per series (answer_reader.Crossover: a primitive on its layout) its measured points as the file holds
     them: the parallel step (solid, filled markers), the serial step it was paired with (black, the series'
     marker hollow), the model's step (dashed, the series' colour), and the crossover S* (dotted) with its
-    interval (shaded). A size that measured nothing (CrossoverPoint.measured false) is not drawn. labels: one
-    legend text per series."""
+    interval (shaded); with the machine's ceiling at this thread count (answer_reader.Ceiling), the chain's blocks
+    stepped at once with no sync (grey, dash-dot). A size that measured nothing (CrossoverPoint.measured false)
+    is not drawn. labels: one legend text per series."""
     figure, axes = plt.subplots(figsize=(7.2, 4.2))
     palette = plt.get_cmap("tab10")
     markers = ("o", "s", "^", "D", "v", "P")
@@ -927,6 +928,11 @@ def crossover_curves(series, labels, title: str) -> str:
                   marker="x", ms=4, label=f"model beside {crossover.sync}", zorder=3)
         sizes += [p.masses for p in crossover.points]
         values += [p.parallel_ns for p in points] + [p.serial_ns for p in points] + [p.model_ns for p in modelled]
+    if ceiling is not None:
+        blocks = sorted((p for p in ceiling.points if p.measured), key=lambda p: p.masses)
+        axes.plot([p.masses for p in blocks], [p.blocks_ns for p in blocks], color="grey", lw=1.2, ls="-.",
+                  marker=".", ms=4, label="the blocks at once, no sync (the ceiling)", zorder=3)
+        values += [p.blocks_ns for p in blocks]
     edges = (min(sizes), max(sizes)) if sizes else (1.0, 2.0)
     for index, crossover in enumerate(series):
         _crossover_span(axes, crossover, palette(index % 10), edges)

@@ -124,6 +124,35 @@ def _crossovers(run_file: RunFile) -> dict[tuple, str]:
     return {group: "; ".join(texts) for group, texts in found.items()}
 
 
+def ceiling_words(run_file: RunFile, threads: int, pin: str) -> str | None:
+    """The machine's ceiling at a thread count and placement as the file's ceiling line quotes it: "1.82x [1.74,
+    1.91] at 32 masses, mailbox 0.87 of it"; None where the file has none there."""
+    answer = _answer(run_file)
+    ceiling = next((each for each in (answer.sweep.ceilings if answer.sweep else ())
+                    if each.threads == threads and each.pin == pin), None)
+    point = ceiling.quoted() if ceiling else None
+    if point is None:
+        return None
+    words = f"{point.speedup:.2f}x [{point.ci_low:.2f}, {point.ci_high:.2f}] at {point.masses} masses"
+    for crossover in answer.crossovers:
+        if crossover.threads == threads and crossover.pin == pin and crossover.leader:
+            reached = next((p for p in crossover.points if p.masses == point.masses and p.of_ceiling is not None), None)
+            if reached:
+                words += f", {crossover.sync} {reached.of_ceiling:.2f} of it"
+    return words
+
+
+def _ceilings(run_file: RunFile) -> dict[tuple, str]:
+    """{(model, threads, pin): the file's ceiling there, in words} (ceiling_words)."""
+    answer = _answer(run_file)
+    found = {}
+    for ceiling in answer.sweep.ceilings if answer.sweep else ():
+        words = ceiling_words(run_file, ceiling.threads, ceiling.pin)
+        if words:
+            found[("", ceiling.threads, ceiling.pin)] = words
+    return found
+
+
 def crossover_lines(files: list[RunFile]) -> list[str]:
     """Two or more files that each swept the crossover (lockstep_crossover): per thread count, placement and
     primitive each file's crossover as it wrote it, side by side (one column per file, its letter); none
@@ -139,6 +168,9 @@ def crossover_lines(files: list[RunFile]) -> list[str]:
                                              key=lambda key: (_group_order(("", key[0], key[1])), key[2]))]
     room = column_width(max(len(row[0]) for row in rows), len(files))
     headings = [""] + [_heading(letter(index), run_file.label, room) for index, run_file in enumerate(files)]
+    ceilings = [_ceilings(run_file) for run_file in files]
+    rows += [[_group_label(group) + ", the ceiling"] + [each.get(group, ABSENT) for each in ceilings]
+             for group in sorted({group for each in ceilings for group in each}, key=_group_order)]
     return (["Crossovers (S* in masses [interval], as each run wrote it; -: not swept there):"]
             + table(headings, rows, width=WIDTH))
 
@@ -148,6 +180,7 @@ def _recommendation_rows(files: list[RunFile]) -> list[list[str]]:
     baseline set against it, and the crossover where the file has one."""
     choices = [_choices(run_file) for run_file in files]
     crossovers = [_crossovers(run_file) for run_file in files]
+    ceilings = [_ceilings(run_file) for run_file in files]
     rows = []
     for group in sorted({group for found in choices + crossovers for group in found}, key=_group_order):
         picked = [found.get(group) for found in choices]  # (recommendation, baseline, oversubscribed) or None
@@ -163,6 +196,8 @@ def _recommendation_rows(files: list[RunFile]) -> list[list[str]]:
                         + [ABSENT if not (p and p[1]) else paired_text(p[1], BASELINE_WORDS) if one
                            else f"{p[1].name} {paired_text(p[1], BASELINE_WORDS)}" for p in picked])
         rows.append(["  crossover"] + [found.get(group, ABSENT) for found in crossovers])
+        if any(found.get(group) for found in ceilings):
+            rows.append(["  the ceiling"] + [found.get(group, ABSENT) for found in ceilings])
     return rows
 
 

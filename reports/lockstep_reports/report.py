@@ -466,14 +466,15 @@ def _crossover_rows(series) -> tuple[list[list[str]], list[list[str]]]:
             head = [f"{crossover.threads}, {crossover.sync}", str(point.masses)]
             pairs = f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)
             if not point.measured:
-                points.append(head + ["", "", point.failure or "not measured", "", pairs, "", ""])
+                points.append(head + ["", "", point.failure or "not measured", "", pairs, "", "", ""])
                 continue
             points.append(head + [format_ns(point.serial_ns), format_ns(point.parallel_ns),
                                   f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
                                   f"{format_number(point.ci_high, 2)}]",
                                   SPEEDUP_VERDICTS.get(point.verdict, point.verdict or ""), pairs,
                                   format_ns(point.model_ns) if point.model_ns is not None else UNAVAILABLE,
-                                  format_number(point.measured_over_model, 2, "x", missing=UNAVAILABLE)])
+                                  format_number(point.measured_over_model, 2, "x", missing=UNAVAILABLE),
+                                  format_number(point.of_ceiling, 2, missing=UNAVAILABLE)])
     return rows, points
 
 
@@ -492,7 +493,8 @@ def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
         "`lockstep run --crossover`: from what model size a parallel step pays off. Per thread count, the step time "
         "of the chain of S masses (2S equations) against S, log-log: each primitive on its layout (solid), the "
         "serial step of the same S it was paired with side by side (black, hollow markers), and beside each series "
-        "the model's step (dashed: the serial step / T plus the measured sync of each RK4 stage). Dotted: the "
+        "the model's step (dashed: the serial step / T plus the measured sync of each RK4 stage); grey, dash-dot: "
+        "the machine's ceiling, the chain's blocks stepped at once with no exchange and no sync. Dotted: the "
         "crossover S*, where the speedup serial / parallel crosses 1; shaded: its interval, where the speedup's 95 % "
         "interval crosses 1 (an open end, beyond the sizes measured, runs to the edge, lighter). A size whose pairs "
         "were all set aside (another process took a CPU) has no point.")
@@ -508,15 +510,32 @@ def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
         pins = sorted({crossover.pin for crossover in series if crossover.pin})
         title = f"step time against S, {threads} threads" + (f", pin:{', '.join(pins)}" if pins else "")
         labels = [f"{_series_name(crossover)}: S* {format_crossover(crossover)}" for crossover in series]
+        ceiling = next((each for each in (sweep.ceilings if sweep else ()) if each.threads == threads), None)
         section.figures.append(Figure(f"crossover-{counter[0]}-{threads}", title,
-                                      figures.crossover_curves(series, labels, title)))
+                                      figures.crossover_curves(series, labels, title, ceiling)))
     rows, points = _crossover_rows(found)
     section.tables += [
         Table(["threads, placement", "primitive + layout", "S* (masses) [interval]", "status", "checked",
                "a stage's sync (model)", "stopped"], rows, caption="Each series' crossover as the run found it."),
         Table(["threads, primitive", "S", "serial step", "parallel step", "speedup [95 % interval]", "verdict",
-               "pairs", "model", "measured / model"], points,
-              caption="Every size swept, as the file holds it: the medians of the pairs and the paired speedup.")]
+               "pairs", "model", "measured / model", "of the ceiling"], points,
+              caption="Every size swept, as the file holds it: the medians of the pairs and the paired speedup; "
+                      "of the ceiling: the speedup over the ceiling's at that size (medians).")]
+    ceiling_rows = [[f"{ceiling.threads}, pin:{ceiling.pin}", str(point.masses), format_ns(point.serial_ns),
+                     format_ns(point.blocks_ns),
+                     f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
+                     f"{format_number(point.ci_high, 2)}]",
+                     f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)]
+                    if point.measured else
+                    [f"{ceiling.threads}, pin:{ceiling.pin}", str(point.masses), "", "", point.failure or "not measured",
+                     str(point.pairs)]
+                    for ceiling in (sweep.ceilings if sweep else ()) for point in ceiling.points]
+    if ceiling_rows:
+        section.tables.append(Table(
+            ["threads, placement", "S", "serial step", "the blocks at once", "speedup [95 % interval]", "pairs"],
+            ceiling_rows, caption="The machine's ceiling: the chain's blocks (those the partition gives the threads) "
+                                  "stepped at once with no exchange and no sync, paired with the serial step; the most "
+                                  "an even split reaches here."))
     return section
 
 

@@ -316,6 +316,31 @@ class CrossoversSideBySide(Scratch):
                     self.assertEqual(cell, f"at every size measured, from {series['masses']:.0f} masses")
         self.assertTrue(all(len(line) <= WIDTH for line in lines))
 
+    def test_the_ceiling_as_its_run_quoted_it(self):
+        """A file with the machine's ceiling (fixtures/crossover_ceiling.json) beside one written before it."""
+        with_ceiling = fixture("crossover_ceiling.json")
+        with open(with_ceiling, encoding="utf-8") as stream:
+            document = json.load(stream)
+        (ceiling,) = document["lockstep_crossover"]["ceilings"]
+        point = next(p for p in ceiling["points"] if p["masses"] == ceiling["quoted_masses"])
+        leader = next(c for c in document["lockstep_crossover"]["crossovers"] if c["leader"])
+        share = next(p["of_ceiling"] for p in leader["points"] if p["masses"] == ceiling["quoted_masses"])
+        out = compared(self.A, with_ceiling)
+        lines = out.splitlines()
+        row = line_index(out, "2 threads, pin:compact, the ceiling")
+        heading = lines[line_index(out, "Crossovers (S* in masses [interval]") + 1]
+        columns = (slice(heading.index("[A]"), heading.index("[B]")), slice(heading.index("[B]"), None))
+        end = next(index for index in range(row + 1, len(lines) + 1)
+                   if index == len(lines) or not lines[index].startswith(" "))
+        cells = [" ".join(line[column].strip() for line in lines[row:end]).strip() for column in columns]
+        self.assertEqual(cells[0], "-")  # written before the ceiling
+        self.assertEqual(cells[1], f"{point['speedup']:.2f}x [{point['ci_low']:.2f}, {point['ci_high']:.2f}] at "
+                                   f"{point['masses']} masses, {leader['sync']} {share:.2f} of it")
+        # The run's own line says the same figures.
+        line = next(text for text in document["lockstep_headline"]["crossover"] if text.startswith("Ceiling"))
+        self.assertIn(f"give {point['speedup']:.2f}x [{point['ci_low']:.2f}, {point['ci_high']:.2f}]", line)
+        self.assertIn(f"{share:.2f} of it", line)
+
     def test_a_file_without_the_sweep(self):
         self.assertNotIn("Crossovers (", compared(self.A, AMD_QUICK))  # only one file swept
         with open(self.B, encoding="utf-8") as stream:

@@ -633,6 +633,9 @@ class DelayCauses(Scratch):
 # every size measured.
 CROSSOVER_A = "crossover_a.json"
 CROSSOVER_B = "crossover_b.json"
+# The same command with the machine's ceiling beside the series (lockstep_crossover.ceilings), by the same build on
+# the same machine, quiet, 2026-11-27.
+CROSSOVER_CEILING = "crossover_ceiling.json"
 
 
 class Crossover(Scratch):
@@ -714,6 +717,36 @@ class Crossover(Scratch):
             # S*: a dotted vertical line at the file's value.
             self.assertTrue(any(line.get_linestyle() == ":" and list(line.get_xdata()) == [crossover.masses] * 2
                                 for line in axes.get_lines()))
+
+    def test_the_ceiling_is_drawn_and_tabled_as_the_file_holds_it(self):
+        document = self.document(CROSSOVER_CEILING)
+        written = document["lockstep_crossover"]["ceilings"]
+        self.assertEqual(len(written), 1)
+        ceiling_line = next(line for line in document["lockstep_headline"]["crossover"] if line.startswith("Ceiling"))
+        run_file = load_run_file(fixture(CROSSOVER_CEILING))
+        (ceiling,) = run_file.answer.sweep.ceilings
+        self.assertEqual((ceiling.threads, ceiling.pin), (written[0]["threads"], written[0]["pin"]))
+        measured = [point for point in ceiling.points if point.measured]
+        self.assertTrue(measured)
+        captured = []
+        with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
+            report.crossover_section(run_file, [0])
+        lines = {line.get_label(): line for line in captured[0].axes[0].get_lines()}
+        drawn = lines["the blocks at once, no sync (the ceiling)"]
+        self.assertEqual(drawn.get_linestyle(), "-.")
+        self.assertEqual(list(drawn.get_ydata()), [point.blocks_ns for point in measured])
+        # Each series point's share of it, as written.
+        shares = [point.of_ceiling for series in run_file.answer.crossovers for point in series.points]
+        self.assertEqual(shares, [point.get("of_ceiling") for series in document["lockstep_crossover"]["crossovers"]
+                                  for point in series["points"]])
+        self.assertTrue(any(share is not None for share in shares))
+        _, markdown = self.report(fixture(CROSSOVER_CEILING))
+        self.assertIn(f"The run's answer: {ceiling_line}", markdown)
+        start = markdown.index("## Crossover: ")
+        section = markdown[start:markdown.index("\n## ", start)]
+        self.assertIn("| threads, placement | S | serial step | the blocks at once |", section)
+        self.assertEqual(sum(1 for line in section.splitlines() if line.startswith("| 2, pin:compact | ")),
+                         len(ceiling.points))
 
     def test_a_damaged_point_is_one_line_naming_it(self):
         document = self.document()
