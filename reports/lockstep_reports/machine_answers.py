@@ -126,7 +126,7 @@ def _crossovers(run_file: RunFile) -> dict[tuple, str]:
 
 def ceiling_words(run_file: RunFile, threads: int, pin: str) -> str | None:
     """The machine's ceiling at a thread count and placement as the file's ceiling line quotes it: "1.82x [1.74,
-    1.91] at 32 masses, mailbox 0.87 of it"; None where the file has none there."""
+    1.91] at 32 masses, LEADER 0.87 of it" (the leader: the run's choice there); None where the file has none there."""
     answer = _answer(run_file)
     ceiling = next((each for each in (answer.sweep.ceilings if answer.sweep else ())
                     if each.threads == threads and each.pin == pin), None)
