@@ -218,7 +218,8 @@ std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const cros
   if (at == nullptr) return std::nullopt;
   std::string line = fmt::format(
       "Ceiling at {} threads (pin:{}), {} masses: {} blocks of the chain stepped at once with no exchange and no "
-      "sync (the most an even split reaches here) give {:.2f}x [{:.2f}, {:.2f}] the serial step's speed",
+      "sync (what the machine gives an even split) give {:.2f}x [{:.2f}, {:.2f}] the serial "
+      "step's speed",
       ceiling.threads, ceiling.pin, at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
       at->speedup.high);
   const crossover_series* leader = leader_at(sweep, ceiling.threads);

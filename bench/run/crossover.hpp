@@ -103,9 +103,13 @@ struct crossover_series {
 // measures it beside the series): at each size, the serial step against T
 // independent blocks of the chain stepped at once (crossover_sweep_point with
 // parallel_ns the blocks' time and speedup serial / blocks; model_ns empty):
-// the parallel step's blocks with no exchange and no sync, the most an even
-// split reaches here. Below T / ideal it is the machine (unequal CPUs, shared
-// caches and memory), not the synchronisation.
+// the parallel step's blocks with no exchange and no sync: what the machine
+// gives an even split before any sync is paid. Below T it is the machine
+// (unequal CPUs, shared caches and memory, a per-step cost that does not
+// halve), not the synchronisation. A reference, not a bound: each block is a
+// chain of its own (fixed ends where the step's block has neighbours), and
+// its pairs are not the series' pairs, so a step can reach a share of it a
+// little above 1 (within the two intervals).
 struct crossover_ceiling {
   unsigned threads = 2;
   std::string pin;
@@ -137,10 +141,12 @@ std::optional<double> share_of_ceiling(const crossover_sweep& sweep, const cross
 // The points a finder reads: the measured ones of a series.
 std::vector<crossover_point> crossover_points(const crossover_series& series);
 
-// The headline's crossover lines, one per thread count ("Crossover at 2
+// The headline's crossover lines: per thread count the crossover's ("Crossover at 2
 // threads (pin:compact): mailbox pays off from about 1450 masses [1100, 1900]
 // (1450 equations a thread); std_barrier from about 2900 [...]; below that,
-// step serially").
+// step serially"), then the ceiling's where one was measured ("Ceiling at 2
+// threads (pin:compact), 4096 masses: ... give 1.98x [1.92, 2.02] the serial
+// step's speed; mailbox gives 1.93x [1.78, 2.06], 0.98 of it").
 std::vector<std::string> crossover_lines(const crossover_sweep& sweep);
 
 // The result file's "lockstep_crossover" (docs/schemas/run.schema.json).

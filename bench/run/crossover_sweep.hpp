@@ -31,7 +31,8 @@
 // at each size where a series of a thread count was measured, one more pair
 // in the same rounds, the serial step against the chain's blocks stepped at
 // once on the series' placement with no exchange and no sync
-// (rk4_entries.hpp, chain_split_runner): the most an even split reaches.
+// (rk4_entries.hpp, chain_split_runner): what the machine gives an even split
+// with no sync to pay.
 //
 // The model beside each point: serial_ns / threads + kernels::kRk4Stages x the
 // stage sync the run measured for the series' entry at its thread count

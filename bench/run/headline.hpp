@@ -173,7 +173,7 @@ struct run_headline {
   std::vector<headline_stopped> stopped;
   std::vector<std::string> collapsed;  // entry names
   known_answers probes;
-  // --crossover: one line per thread count swept (crossover.hpp:
+  // --crossover: per thread count swept the crossover's line and the ceiling's (crossover.hpp:
   // crossover_lines), also among `lines`, after the answer-first line.
   std::vector<std::string> crossover;
   std::vector<std::string> lines;      // the text, at most kHeadlineLines lines

@@ -332,7 +332,10 @@ class split_chains {
   }
 
  private:
-  struct alignas(platform::kCacheLine) slot {
+  // A line pair of its own (platform/cache_line.hpp): the step count its
+  // rk4 writes every step never shares a prefetch pair with the next
+  // participant's model, read every step.
+  struct alignas(platform::kPrefetchPair) slot {
     std::size_t masses = 0;
     std::optional<kernels::staged_rk4<kernels::chain_model>> rk4;
   };

@@ -95,7 +95,8 @@ block_runner_factory chain_step_runner(const harness_state& harness, const std::
 // serial chains stepped at once, one per participant placed by `pin`, each of
 // the masses the partition gives that participant (layouts/partition.hpp, in
 // whole masses): the parallel step's blocks with no exchange and no sync, so
-// the most any even split into `threads` blocks can reach here. Empty when
+// what the machine gives an even split before any sync (a reference: each
+// block is a chain of its own, with fixed ends). Empty when
 // the chain has fewer masses than threads (the blocks would not be whole
 // masses).
 block_runner_factory chain_split_runner(const harness_state& harness, platform::placement pin, unsigned threads,

@@ -324,8 +324,12 @@ def _ceiling_point(path: str, place: tuple, raw) -> CeilingPoint:
     failure = raw.get("failure", "")
     if not isinstance(failure, str):
         fail(path, place + ("failure",), f"is {json_kind(failure)}, not text")
-    return CeilingPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, _whole(path, place, raw, "pairs", 0),
-                        _whole(path, place, raw, "pairs_set_aside", 0), failure)
+    point = CeilingPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, _whole(path, place, raw, "pairs", 0),
+                         _whole(path, place, raw, "pairs_set_aside", 0), failure)
+    if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
+        fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
+                                         f"[{point.ci_low:g}, {point.ci_high:g}]")
+    return point
 
 
 def _ceiling(path: str, here: tuple, raw) -> Ceiling:

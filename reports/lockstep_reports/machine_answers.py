@@ -171,7 +171,7 @@ def crossover_lines(files: list[RunFile]) -> list[str]:
     ceilings = [_ceilings(run_file) for run_file in files]
     rows += [[_group_label(group) + ", the ceiling"] + [each.get(group, ABSENT) for each in ceilings]
              for group in sorted({group for each in ceilings for group in each}, key=_group_order)]
-    return (["Crossovers (S* in masses [interval], as each run wrote it; -: not swept there):"]
+    return (["Crossovers (S* in masses [interval], as each run wrote it; -: not swept there, or written before it):"]
             + table(headings, rows, width=WIDTH))
 
 

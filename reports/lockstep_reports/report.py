@@ -534,8 +534,8 @@ def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
         section.tables.append(Table(
             ["threads, placement", "S", "serial step", "the blocks at once", "speedup [95 % interval]", "pairs"],
             ceiling_rows, caption="The machine's ceiling: the chain's blocks (those the partition gives the threads) "
-                                  "stepped at once with no exchange and no sync, paired with the serial step; the most "
-                                  "an even split reaches here."))
+                                  "stepped at once with no exchange and no sync, paired with the serial step: what the "
+                                  "machine gives an even split with no sync to pay (a reference, not a bound)."))
     return section
 
 

@@ -353,6 +353,6 @@ class Headline:
     collapsed: tuple[str, ...]  # entry names as written, each once
     collapsed_keys: frozenset
     answer: HeadlineAnswer | None = None  # None: a file written before lockstep_headline.answer
-    # lockstep_headline.crossover: the crossover lines (one per thread count swept, also among `lines`), as the
+    # lockstep_headline.crossover: the crossover lines (per thread count swept the crossover's and the ceiling's, also among `lines`), as the
     # run wrote them; empty without `--crossover` or in a file written before the key.
     crossover: tuple[str, ...] = ()
