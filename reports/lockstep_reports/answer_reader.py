@@ -294,16 +294,31 @@ def _flag(path: str, place: tuple, block: dict, key: str) -> bool:
     return value
 
 
-def _point(path: str, place: tuple, raw) -> CrossoverPoint:
-    """One point of a series: every key the writer always writes is required (docs/schemas/run.schema.json)."""
-    raw = _object(path, place, raw)
-    times = [_number(path, place, raw, key, 0.0, fields.LONGEST_NS) for key in ("serial_ns", "parallel_ns")]
+def _paired_parts(path: str, place: tuple, raw: dict, time_keys: tuple[str, str]) -> tuple[list, list, str]:
+    """What a series point and a ceiling point share: their two times, the speedup with its interval, and why
+    nothing was measured ("" when measured)."""
+    times = [_number(path, place, raw, key, 0.0, fields.LONGEST_NS) for key in time_keys]
     ratios = [_number(path, place, raw, key, 0.0, fields.LARGEST_AMOUNT) for key in ("speedup", "ci_low", "ci_high")]
-    model = [_number(path, place, raw, key, -fields.LONGEST_NS, fields.LONGEST_NS, nullable=True)
-             for key in ("model_ns", "measured_over_model")]
     failure = raw.get("failure", "")
     if not isinstance(failure, str):
         fail(path, place + ("failure",), f"is {json_kind(failure)}, not text")
+    return times, ratios, failure
+
+
+def _within_interval(path: str, place: tuple, point):
+    """The point, once its speedup lies within its interval where it was measured."""
+    if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
+        fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
+                                         f"[{point.ci_low:g}, {point.ci_high:g}]")
+    return point
+
+
+def _point(path: str, place: tuple, raw) -> CrossoverPoint:
+    """One point of a series: every key the writer always writes is required (docs/schemas/run.schema.json)."""
+    raw = _object(path, place, raw)
+    times, ratios, failure = _paired_parts(path, place, raw, ("serial_ns", "parallel_ns"))
+    model = [_number(path, place, raw, key, -fields.LONGEST_NS, fields.LONGEST_NS, nullable=True)
+             for key in ("model_ns", "measured_over_model")]
     verdict = _text(path, place, raw, "verdict", required=False)
     if verdict is not None and verdict not in fields.PAIR_VERDICTS:
         fail(path, place + ("verdict",), f"is {shown(verdict)}, not one of {', '.join(fields.PAIR_VERDICTS)}")
@@ -311,25 +326,15 @@ def _point(path: str, place: tuple, raw) -> CrossoverPoint:
                            _whole(path, place, raw, "pairs", 0), _whole(path, place, raw, "pairs_set_aside", 0),
                            *model, failure,
                            _number(path, place, raw, "of_ceiling", 0.0, fields.LARGEST_AMOUNT, nullable=True))
-    if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
-        fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
-                                         f"[{point.ci_low:g}, {point.ci_high:g}]")
-    return point
+    return _within_interval(path, place, point)
 
 
 def _ceiling_point(path: str, place: tuple, raw) -> CeilingPoint:
     raw = _object(path, place, raw)
-    times = [_number(path, place, raw, key, 0.0, fields.LONGEST_NS) for key in ("serial_ns", "blocks_ns")]
-    ratios = [_number(path, place, raw, key, 0.0, fields.LARGEST_AMOUNT) for key in ("speedup", "ci_low", "ci_high")]
-    failure = raw.get("failure", "")
-    if not isinstance(failure, str):
-        fail(path, place + ("failure",), f"is {json_kind(failure)}, not text")
-    point = CeilingPoint(_whole(path, place, raw, "masses", 1), *times, *ratios, _whole(path, place, raw, "pairs", 0),
-                         _whole(path, place, raw, "pairs_set_aside", 0), failure)
-    if point.measured and not point.ci_low <= point.speedup <= point.ci_high:
-        fail(path, place + ("speedup",), f"is {point.speedup:g}, outside its interval "
-                                         f"[{point.ci_low:g}, {point.ci_high:g}]")
-    return point
+    times, ratios, failure = _paired_parts(path, place, raw, ("serial_ns", "blocks_ns"))
+    return _within_interval(path, place, CeilingPoint(
+        _whole(path, place, raw, "masses", 1), *times, *ratios, _whole(path, place, raw, "pairs", 0),
+        _whole(path, place, raw, "pairs_set_aside", 0), failure))
 
 
 def _ceiling(path: str, here: tuple, raw) -> Ceiling:
