@@ -203,12 +203,14 @@ const crossover_series* leader_at(const crossover_sweep& sweep, unsigned threads
   return nullptr;
 }
 
-// The leader's measured point at a size, or nullptr.
-const crossover_sweep_point* measured_at(const crossover_series* series, std::size_t masses) {
-  if (series == nullptr) return nullptr;
-  for (const auto& point : series->points)
+// The measured point at a size among `points`, or nullptr.
+const crossover_sweep_point* measured_at(const std::vector<crossover_sweep_point>& points, std::size_t masses) {
+  for (const auto& point : points)
     if (point.masses == masses && point.measured()) return &point;
   return nullptr;
+}
+const crossover_sweep_point* measured_at(const crossover_series* series, std::size_t masses) {
+  return series != nullptr ? measured_at(series->points, masses) : nullptr;
 }
 
 // The ceiling's line at one thread count (ceiling_quoted says at which size);
@@ -263,11 +265,8 @@ const crossover_sweep_point* ceiling_quoted(const crossover_sweep& sweep, const 
 }
 
 const crossover_sweep_point* ceiling_at(const crossover_sweep& sweep, const crossover_sweep_point& point) {
-  for (const auto& ceiling : sweep.ceilings) {
-    if (ceiling.threads != point.threads) continue;
-    for (const auto& candidate : ceiling.points)
-      if (candidate.masses == point.masses && candidate.measured()) return &candidate;
-  }
+  for (const auto& ceiling : sweep.ceilings)
+    if (ceiling.threads == point.threads) return measured_at(ceiling.points, point.masses);
   return nullptr;
 }
 

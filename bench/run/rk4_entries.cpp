@@ -322,9 +322,11 @@ class split_chains {
 
   void run(unsigned participant, std::uint64_t steps) {
     slot& own = slots_[participant];
-    // Built by its own participant on its first block (the warm-up batch):
-    // its arrays then come from that thread's allocations, never on a line
-    // beside another participant's (a 1-mass chain's arrays are 16 bytes).
+    // Built by its own participant on its first block (the warm-up batch,
+    // untimed): its arrays then come from that thread's allocations (glibc
+    // gives threads that allocate at once arenas of their own), not from one
+    // heap where a 1-mass chain's 16-byte arrays would sit on a line beside
+    // another participant's.
     if (!own.rk4)
       own.rk4.emplace(kernels::chain_model(kernels::model_choice{own.masses}.chain()), kBenchmarkStepSeconds);
     own.rk4->run(steps);

@@ -9,7 +9,7 @@ answer_reader.py): nothing is recomputed here, so each machine's answer reads as
 from __future__ import annotations
 
 from . import statistics
-from .answer_reader import Crossover, PairedRatio, RunAnswer
+from .answer_reader import Ceiling, Crossover, PairedRatio, RunAnswer
 from .comparability import letter, unoptimised
 from .fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE_CONTEXT, QUICK_MODE, SERIAL_CONTEXT,
                      UNAVAILABLE)
@@ -124,18 +124,15 @@ def _crossovers(run_file: RunFile) -> dict[tuple, str]:
     return {group: "; ".join(texts) for group, texts in found.items()}
 
 
-def ceiling_words(run_file: RunFile, threads: int, pin: str) -> str | None:
-    """The machine's ceiling at a thread count and placement as the file's ceiling line quotes it: "1.82x [1.74,
-    1.91] at 32 masses, LEADER 0.87 of it" (the leader: the run's choice there); None where the file has none there."""
-    answer = _answer(run_file)
-    ceiling = next((each for each in (answer.sweep.ceilings if answer.sweep else ())
-                    if each.threads == threads and each.pin == pin), None)
-    point = ceiling.quoted() if ceiling else None
+def ceiling_words(answer: RunAnswer, ceiling: Ceiling) -> str | None:
+    """A file's ceiling as its ceiling line quotes it: "1.82x [1.74, 1.91] at 32 masses, LEADER 0.87 of it" (the
+    leader: the run's choice there); None where it measured nothing."""
+    point = ceiling.quoted()
     if point is None:
         return None
     words = f"{point.speedup:.2f}x [{point.ci_low:.2f}, {point.ci_high:.2f}] at {point.masses} masses"
     for crossover in answer.crossovers:
-        if crossover.threads == threads and crossover.pin == pin and crossover.leader:
+        if crossover.threads == ceiling.threads and crossover.pin == ceiling.pin and crossover.leader:
             reached = next((p for p in crossover.points if p.masses == point.masses and p.of_ceiling is not None), None)
             if reached:
                 words += f", {crossover.sync} {reached.of_ceiling:.2f} of it"
@@ -147,7 +144,7 @@ def _ceilings(run_file: RunFile) -> dict[tuple, str]:
     answer = _answer(run_file)
     found = {}
     for ceiling in answer.sweep.ceilings if answer.sweep else ():
-        words = ceiling_words(run_file, ceiling.threads, ceiling.pin)
+        words = ceiling_words(answer, ceiling)
         if words:
             found[("", ceiling.threads, ceiling.pin)] = words
     return found

@@ -449,6 +449,29 @@ def _series_name(crossover) -> str:
     return f"{crossover.sync} + {crossover.layout}" if crossover.layout else crossover.sync
 
 
+def _pairs_text(point) -> str:
+    """A point's pairs kept, and those set aside where there were any."""
+    return f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)
+
+
+def _speedup_text(point) -> str:
+    """A point's paired speedup with its interval: "1.93x [1.78, 2.06]"."""
+    return (f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
+            f"{format_number(point.ci_high, 2)}]")
+
+
+def _ceiling_rows(sweep) -> list[list[str]]:
+    """One row per size of each ceiling the sweep measured (none in a file without them)."""
+    rows = []
+    for ceiling in sweep.ceilings if sweep else ():
+        where = f"{ceiling.threads}, pin:{ceiling.pin}"
+        for point in ceiling.points:
+            rows.append([where, str(point.masses), format_ns(point.serial_ns), format_ns(point.blocks_ns),
+                         _speedup_text(point), _pairs_text(point)] if point.measured else
+                        [where, str(point.masses), "", "", point.failure or "not measured", _pairs_text(point)])
+    return rows
+
+
 def _crossover_rows(series) -> tuple[list[list[str]], list[list[str]]]:
     """(one row per series, one row per point) for the crossover section's tables."""
     rows, points = [], []
@@ -464,13 +487,12 @@ def _crossover_rows(series) -> tuple[list[list[str]], list[list[str]]]:
                      CROSSOVER_STOPS.get(crossover.stop_reason, crossover.stop_reason)])
         for point in crossover.points:
             head = [f"{crossover.threads}, {crossover.sync}", str(point.masses)]
-            pairs = f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)
+            pairs = _pairs_text(point)
             if not point.measured:
                 points.append(head + ["", "", point.failure or "not measured", "", pairs, "", "", ""])
                 continue
             points.append(head + [format_ns(point.serial_ns), format_ns(point.parallel_ns),
-                                  f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
-                                  f"{format_number(point.ci_high, 2)}]",
+                                  _speedup_text(point),
                                   SPEEDUP_VERDICTS.get(point.verdict, point.verdict or ""), pairs,
                                   format_ns(point.model_ns) if point.model_ns is not None else UNAVAILABLE,
                                   format_number(point.measured_over_model, 2, "x", missing=UNAVAILABLE),
@@ -521,15 +543,7 @@ def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
                "pairs", "model", "measured / model", "of the ceiling"], points,
               caption="Every size swept, as the file holds it: the medians of the pairs and the paired speedup; "
                       "of the ceiling: the speedup over the ceiling's at that size (medians).")]
-    ceiling_rows = [[f"{ceiling.threads}, pin:{ceiling.pin}", str(point.masses), format_ns(point.serial_ns),
-                     format_ns(point.blocks_ns),
-                     f"{format_number(point.speedup, 2, 'x')} [{format_number(point.ci_low, 2)}, "
-                     f"{format_number(point.ci_high, 2)}]",
-                     f"{point.pairs} ({point.pairs_set_aside} set aside)" if point.pairs_set_aside else str(point.pairs)]
-                    if point.measured else
-                    [f"{ceiling.threads}, pin:{ceiling.pin}", str(point.masses), "", "", point.failure or "not measured",
-                     str(point.pairs)]
-                    for ceiling in (sweep.ceilings if sweep else ()) for point in ceiling.points]
+    ceiling_rows = _ceiling_rows(sweep)
     if ceiling_rows:
         section.tables.append(Table(
             ["threads, placement", "S", "serial step", "the blocks at once", "speedup [95 % interval]", "pairs"],
