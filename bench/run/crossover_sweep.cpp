@@ -76,6 +76,36 @@ crossover_sweep_point point_of(const paired_result& pair, unsigned threads, std:
   return point;
 }
 
+// The ceilings of every thread count with a series measured at this size
+// (`measured`: the series' indices), their sides built and their pairs added
+// to `plan` after the series'; returns their indices in sweep.ceilings, in
+// the plan's order.
+std::vector<std::size_t> plan_ceilings(harness_state& harness, const crossover_sweep& sweep,
+                                       const std::vector<std::size_t>& measured, std::size_t masses,
+                                       const std::string& serial_name, std::vector<comparison>& plan) {
+  const std::size_t cpus = harness.machine->affinity().size();
+  std::vector<std::size_t> planned;
+  for (std::size_t index = 0; index < sweep.ceilings.size(); ++index) {
+    const crossover_ceiling& ceiling = sweep.ceilings[index];
+    const bool wanted = std::any_of(measured.begin(), measured.end(), [&](std::size_t series) {
+      return sweep.series[series].threads == ceiling.threads;
+    });
+    if (!wanted) continue;
+    block_runner_factory factory = chain_split_runner(harness, platform::parse_placement(ceiling.pin),
+                                                      ceiling.threads, masses, ceiling.threads <= cpus);
+    if (!factory) continue;
+    const std::string name =
+        fmt::format("crossover/model:chain{}/blocks_at_once/pin:{}/threads:{}", masses, ceiling.pin, ceiling.threads);
+    harness.units_per_batch[name] = probe_units(factory, harness.settings);
+    harness.block_runners[name] = std::move(factory);
+    plan.push_back({comparison_kind::crossover,
+                    fmt::format("ceiling pin:{} threads:{} masses:{}", ceiling.pin, ceiling.threads, masses),
+                    serial_name, name});
+    planned.push_back(index);
+  }
+  return planned;
+}
+
 }  // namespace
 
 std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices) {
@@ -202,27 +232,7 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
       which.push_back(index);
     }
     if (plan.empty()) continue;
-    // The ceiling of every thread count with a series measured at this size.
-    std::vector<std::size_t> ceilings_here;
-    for (std::size_t index = 0; index < sweep.ceilings.size(); ++index) {
-      const crossover_ceiling& ceiling = sweep.ceilings[index];
-      const bool wanted = std::any_of(which.begin(), which.end(), [&](std::size_t measured) {
-        return sweep.series[measured].threads == ceiling.threads;
-      });
-      block_runner_factory factory =
-          wanted ? chain_split_runner(harness, platform::parse_placement(ceiling.pin), ceiling.threads, masses,
-                                      ceiling.threads <= cpus)
-                 : block_runner_factory{};
-      if (!factory) continue;
-      const std::string name =
-          fmt::format("crossover/model:chain{}/blocks_at_once/pin:{}/threads:{}", masses, ceiling.pin, ceiling.threads);
-      harness.units_per_batch[name] = probe_units(factory, harness.settings);
-      harness.block_runners[name] = std::move(factory);
-      plan.push_back({comparison_kind::crossover,
-                      fmt::format("ceiling pin:{} threads:{} masses:{}", ceiling.pin, ceiling.threads, masses),
-                      serial_name, name});
-      ceilings_here.push_back(index);
-    }
+    const std::vector<std::size_t> ceilings_here = plan_ceilings(harness, sweep, which, masses, serial_name, plan);
     harness.block_runners[serial_name] = chain_serial_runner(masses);
     harness.units_per_batch[serial_name] = probe_units(harness.block_runners[serial_name], harness.settings);
     std::vector<paired_result>& pairs = harness.book->pairs;
