@@ -56,6 +56,7 @@ struct run_options {
   std::string crossover_budget;       // empty: bench::kCrossoverBudgetNs
   std::size_t crossover_max_masses = bench::kCrossoverMaxMasses;
   std::size_t crossover_through = 0;  // 0: a series stops once confirmed
+  unsigned crossover_pairs = bench::kCrossoverPairs;
   int repetitions = 0;   // 0: the mode's default
   std::string min_time;  // empty: the mode's default
   std::string out;
@@ -263,6 +264,7 @@ int execute(const run_options& options) {
                                               3'600'000'000'000);
     crossover.max_masses = options.crossover_max_masses;
     crossover.through_masses = options.crossover_through;
+    crossover.pairs = options.crossover_pairs;
     if (crossover.through_masses > crossover.max_masses)
       throw usage_error(fmt::format("--crossover-through: {} masses is above --crossover-max-masses ({})",
                                     crossover.through_masses, crossover.max_masses));
@@ -350,6 +352,12 @@ void add_run(CLI::App& app, int& result) {
                   "Sweep every series up to at least this many masses, past a confirmed crossover (default: a "
                   "series stops once two sizes in a row clear 1)")
       ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
+      ->needs(crossover);
+  run->add_option("--crossover-pairs", options->crossover_pairs,
+                  fmt::format("Pairs of alternating blocks per point of the crossover sweep (default {}): more "
+                              "narrow each speedup's interval, at that much more time",
+                              bench::kCrossoverPairs))
+      ->check(CLI::Range(2U, 1000U))
       ->needs(crossover);
   run->add_option("--repetitions", options->repetitions,
                   fmt::format("Repetitions per entry (default {}; --quick {})", bench::kDefaultRepetitions, bench::kQuickRepetitions))

@@ -138,6 +138,8 @@ const bad_input kBadInputs[] = {
     {{"run", "--crossover", "--crossover-budget", "500ms", "--out", "@/r.json"}, "(1s to 3600s)"},
     {{"run", "--crossover-budget", "90s", "--out", "@/r.json"}, "--crossover"},
     {{"run", "--crossover", "--crossover-max-masses", "1", "--out", "@/r.json"}, "--crossover-max-masses"},
+    {{"run", "--crossover", "--crossover-pairs", "1", "--out", "@/r.json"}, "--crossover-pairs"},
+    {{"run", "--crossover-pairs", "32", "--out", "@/r.json"}, "--crossover"},
     {{"verify", "--dt", "1 ms"}, "unknown unit ' ms' (ns, us, ms or s)"},
     {{"migrate", "--bytes", "4XiB"}, "--bytes: '4XiB': unknown unit 'XiB' (B, KiB, MiB or GiB, or none for bytes)"},
     {{"delay", "--period", "1000"}, "--period"},

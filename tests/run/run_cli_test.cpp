@@ -109,6 +109,9 @@ TEST(RunCli, PlanStatesTheCrossoverSweepAndItsEstimate) {
   EXPECT_NE(many.out.find("crossover sweep (--crossover): up to 10 series"), std::string::npos) << many.out;
   const auto without = run_command(run_args({"--plan", "--threads", "2"}));
   EXPECT_EQ(without.out.find("crossover sweep"), std::string::npos) << without.out;
+  const auto more_pairs = run_command(run_args({"--plan", "--threads", "2", "--crossover", "--crossover-pairs", "40"}));
+  EXPECT_EQ(more_pairs.exit_status, 0) << more_pairs.err;
+  EXPECT_NE(more_pairs.out.find("40 pairs of 4.00 ms blocks a point"), std::string::npos) << more_pairs.out;
 }
 
 // --scaling: 2, 4 and 8 threads at pin:compact, the curve in the summary and
