@@ -354,8 +354,8 @@ void add_run(CLI::App& app, int& result) {
       ->check(CLI::Range(std::size_t{2}, std::size_t{1} << 20))
       ->needs(crossover);
   run->add_option("--crossover-pairs", options->crossover_pairs,
-                  fmt::format("Pairs of alternating blocks per point of the crossover sweep (default {}): more "
-                              "narrow each speedup's interval, at that much more time",
+                  fmt::format("Pairs of alternating blocks per point of the crossover sweep (default {}): fewer "
+                              "give a quicker sweep and wider intervals",
                               bench::kCrossoverPairs))
       ->check(CLI::Range(2U, 1000U))
       ->needs(crossover);

@@ -20,8 +20,8 @@ namespace lockstep::bench {
 namespace {
 
 // A comparison's own bound within the sweep: far above what its pairs take
-// (16 pairs of two 4 ms blocks, a step of about a millisecond at the largest
-// size); the sweep's budget is what bounds the whole.
+// (48 pairs of two 4 ms blocks, a step of about a millisecond at the largest
+// size: about 2 s); the sweep's budget is what bounds the whole.
 constexpr std::int64_t kComparisonBudgetNs = 20'000'000'000;
 // A probe block this long sizes a side's blocks (its time per unit).
 constexpr double kProbeBlockNs = 200'000.0;

@@ -54,12 +54,16 @@ namespace lockstep::bench {
 
 // The sweep's defaults: at most 2 minutes on the 2-vCPU development VM, up
 // to 65536 masses (131072 equations; a serial step of about a millisecond
-// there), 16 pairs of 4 ms blocks per point (the speedup's interval a few
-// percent wide on a quiet machine).
+// there), 48 pairs of 4 ms blocks per point. With 16, the leader's speedup
+// interval at 4096 masses on 2 threads was 9-13 % of its median wide in two
+// runs of four and 37-59 % in the other two (low ends 1.43 and 0.95 under
+// medians of 1.50 and 1.35: the VM changed pace during the point); with 48 it
+// was 5-15 % wide in five runs interleaved with those, for about 3x the
+// sweep's time (31-35 s through 4096 masses instead of 10-13 s).
 inline constexpr std::int64_t kCrossoverBudgetNs = 120'000'000'000;
 inline constexpr std::size_t kCrossoverMaxMasses = 65536;
 inline constexpr std::size_t kCrossoverFirstMasses = 2;  // the paper's two masses
-inline constexpr unsigned kCrossoverPairs = 16;
+inline constexpr unsigned kCrossoverPairs = 48;
 inline constexpr std::int64_t kCrossoverBlockNs = 4'000'000;
 // Points in a row whose whole interval is above 1 that stop a series.
 inline constexpr unsigned kCrossoverClearPoints = 2;

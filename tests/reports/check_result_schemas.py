@@ -31,7 +31,7 @@ SHAPES = {
                      "--layout", "padded64", "--pairs", "0"], ["--", "--benchmark_min_time=0.01"], {}),
         ("crossover", ["run", "--quick", "--repetitions", "1", "--threads", "2", "--pin", "compact",
                        "--sync", "mailbox,std_barrier", "--layout", "per_thread", "--pairs", "2", "--crossover",
-                       "--crossover-max-masses", "16", "--crossover-budget", "5s"],
+                       "--crossover-max-masses", "16", "--crossover-budget", "5s", "--crossover-pairs", "4"],
          ["--", "--benchmark_min_time=0.01"], {}),
     ],
     "c2c": [("plain", ["c2c", "--samples", "20", "--rounds", "5", "--max-pairs", "4"], [], {})],
