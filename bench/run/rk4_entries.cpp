@@ -8,6 +8,7 @@
 #include <tuple>
 #include <type_traits>
 #include <exception>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -262,11 +263,14 @@ struct run_steps {
   }
 };
 
-// The serial step of a chain as one side of a pair (chain_serial_runner).
+using serial_chain = kernels::staged_rk4<kernels::chain_model>;
+
+// The serial step of a chain as one side of a pair (chain_serial_runner):
+// the runners of one factory share one chain, so every comparison of a size
+// divides by the same serial step.
 class serial_block_runner final : public block_runner {
  public:
-  explicit serial_block_runner(std::size_t masses)
-      : rk4_(kernels::chain_model(kernels::model_choice{masses}.chain()), kBenchmarkStepSeconds) {}
+  explicit serial_block_runner(std::shared_ptr<serial_chain> chain) : chain_(std::move(chain)) {}
 
   std::optional<double> run_block(std::uint64_t units) override {
     const platform::thread_counters before = accounting_ ? platform::snapshot_current_thread() : platform::thread_counters{};
@@ -275,13 +279,13 @@ class serial_block_runner final : public block_runner {
     // number: GCC 12 took an optional's difference below for uninitialised).
     const std::int64_t waited_before = accounting_ ? schedstat_->read().run_queue_wait_ns.value_or(-1) : -1;
     const std::int64_t block_start = platform::now_ns();
-    rk4_.run(units);  // warm-up, as a team's block has
+    chain_->run(units);  // warm-up, as a team's block has
     const std::int64_t cpu_start = thread_cpu_ns();
     const std::int64_t start = platform::now_ns();
-    rk4_.run(units);
+    chain_->run(units);
     const std::int64_t elapsed = platform::now_ns() - start;
     const std::int64_t cpu_end = thread_cpu_ns();
-    benchmark::DoNotOptimize(rk4_.state().data());
+    benchmark::DoNotOptimize(chain_->state().data());
     facts_.reset();
     if (accounting_) {
       const platform::thread_counters after = platform::snapshot_current_thread();
@@ -302,7 +306,7 @@ class serial_block_runner final : public block_runner {
   [[nodiscard]] std::optional<block_facts> last_facts() const override { return facts_; }
 
  private:
-  kernels::staged_rk4<kernels::chain_model> rk4_;
+  std::shared_ptr<serial_chain> chain_;  // the factory's, shared by its runners
   std::optional<platform::thread_counter_reader> schedstat_;
   bool accounting_ = false;
   std::optional<block_facts> facts_;
@@ -540,8 +544,10 @@ block_runner_factory chain_split_runner(const harness_state& harness, platform::
 }
 
 block_runner_factory chain_serial_runner(std::size_t masses) {
-  return [masses]() -> std::unique_ptr<block_runner> {
-    auto runner = std::make_unique<serial_block_runner>(masses);
+  auto chain = std::make_shared<serial_chain>(kernels::chain_model(kernels::model_choice{masses}.chain()),
+                                              kBenchmarkStepSeconds);
+  return [chain]() -> std::unique_ptr<block_runner> {
+    auto runner = std::make_unique<serial_block_runner>(chain);
     runner->set_accounting(true);
     return runner;
   };
