@@ -107,9 +107,12 @@ struct crossover_series {
 // gives an even split before any sync is paid. Below T it is the machine
 // (unequal CPUs, shared caches and memory, a per-step cost that does not
 // halve), not the synchronisation. A reference, not a bound: each block is a
-// chain of its own (fixed ends where the step's block has neighbours), and
-// its pairs are not the series' pairs, so a step can reach a share of it a
-// little above 1 (within the two intervals).
+// chain of its own (fixed ends where the step's block has neighbours), built
+// apart from the step's arrays (chains built apart ran up to 12 % apart:
+// rk4_entries.hpp, chain_serial_runner), and its pairs are not the series'
+// pairs, so a step can read a share of it above 1 (1.05-1.09 at 4096 masses
+// on 2 threads in four runs on the Intel development VM, beyond both
+// intervals in one; the serial step both divide by is one chain).
 struct crossover_ceiling {
   unsigned threads = 2;
   std::string pin;
