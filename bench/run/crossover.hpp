@@ -109,12 +109,8 @@ struct crossover_series {
 // halve), not the synchronisation. A reference, not a bound: each block is a
 // chain of its own (fixed ends where the step's block has neighbours), built
 // apart from the step's arrays, and its pairs are not the series' pairs.
-// Known to read low on the Intel development VM: the step reached 1.04-1.11
-// of it at 4096 masses on 2 threads in seven runs (beyond both intervals in
-// two; the serial step both divide by is one chain), where the same two
-// blocks stepped at once by a standalone program with warm threads gave
-// 1.77x and 1.85x the serial step against the step's 1.71x (31 rounds each).
-// Why chain_split_runner's blocks run slower is not yet found.
+// The blocks' time is the slowest block's own stepping time
+// (rk4_entries.cpp, split_block_runner says why not the batch clock).
 struct crossover_ceiling {
   unsigned threads = 2;
   std::string pin;
