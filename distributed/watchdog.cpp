@@ -59,12 +59,22 @@ void on_alarm(int /*signal*/) noexcept {
   }
   const bool waiting = waiting_for_others.load(std::memory_order_relaxed);
   if (++unchanged_checks < (waiting ? kWaitingLimits * kChecksPerLimit : kChecksPerLimit)) return;
+  // The whole line in one write(): shorter than PIPE_BUF, so the lines of
+  // ranks whose watchdogs fire at once never interleave on a shared stderr
+  // pipe (in pieces they did: tests/mpi read two ranks' words in one line).
+  std::array<char, 1024> line{};
+  std::size_t length = 0;
+  const auto append = [&](const char* text, std::size_t size) noexcept {
+    const std::size_t taken = std::min(size, line.size() - length);
+    std::memcpy(line.data() + length, text, taken);
+    length += taken;
+  };
   if (waiting)
-    write_all(waiting_prefix.data(), waiting_length);
+    append(waiting_prefix.data(), waiting_length);
   else
-    write_all(stopped_prefix.data(), stopped_length);
+    append(stopped_prefix.data(), stopped_length);
   const char* what = current_phase.load(std::memory_order_relaxed);
-  write_all(what, std::strlen(what));
+  append(what, std::strlen(what));
   char digits[24];
   std::size_t at = sizeof digits;
   std::uint64_t value = now;
@@ -72,17 +82,18 @@ void on_alarm(int /*signal*/) noexcept {
     digits[--at] = static_cast<char>('0' + value % 10);
     value /= 10;
   } while (value != 0 && at > 0);
-  write_all(", at ", 5);
-  write_all(digits + at, sizeof digits - at);
+  append(", at ", 5);
+  append(digits + at, sizeof digits - at);
   static constexpr char kStoppedSuffix[] =
       "): this rank is the one that stopped; ending the job (--watchdog sets the limit)\n";
   static constexpr char kWaitingSuffix[] =
       "): a rank it waits for stopped, or the network to it did; ending the job (--watchdog sets the limit, twice it "
       "for a waiting rank)\n";
   if (waiting)
-    write_all(kWaitingSuffix, sizeof kWaitingSuffix - 1);
+    append(kWaitingSuffix, sizeof kWaitingSuffix - 1);
   else
-    write_all(kStoppedSuffix, sizeof kStoppedSuffix - 1);
+    append(kStoppedSuffix, sizeof kStoppedSuffix - 1);
+  write_all(line.data(), length);
   ::_exit(kExitStalled);
 }
 
