@@ -149,14 +149,14 @@ std::string stop_words(const std::string& reason) {
   return reason;
 }
 
-// One series in the line: the first of a thread count says what it means in
-// full, the others follow in short.
-std::string series_text(const crossover_series& series, bool first) {
+// One series in the line, by `name`: the first of a thread count says what
+// it means in full, the others follow in short.
+std::string series_text(const crossover_series& series, const std::string& name, bool first) {
   const crossover_estimate& found = series.crossover;
   const auto measured = crossover_points(series);
   switch (found.status) {
     case crossover_status::crossed:
-      return fmt::format("{} {}from about {} {}{} ({})", series.sync, first ? "pays off " : "",
+      return fmt::format("{} {}from about {} {}{} ({})", name, first ? "pays off " : "",
                          masses_text(*found.masses), first ? "masses " : "", interval_text(found, series),
                          equations_text(*found.masses, series.threads));
     case crossover_status::crossed_unconfirmed: {
@@ -167,14 +167,14 @@ std::string series_text(const crossover_series& series, bool first) {
             why = fmt::format("at {} masses it falls back to {:.2f}x [{:.2f}, {:.2f}]", masses_text(point.masses),
                               point.speedup.median, point.speedup.low, point.speedup.high);
       }
-      return fmt::format("{} crosses 1 at about {} masses {} ({}), unconfirmed: {}", series.sync,
+      return fmt::format("{} crosses 1 at about {} masses {} ({}), unconfirmed: {}", name,
                          masses_text(*found.masses), interval_text(found, series),
                          equations_text(*found.masses, series.threads), why);
     }
     case crossover_status::always:
       // Sizes below the first measured one that were not measured (every
       // pair set aside) leave S* unknown below it: said, not hidden.
-      return fmt::format("{} pays off at every size measured, from {} masses{}", series.sync,
+      return fmt::format("{} pays off at every size measured, from {} masses{}", name,
                          masses_text(*found.masses),
                          !series.points.empty() && !series.points.front().measured()
                              ? " (the sizes below were not measured: a CPU taken)"
@@ -182,12 +182,12 @@ std::string series_text(const crossover_series& series, bool first) {
     case crossover_status::none_within_sweep: break;
   }
   if (measured.empty())
-    return fmt::format("{}: nothing measured ({})", series.sync, series.stop_reason.empty() ? "no point" : stop_words(series.stop_reason));
+    return fmt::format("{}: nothing measured ({})", name, series.stop_reason.empty() ? "no point" : stop_words(series.stop_reason));
   const auto best = std::max_element(measured.begin(), measured.end(), [](const crossover_point& a, const crossover_point& b) {
     return a.speedup.median < b.speedup.median;
   });
   return fmt::format("{}: none within the sweep up to {} masses (best {:.2f}x [{:.2f}, {:.2f}] at {}; stopped: {})",
-                     series.sync, masses_text(measured.back().masses), best->speedup.median, best->speedup.low,
+                     name, masses_text(measured.back().masses), best->speedup.median, best->speedup.low,
                      best->speedup.high, masses_text(best->masses), stop_words(series.stop_reason));
 }
 
@@ -195,8 +195,8 @@ nlohmann::json optional_json(const std::optional<double>& value) {
   return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
 }
 
-// The leader of a thread count: its first series when that is the run's
-// choice (the sweep plans it first), else none.
+// The run's choice at a thread count: its first series when that leads (the
+// sweep plans it first), else none.
 const crossover_series* leader_at(const crossover_sweep& sweep, unsigned threads) {
   for (const auto& series : sweep.series)
     if (series.threads == threads) return series.leader ? &series : nullptr;
@@ -224,11 +224,13 @@ std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const cros
       "step's speed",
       ceiling.threads, ceiling.pin, at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
       at->speedup.high);
-  const crossover_series* leader = leader_at(sweep, ceiling.threads);
-  if (const crossover_sweep_point* reached = measured_at(leader, at->masses)) {
-    if (const auto share = share_of_ceiling(sweep, *reached))
-      line += fmt::format("; {} gives {:.2f}x [{:.2f}, {:.2f}], {:.2f} of it", leader->sync, reached->speedup.median,
-                          reached->speedup.low, reached->speedup.high, *share);
+  // Each primitive that leads here (the choice, and a rival tied with it).
+  for (const auto& series : sweep.series) {
+    if (series.threads != ceiling.threads || !series.leader) continue;
+    if (const crossover_sweep_point* reached = measured_at(&series, at->masses))
+      if (const auto share = share_of_ceiling(sweep, *reached))
+        line += fmt::format("; {} gives {:.2f}x [{:.2f}, {:.2f}], {:.2f} of it", series.sync, reached->speedup.median,
+                            reached->speedup.low, reached->speedup.high, *share);
   }
   return line;
 }
@@ -286,7 +288,15 @@ std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
     bool pays_off = false;
     std::size_t set_aside = 0;
     for (std::size_t index = 0; index < all.size(); ++index) {
-      line += (index == 0 ? "" : "; ") + series_text(*all[index], index == 0);
+      const crossover_series& series = *all[index];
+      // By its primitive, with its layout when another series here has the
+      // same primitive; a rival tied with the choice says so.
+      const bool shared = std::count_if(all.begin(), all.end(), [&](const crossover_series* other) {
+                            return other->sync == series.sync;
+                          }) > 1;
+      std::string name = shared ? series.sync + " + " + series.layout : series.sync;
+      if (index > 0 && series.leader) name += " (tied with it in the matrix)";
+      line += (index == 0 ? "" : "; ") + series_text(series, name, index == 0);
       const auto status = all[index]->crossover.status;
       pays_off = pays_off || status == crossover_status::crossed || status == crossover_status::always;
       for (const auto& point : all[index]->points) set_aside += point.pairs_set_aside;

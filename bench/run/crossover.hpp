@@ -88,7 +88,9 @@ struct crossover_series {
   std::string pin;
   std::string sync;
   std::string layout;
-  bool leader = true;  // the run's choice at this thread count; false: the baseline (std::barrier)
+  // The run's choice at this thread count, or the rival its pair could not
+  // tell from it (headline_choice::tied); false: the baseline (std::barrier).
+  bool leader = true;
   // The stage sync the model takes: the run's sync_ns_per_stage (median) of
   // this primitive's entry at this thread count, placement and layout, and
   // that entry; empty when the run did not measure it (accounting off).

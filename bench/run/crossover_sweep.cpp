@@ -130,6 +130,18 @@ std::vector<crossover_series> plan_crossover_series(const run_book& book, const 
     leader.layout = chosen.layout;
     stage_sync_of(leader, chosen.entry);
     planned.push_back(leader);
+    // A rival the matrix could not tell from the choice leads too: a tie at
+    // the matrix's model size says nothing about which pays off at others
+    // (on the AMD guest, seqlock and ck_dissemination, tied at 2 masses,
+    // crossed at 102 [93, 114] and 219 [156, 292] masses in one run).
+    if (chosen.tied && chosen.runner_up && chosen.runner_up->sync != sync::kBaselinePrimitive) {
+      crossover_series tied = leader;
+      tied.sync = chosen.runner_up->sync;
+      tied.layout = chosen.runner_up->layout;
+      tied.stage_sync_ns.reset();
+      stage_sync_of(tied, chosen.runner_up->entry);
+      planned.push_back(tied);
+    }
     if (chosen.sync == sync::kBaselinePrimitive) continue;
     // The baseline on its best layout here: the lowest median.
     std::optional<measured_entry> best;

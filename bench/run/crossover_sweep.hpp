@@ -5,9 +5,10 @@
 // Which series: for each thread count above 1 the run measured, at
 // pin:compact (or the run's first placement there when compact was not
 // measured), the run's choice at that thread count (the headline's, on its
-// layout) and std::barrier, the C++20 baseline (sync::kBaselinePrimitive), on
-// its best layout there (the lowest median); one series when the choice is
-// the baseline.
+// layout), the rival tied with it when the headline names a tie (both lead:
+// a tie at the matrix's size says nothing of other sizes), and std::barrier,
+// the C++20 baseline (sync::kBaselinePrimitive), on its best layout there
+// (the lowest median); the baseline once when it is the choice or the rival.
 //
 // How: S = 2, 4, 8, ... masses (kernels/model_choice.hpp: the chain, as
 // --masses S builds it), at each S the chain's parallel step of every series
@@ -83,7 +84,7 @@ struct crossover_settings {
 // points are empty.
 std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices);
 
-// For --plan: the series a run of these thread counts would sweep (two a
+// For --plan: the series a run of these thread counts would sweep (up to three a
 // thread count above 1) and the ceilings beside them (one a thread count),
 // and its time: every series to the largest size (a series that confirms its
 // crossover stops earlier), at most the budget.

@@ -88,10 +88,10 @@ std::string plan_of(const platform::topology& machine, const matrix_request& req
   if (request.crossover) {
     std::size_t counts = 0;
     for (const unsigned threads : selection.threads) counts += threads > 1 ? 1 : 0;
-    const std::size_t series = 2 * counts;
+    const std::size_t series = 3 * counts;
     crossover = fmt::format(
-        "crossover sweep (--crossover): up to {} series (per thread count above 1, the run's choice and "
-        "std_barrier at pin:compact, and beside them the machine's ceiling: the chain's blocks stepped at once "
+        "crossover sweep (--crossover): up to {} series (per thread count above 1, the run's choice, a rival "
+        "tied with it, and std_barrier at pin:compact, and beside them the machine's ceiling: the chain's blocks stepped at once "
         "with no sync), S = {} to {} masses doubling, {} pairs of {} blocks a point; estimated at "
         "most {} (every series to the largest size; a series stops once two points clear 1), budget {}\n",
         series, kCrossoverFirstMasses, request.crossover->max_masses, request.crossover->pairs,

@@ -473,14 +473,20 @@ def _ceiling_rows(sweep) -> list[list[str]]:
 
 
 def _crossover_rows(series) -> tuple[list[list[str]], list[list[str]]]:
-    """(one row per series, one row per point) for the crossover section's tables."""
+    """(one row per series, one row per point) for the crossover section's tables. A thread count's first
+    leading series is the run's choice, a later one the rival tied with it (lockstep run plans them so)."""
     rows, points = [], []
+    led = set()
     for crossover in series:
         where = f"{crossover.threads} threads" + (f", pin:{crossover.pin}" if crossover.pin else "")
+        role = ""
+        if crossover.leader:
+            role = " (tied with the run's choice)" if (crossover.threads, crossover.pin) in led else " (the run's leader)"
+            led.add((crossover.threads, crossover.pin))
         checked = (f"confirmed at {_masses(crossover.confirmed_at)}" if crossover.confirmed_at is not None else
                    f"contradicted at {_masses(crossover.contradicted_at)}" if crossover.contradicted_at is not None
                    else "")
-        rows.append([where, _series_name(crossover) + (" (the run's leader)" if crossover.leader else ""),
+        rows.append([where, _series_name(crossover) + role,
                      format_crossover(crossover), CROSSOVER_STATUS_WORDS.get(crossover.status, crossover.status),
                      checked,
                      format_ns(crossover.stage_sync_ns) if crossover.stage_sync_ns is not None else UNAVAILABLE,

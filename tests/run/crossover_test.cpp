@@ -10,6 +10,9 @@
 #include <vector>
 
 #include "bench/run/crossover.hpp"
+#include "bench/run/crossover_sweep.hpp"
+#include "bench/run/headline.hpp"
+#include "bench/run/run_book.hpp"
 #include "bench/run/rk4_entries.hpp"
 #include "bench/run/team_driver.hpp"
 #include "platform/placement.hpp"
@@ -269,6 +272,96 @@ TEST(CrossoverLines, NoCeilingLineWithoutAMeasuredCeiling) {
   }
   EXPECT_EQ(crossover_lines(sweep).size(), 1u);
   EXPECT_FALSE(share_of_ceiling(sweep, sweep.series.front().points.back()).has_value());
+}
+
+// A rival the matrix's pair could not tell from the choice leads in the
+// sweep too, and both are named in the ceiling's line.
+TEST(CrossoverLines, ARivalTiedWithTheChoiceIsNamedAsSuchAndInTheCeilingLine) {
+  crossover_sweep sweep = with_ceiling(16);
+  crossover_series tied = sweep.series.front();
+  tied.sync = "seqlock";
+  tied.points.back().speedup = {1.2, 1.1, 1.3};
+  tied.crossover = find_crossover(crossover_points(tied));
+  sweep.series.insert(sweep.series.begin() + 1, tied);
+  const auto lines = crossover_lines(sweep);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0].rfind("Crossover at 2 threads (pin:compact): mailbox pays off from about 6 masses [", 0), 0u)
+      << lines[0];
+  EXPECT_NE(lines[0].find("; seqlock (tied with it in the matrix) from about 6 ["), std::string::npos) << lines[0];
+  EXPECT_NE(lines[0].find("; std_barrier: none within the sweep"), std::string::npos) << lines[0];
+  EXPECT_NE(lines[1].find("; mailbox gives 4.00x [3.00, 5.00], 2.22 of it; seqlock gives 1.20x [1.10, 1.30], 0.67 of it"),
+            std::string::npos)
+      << lines[1];
+}
+
+// Two series of one primitive at a thread count are told apart by layout.
+TEST(CrossoverLines, TwoSeriesOfOnePrimitiveAreNamedByLayout) {
+  crossover_sweep sweep = two_series();
+  crossover_series tied = sweep.series.front();
+  tied.layout = "packed";
+  sweep.series.insert(sweep.series.begin() + 1, tied);
+  const std::string line = crossover_lines(sweep).front();
+  EXPECT_NE(line.find(": mailbox + per_thread pays off from about 6 masses"), std::string::npos) << line;
+  EXPECT_NE(line.find("; mailbox + packed (tied with it in the matrix) from about 6"), std::string::npos) << line;
+}
+
+// The series the sweep plans from a run book and its choices.
+class CrossoverPlan : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    add_step("mailbox", "per_thread", 1000.0);
+    add_step("seqlock", "per_thread", 1040.0);
+    add_step("std_barrier", "packed", 6100.0);
+    add_step("std_barrier", "padded64", 5800.0);
+    choice.threads = 2;
+    choice.pin = "compact";
+    choice.entry = name_of("mailbox", "per_thread");
+    choice.sync = "mailbox";
+    choice.layout = "per_thread";
+  }
+  static std::string name_of(const std::string& sync, const std::string& layout) {
+    return "rk4/sync:" + sync + "/layout:" + layout + "/pin:compact/threads:2";
+  }
+  void add_step(const std::string& sync, const std::string& layout, double ns_per_step) {
+    captured_entry entry;
+    entry.name = name_of(sync, layout);
+    entry.fields = {{"kind", "rk4"}, {"sync", sync}, {"layout", layout}, {"pin", "compact"}, {"threads", "2"}};
+    entry.repetitions.push_back({{"ns_per_step", ns_per_step}, {"sync_ns_per_stage", ns_per_step / 8.0}});
+    book.record(std::move(entry));
+  }
+  void tie_with(const std::string& sync, const std::string& layout) {
+    choice.tied = true;
+    choice.runner_up = headline_rival{name_of(sync, layout), sync, layout, {1.01, 0.98, 1.04}, ratio_verdict::unsure};
+  }
+  static std::vector<std::string> names(const std::vector<crossover_series>& planned) {
+    std::vector<std::string> found;
+    for (const auto& series : planned)
+      found.push_back(series.sync + "+" + series.layout + (series.leader ? " leads" : ""));
+    return found;
+  }
+  run_book book;
+  headline_choice choice;
+};
+
+TEST_F(CrossoverPlan, TheChoiceAndTheBaselineOnItsBestLayout) {
+  EXPECT_EQ(names(plan_crossover_series(book, {choice})),
+            (std::vector<std::string>{"mailbox+per_thread leads", "std_barrier+padded64"}));
+}
+
+TEST_F(CrossoverPlan, ARivalTiedWithTheChoiceLeadsToo) {
+  tie_with("seqlock", "per_thread");
+  const auto planned = plan_crossover_series(book, {choice});
+  EXPECT_EQ(names(planned), (std::vector<std::string>{"mailbox+per_thread leads", "seqlock+per_thread leads",
+                                                      "std_barrier+padded64"}));
+  ASSERT_TRUE(planned[1].stage_sync_ns.has_value());
+  EXPECT_DOUBLE_EQ(*planned[1].stage_sync_ns, 130.0);
+  EXPECT_EQ(planned[1].stage_sync_entry, name_of("seqlock", "per_thread"));
+}
+
+TEST_F(CrossoverPlan, ABaselineTiedWithTheChoiceIsSweptOnce) {
+  tie_with("std_barrier", "packed");
+  EXPECT_EQ(names(plan_crossover_series(book, {choice})),
+            (std::vector<std::string>{"mailbox+per_thread leads", "std_barrier+padded64"}));
 }
 
 TEST(CrossoverJson, TheCeilingAndEachPointsShareOfIt) {

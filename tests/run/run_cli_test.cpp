@@ -101,12 +101,12 @@ TEST(RunCli, PlanStatesTheCrossoverSweepAndItsEstimate) {
   watchdog guard(std::chrono::seconds(60 * lockstep::testing::kSlowdown));
   const auto here = run_command(run_args({"--plan", "--threads", "2", "--crossover", "--crossover-budget", "90s"}));
   EXPECT_EQ(here.exit_status, 0) << here.err;
-  EXPECT_NE(here.out.find("crossover sweep (--crossover): up to 2 series"), std::string::npos) << here.out;
+  EXPECT_NE(here.out.find("crossover sweep (--crossover): up to 3 series"), std::string::npos) << here.out;
   EXPECT_NE(here.out.find("budget 1 min 30 s"), std::string::npos) << here.out;
   const auto many = run_command({"/usr/bin/env", "HWLOC_SYNTHETIC=package:2 core:32 pu:1", LOCKSTEP_BINARY, "run", "--plan",
                                  "--crossover"});
   EXPECT_EQ(many.exit_status, 0) << many.err;
-  EXPECT_NE(many.out.find("crossover sweep (--crossover): up to 10 series"), std::string::npos) << many.out;
+  EXPECT_NE(many.out.find("crossover sweep (--crossover): up to 15 series"), std::string::npos) << many.out;
   const auto without = run_command(run_args({"--plan", "--threads", "2"}));
   EXPECT_EQ(without.out.find("crossover sweep"), std::string::npos) << without.out;
   const auto more_pairs = run_command(run_args({"--plan", "--threads", "2", "--crossover", "--crossover-pairs", "40"}));
