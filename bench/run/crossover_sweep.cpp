@@ -108,6 +108,26 @@ std::vector<std::size_t> plan_ceilings(harness_state& harness, const crossover_s
 
 }  // namespace
 
+bool interval_too_wide(const paired_result& pair) {
+  return pair.failure.empty() && !pair.ratios.empty() && pair.estimate.median > 0.0 &&
+         (pair.estimate.high - pair.estimate.low) / pair.estimate.median > kCrossoverWideShare;
+}
+
+void add_batch(paired_result& into, const paired_result& more, double noise) {
+  const auto append = [](auto& to, const auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+  append(into.ratios, more.ratios);
+  append(into.readings, more.readings);
+  append(into.modes, more.modes);
+  append(into.set_aside, more.set_aside);
+  append(into.unit_ns_a, more.unit_ns_a);
+  append(into.unit_ns_b, more.unit_ns_b);
+  append(into.cpus_busy_a, more.cpus_busy_a);
+  append(into.cpus_busy_b, more.cpus_busy_b);
+  into.budget_cut = into.budget_cut || more.budget_cut;
+  into.estimate = bootstrap_median(into.ratios);
+  into.verdict = verdict_of(into.estimate, noise);
+}
+
 std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices) {
   std::map<unsigned, std::vector<const headline_choice*>> by_threads;
   for (const auto& choice : choices)
@@ -250,6 +270,25 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
     std::vector<paired_result>& pairs = harness.book->pairs;
     const std::size_t before = pairs.size();
     measure_pairs(harness, plan, pairing, {});
+    // A comparison whose interval came out wide takes another batch of pairs,
+    // up to kCrossoverMoreBatches, while the budget lasts: the rule reads the
+    // interval's width, never its place, and the estimate is over every pair.
+    for (unsigned batch = 0; batch < kCrossoverMoreBatches && pairs.size() == before + plan.size(); ++batch) {
+      if (platform::now_ns() - start_ns > settings.budget_ns) break;
+      std::vector<comparison> again;
+      std::vector<std::size_t> where;
+      for (std::size_t item = 0; item < plan.size(); ++item)
+        if (interval_too_wide(pairs[before + item])) {
+          again.push_back(plan[item]);
+          where.push_back(before + item);
+        }
+      if (again.empty()) break;
+      const std::size_t added = pairs.size();
+      measure_pairs(harness, again, pairing, {});
+      for (std::size_t item = 0; item < where.size() && added + item < pairs.size(); ++item)
+        if (pairs[added + item].failure.empty()) add_batch(pairs[where[item]], pairs[added + item], settings.noise);
+      pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(added), pairs.end());
+    }
     for (std::size_t item = 0; item < which.size() && before + item < pairs.size(); ++item) {
       const std::size_t index = which[item];
       crossover_series& one = sweep.series[index];

@@ -91,12 +91,14 @@ std::string plan_of(const platform::topology& machine, const matrix_request& req
     const std::size_t series = 3 * counts;
     crossover = fmt::format(
         "crossover sweep (--crossover): up to {} series (per thread count above 1, the run's choice, a rival "
-        "tied with it, and std_barrier at pin:compact, and beside them the machine's ceiling: the chain's blocks stepped at once "
-        "with no sync), S = {} to {} masses doubling, {} pairs of {} blocks a point; estimated at "
-        "most {} (every series to the largest size; a series stops once two points clear 1), budget {}\n",
+        "tied with it, and std_barrier at pin:compact, and beside them the machine's ceiling: the chain's blocks "
+        "stepped at once with no sync), S = {} to {} masses doubling, {} pairs of {} blocks a point, up to {} more "
+        "batches where its "
+        "interval is wider than {:.0f} % of its median; estimated {} (every series to the largest size, one batch "
+        "a point; a series stops once two points clear 1), budget {}\n",
         series, kCrossoverFirstMasses, request.crossover->max_masses, request.crossover->pairs,
-        format_ns(static_cast<double>(request.crossover->block_ns)),
-        format_seconds(estimate_crossover_s(series, counts, *request.crossover)),
+        format_ns(static_cast<double>(request.crossover->block_ns)), kCrossoverMoreBatches,
+        kCrossoverWideShare * 100.0, format_seconds(estimate_crossover_s(series, counts, *request.crossover)),
         format_seconds(static_cast<double>(request.crossover->budget_ns) / 1e9));
   }
   return fmt::format("lockstep run --plan (nothing measured)\n"

@@ -305,6 +305,38 @@ TEST(CrossoverLines, TwoSeriesOfOnePrimitiveAreNamedByLayout) {
   EXPECT_NE(line.find("; mailbox + packed (tied with it in the matrix) from about 6"), std::string::npos) << line;
 }
 
+// A point whose interval is wide takes another batch: the batches' pairs
+// pooled, the estimate made again over all of them.
+TEST(CrossoverBatches, AWideIntervalTakesAnotherBatchPooledWithTheFirst) {
+  paired_result first;
+  first.ratios = {1.0, 1.9, 1.2, 1.8, 1.1, 1.7};
+  first.unit_ns_a = {10.0, 19.0, 12.0, 18.0, 11.0, 17.0};
+  first.unit_ns_b = std::vector<double>(6, 10.0);
+  first.set_aside = {3.0};
+  first.estimate = bootstrap_median(first.ratios);
+  EXPECT_TRUE(interval_too_wide(first));
+  paired_result narrow = first;
+  narrow.estimate = {1.5, 1.45, 1.55};
+  EXPECT_FALSE(interval_too_wide(narrow));
+  paired_result failed = first;
+  failed.failure = "stalled";
+  EXPECT_FALSE(interval_too_wide(failed));
+
+  const double first_width = first.estimate.high - first.estimate.low;
+  paired_result second;
+  second.ratios = std::vector<double>(12, 1.75);
+  second.unit_ns_a = std::vector<double>(12, 17.5);
+  second.unit_ns_b = std::vector<double>(12, 10.0);
+  second.set_aside = {2.0, 4.0};
+  add_batch(first, second, kDefaultNoise);
+  EXPECT_EQ(first.ratios.size(), 18u);
+  EXPECT_EQ(first.unit_ns_a.size(), 18u);
+  EXPECT_EQ(first.set_aside.size(), 3u);
+  EXPECT_DOUBLE_EQ(first.estimate.median, 1.75);
+  EXPECT_LT(first.estimate.high - first.estimate.low, first_width);
+  EXPECT_EQ(first.verdict, ratio_verdict::penalty);
+}
+
 // The series the sweep plans from a run book and its choices.
 class CrossoverPlan : public ::testing::Test {
  protected:

@@ -103,6 +103,9 @@ TEST(RunCli, PlanStatesTheCrossoverSweepAndItsEstimate) {
   EXPECT_EQ(here.exit_status, 0) << here.err;
   EXPECT_NE(here.out.find("crossover sweep (--crossover): up to 3 series"), std::string::npos) << here.out;
   EXPECT_NE(here.out.find("budget 1 min 30 s"), std::string::npos) << here.out;
+  EXPECT_NE(here.out.find("up to 2 more batches where its interval is wider than 10 % of its median"),
+            std::string::npos)
+      << here.out;
   const auto many = run_command({"/usr/bin/env", "HWLOC_SYNTHETIC=package:2 core:32 pu:1", LOCKSTEP_BINARY, "run", "--plan",
                                  "--crossover"});
   EXPECT_EQ(many.exit_status, 0) << many.err;
