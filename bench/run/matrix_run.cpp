@@ -326,8 +326,9 @@ void measure_crossovers(prepared_matrix& run, const crossover_settings& settings
       make_headline(run.book, probes, static_cast<unsigned>(machine.affinity().size()), std::string());
   std::vector<crossover_series> series = plan_crossover_series(run.book, chosen.choices);
   fmt::print(stderr,
-             "lockstep run: crossover sweep, {} series, S = {} to {} masses doubling, {} pairs a point, at most {}\n",
-             series.size(), kCrossoverFirstMasses, settings.max_masses, settings.pairs,
+             "lockstep run: crossover sweep, {} series, S = {} to {} masses doubling, {} pairs a point (up to {} "
+             "more batches where its interval is wide), at most {}\n",
+             series.size(), kCrossoverFirstMasses, settings.max_masses, settings.pairs, kCrossoverMoreBatches,
              format_seconds(static_cast<double>(settings.budget_ns) / 1e9));
   std::fflush(stderr);
   run.book.crossover = sweep_crossovers(run.harness, std::move(series), settings, [](std::size_t masses, double elapsed) {
