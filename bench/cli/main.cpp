@@ -9,6 +9,7 @@
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
 #include "bench/results/build_info.hpp"
+#include "platform/machine_state.hpp"
 
 namespace {
 
@@ -66,6 +67,8 @@ int main(int argc, char** argv) {
   lockstep::cli::add_reports(app, result);
   add_help(app, result);
 
+  // The frequency during the command: its first sample (platform/machine_state.hpp).
+  lockstep::platform::begin_command_frequency_trace();
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,5 +1,6 @@
-// lockstep topology: what hwloc sees, the affinity set, and the placement
-// plans for 1, 2, 4 threads and the core count. The plans and the two
+// lockstep topology: what hwloc sees, the affinity set, the placement plans
+// for 1, 2, 4 threads and the core count, and the machine's state
+// (bench/probe_reports/machine_state_report.hpp). The plans and the two
 // readings: bench/probe_reports/topology_report.hpp; this file is the options, their
 // checks, that call and the readings.
 #include <CLI/CLI.hpp>
@@ -13,7 +14,9 @@
 #include "bench/cli/command.hpp"
 #include "bench/cli/options.hpp"
 #include "bench/results/result_file.hpp"
+#include "bench/probe_reports/machine_state_report.hpp"
 #include "bench/probe_reports/topology_report.hpp"
+#include "platform/machine_state.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 
@@ -57,9 +60,13 @@ void add_topology(CLI::App& app, int& result) {
     const platform::topology machine = load(*options);
     check_out(options->out);
     const std::vector<platform::placement_plan> plans = bench::topology_plans(machine);
+    const platform::machine_state state = platform::read_machine_state();
     fmt::print("{}", bench::topology_text(machine, plans));
+    fmt::print("{}", bench::machine_state_text(state, machine.affinity()));
     if (!options->out.empty()) {
-      bench::write_result_file(options->out, bench::topology_json(machine, plans).dump(2) + "\n");
+      nlohmann::json document = bench::topology_json(machine, plans);
+      document["machine_state"] = bench::machine_state_json(state, machine.affinity());
+      bench::write_result_file(options->out, document.dump(2) + "\n");
       fmt::print(stderr, "topology written to {}\n", options->out);
     }
     result = kExitOk;

@@ -17,6 +17,7 @@
 #include <fstream>
 
 #include "bench/results/build_info.hpp"
+#include "bench/results/machine_state_context.hpp"
 #include "platform/clock.hpp"
 #include "platform/thread_accounting.hpp"
 
@@ -121,6 +122,7 @@ nlohmann::json machine_context(const platform::topology& machine) {
                               ? "available (se.nr_migrations in /proc/self/task/TID/sched)"
                               : "unavailable (no se.nr_migrations in /proc/self/task/TID/sched): "
                                 "migrations_per_kstep and cross_core_csw_pct are omitted";
+  add_machine_state(context, machine.affinity());
   return context;
 }
 

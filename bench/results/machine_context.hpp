@@ -8,7 +8,9 @@
 // fingerprint, the same keys with the same values whichever command asks, so
 // that `lockstep compare` can tell "another machine" from "another run".
 // Commands add their own keys beside it (lockstep_mode, c2c_one_way_ns, ...),
-// never another value for a fingerprint key. `lockstep run` merges it into
+// never another value for a fingerprint key. The machine state's keys are
+// read when the context is made; two of them are the command's own readings
+// (kPerCommandStateKeys in bench/results/machine_state_context.hpp). `lockstep run` merges it into
 // Google Benchmark's context after the run (replacing Google Benchmark's own
 // host_name and num_cpus with the same figures from here).
 #include <nlohmann/json.hpp>
@@ -27,7 +29,10 @@ using context_map = std::map<std::string, std::string>;
 // build_type, sanitizer, cpu_model, hypervisor, kernel, host_name, num_cpus, topology,
 // topology_packages, topology_l3, topology_cores, topology_pus, hwloc_version,
 // benchmark_version, boost_version, clocksource, migrations (available or why
-// not). Values the machine cannot give are "unavailable".
+// not), and the machine's state: governor, boost, SMT, isolated CPUs, IRQs,
+// huge pages, the frequency during the command (add_machine_state,
+// bench/results/machine_state_context.hpp, for the CPUs of the affinity set).
+// Values the machine cannot give are "unavailable".
 // Every value is a string but num_cpus, a whole number as Google Benchmark
 // writes it (a reader of either file sees one type).
 nlohmann::json machine_context(const platform::topology& machine);
