@@ -408,7 +408,7 @@ void governor_parts(const machine_state& state, const std::vector<unsigned>& tea
   const bool boost_on = state.boost.setting == boost_setting::on;
   const std::string boost_words = fmt::format("{} on", state.boost.word);
   if (!cpus.empty()) {
-    parts.push_back({fmt::format("{} run the {} governor{}{}", cpus_words(cpus), joined(governors, " and "),
+    parts.push_back({fmt::format("{} run the {} governor{}{}", cpus_words(cpus), listed(governors),
                                  governors.size() == 1 ? "" : "s", boost_on ? " with " + boost_words : ""),
                      "figures move with frequency", "set the performance governor",
                      "cpupower frequency-set -g performance"});
@@ -448,6 +448,7 @@ void latency_parts(const machine_state& state, const std::vector<unsigned>& team
 std::string bias_line(const machine_state& state, const std::vector<unsigned>& team, bias_focus focus,
                       const std::vector<unsigned>& busy_siblings) {
   const std::vector<unsigned> members = sorted_unique(team);
+  if (members.empty()) return {};
   std::vector<bias_part> parts;
   if (focus == bias_focus::step_times) {
     governor_parts(state, members, parts);

@@ -112,8 +112,8 @@ std::optional<irq_summary> irqs_on(const machine_state& state, const std::vector
 //
 // scaling_cur_freq of the CPUs a command may use, sampled at its start, at
 // the quiet moments the command offers (between repetitions, never inside a
-// measured block: reading it on x86 may interrupt the CPU read), and at its
-// end. Where no CPU has the file (a VM) the trace knows it from its first
+// measured block: on x86 kernels before 5.18 a read sends an interrupt to the
+// CPU it names, to read its APERF/MPERF counters), and at its end. Where no CPU has the file (a VM) the trace knows it from its first
 // sample and every later sample costs nothing.
 
 struct frequency_summary {

@@ -176,6 +176,7 @@ TEST(BiasLine, IntelRunNamesTheGovernorAndTurboAndWhatToChange) {
             "CPUs 0-3 run the powersave governor with turbo on: figures move with frequency; set the performance "
             "governor and turn turbo off (cpupower frequency-set -g performance; echo 1 > "
             "/sys/devices/system/cpu/intel_pstate/no_turbo)");
+  EXPECT_EQ(bias_line(state, {}, bias_focus::step_times), "") << "no team, nothing to say";
 }
 
 TEST(BiasLine, IntelDelayOnIsolatedCpusNamesTheTickOnly) {
@@ -222,6 +223,10 @@ TEST(BiasLine, UserspaceAndPerformanceGovernorsAreNotABias) {
   EXPECT_EQ(bias_line(state, kIntelCpus, bias_focus::step_times),
             "CPUs 2-3 run the schedutil and powersave governors: figures move with frequency; set the performance "
             "governor (cpupower frequency-set -g performance)");
+  state.frequencies[0].governor = "ondemand";
+  EXPECT_EQ(bias_line(state, kIntelCpus, bias_focus::step_times),
+            "CPUs 0,2-3 run the ondemand, schedutil and powersave governors: figures move with frequency; set the "
+            "performance governor (cpupower frequency-set -g performance)");
 }
 
 // proc/stat between two readings: a sibling outside the team busy for at
