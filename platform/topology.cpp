@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <tuple>
@@ -23,6 +24,7 @@ std::string_view to_string(pu_relation relation) noexcept {
     case pu_relation::shared_l3: return "shared L3";
     case pu_relation::same_package: return "same package";
     case pu_relation::different_l3: return "different L3";
+    case pu_relation::other_numa_node: return "other NUMA node";
     case pu_relation::different_package: return "different package";
   }
   return "unknown";
@@ -73,6 +75,81 @@ std::string_view cache_kind(hwloc_obj_cache_type_t type) {
   return "unknown";
 }
 
+// Each PU's NUMA node, by OS index: the node whose CPU set holds it. Where
+// two nodes hold one PU (a node of ordinary memory and one of HBM or CXL
+// memory beside it, which hwloc marks with a subtype), the ordinary one is
+// the PU's: its memory is where the kernel puts a page that PU touches first
+// by default. Among equals, the first in hwloc's order.
+std::map<unsigned, int> numa_node_of_pus(hwloc_topology_t handle) {
+  std::map<unsigned, int> node_of;
+  const int count = hwloc_get_nbobjs_by_type(handle, HWLOC_OBJ_NUMANODE);
+  for (const bool ordinary : {true, false}) {
+    for (int index = 0; index < count; ++index) {
+      hwloc_obj_t node = hwloc_get_obj_by_type(handle, HWLOC_OBJ_NUMANODE, static_cast<unsigned>(index));
+      if (node == nullptr || node->cpuset == nullptr || (node->subtype == nullptr) != ordinary) continue;
+      unsigned pu = 0;
+      hwloc_bitmap_foreach_begin(pu, node->cpuset) {
+        node_of.try_emplace(pu, static_cast<int>(node->os_index));
+      }
+      hwloc_bitmap_foreach_end();
+    }
+  }
+  return node_of;
+}
+
+struct bitmap_deleter {
+  void operator()(hwloc_bitmap_s* bitmap) const noexcept { hwloc_bitmap_free(bitmap); }
+};
+
+// hwloc's CPU kinds, least performant first (its order), with the PUs of
+// each; empty when hwloc reports none.
+std::vector<cpu_kind> read_cpu_kinds(hwloc_topology_t handle) {
+  std::vector<cpu_kind> kinds;
+  const int count = hwloc_cpukinds_get_nr(handle, 0);
+  if (count <= 0) return kinds;
+  const std::unique_ptr<hwloc_bitmap_s, bitmap_deleter> cpuset(hwloc_bitmap_alloc());
+  if (!cpuset) return kinds;
+  for (int index = 0; index < count; ++index) {
+    int efficiency = -1;
+    unsigned infos_count = 0;
+    hwloc_info_s* infos = nullptr;
+    if (hwloc_cpukinds_get_info(handle, static_cast<unsigned>(index), cpuset.get(), &efficiency, &infos_count, &infos,
+                                0) != 0) {
+      continue;
+    }
+    cpu_kind kind;
+    kind.index = static_cast<unsigned>(kinds.size());
+    kind.efficiency = efficiency;
+    for (unsigned info = 0; info < infos_count; ++info) {
+      const std::string_view name = infos[info].name != nullptr ? infos[info].name : "";
+      const char* value = infos[info].value != nullptr ? infos[info].value : "";
+      if (name == "CoreType") kind.core_type = value;
+      if (name == "FrequencyMaxMHz") kind.max_mhz = static_cast<unsigned>(std::strtoul(value, nullptr, 10));
+    }
+    unsigned pu = 0;
+    hwloc_bitmap_foreach_begin(pu, cpuset.get()) { kind.pus.push_back(pu); }
+    hwloc_bitmap_foreach_end();
+    kinds.push_back(std::move(kind));
+  }
+  return kinds;
+}
+
+// A comma list with one entry per OS index from 0 to the highest: value(pu)
+// where the topology has that PU, "-" where it has not.
+template <class Value>
+std::string per_cpu_list(const std::vector<pu_info>& pus, Value value) {
+  unsigned highest = 0;
+  for (const pu_info& pu : pus) highest = std::max(highest, pu.os_index);
+  std::vector<std::string> cells(static_cast<std::size_t>(highest) + 1, "-");
+  for (const pu_info& pu : pus) cells[pu.os_index] = value(pu);
+  std::string text;
+  for (const std::string& cell : cells) {
+    if (!text.empty()) text += ',';
+    text += cell;
+  }
+  return text;
+}
+
 // CPUs of the calling process (its main thread's mask), or empty if unknown.
 std::vector<unsigned> process_affinity() {
   std::vector<unsigned> cpus;
@@ -102,6 +179,8 @@ struct topology_loader {
 
     const int packages = hwloc_get_nbobjs_by_type(handle, HWLOC_OBJ_PACKAGE);
     machine.packages_ = packages > 0 ? static_cast<unsigned>(packages) : 1U;
+    const std::map<unsigned, int> numa_of = numa_node_of_pus(handle);
+    machine.kinds_ = read_cpu_kinds(handle);
 
     // Cores are built from the PUs: a PU without a Core ancestor (a synthetic
     // "package:2 pu:4") is its own core, as the kernel would schedule it.
@@ -123,6 +202,10 @@ struct topology_loader {
       info.l2 = logical_or_none(cache_ancestor(pu, 2));
       info.l3 = logical_or_none(cache_ancestor(pu, 3));
       info.package = package != nullptr ? package->logical_index : 0U;
+      if (const auto node = numa_of.find(info.os_index); node != numa_of.end()) info.numa = node->second;
+      for (const cpu_kind& kind : machine.kinds_) {
+        if (std::binary_search(kind.pus.begin(), kind.pus.end(), info.os_index)) info.kind = static_cast<int>(kind.index);
+      }
 
       auto [slot, inserted] = core_of_object.try_emplace(core_key, static_cast<unsigned>(machine.cores_.size()));
       if (inserted) {
@@ -131,6 +214,8 @@ struct topology_loader {
         new_core.package = info.package;
         new_core.l2 = info.l2;
         new_core.l3 = info.l3;
+        new_core.numa = info.numa;
+        new_core.kind = info.kind;
         machine.cores_.push_back(std::move(new_core));
       }
       info.core = slot->second;
@@ -143,6 +228,11 @@ struct topology_loader {
         l3_seen.push_back(info.l3);
       }
     }
+    std::vector<int> nodes;
+    for (const pu_info& pu : machine.pus_) {
+      if (pu.numa != kNoObject && std::find(nodes.begin(), nodes.end(), pu.numa) == nodes.end()) nodes.push_back(pu.numa);
+    }
+    machine.numa_nodes_ = std::max<unsigned>(1U, static_cast<unsigned>(nodes.size()));
     machine.l2_domains_ = static_cast<unsigned>(l2_seen.size());
     machine.l3_domains_ = static_cast<unsigned>(l3_seen.size());
 
@@ -232,11 +322,34 @@ pu_relation topology::relation(unsigned os_pu_a, unsigned os_pu_b) const {
   if (a.os_index == b.os_index) return pu_relation::same_pu;
   if (a.core == b.core) return pu_relation::smt_siblings;
   if (a.l2 != kNoObject && a.l2 == b.l2) return pu_relation::shared_l2;
+  if (a.package != b.package) return pu_relation::different_package;
+  if (a.numa != b.numa) return pu_relation::other_numa_node;
   if (a.l3 != kNoObject && a.l3 == b.l3) return pu_relation::shared_l3;
-  if (a.package == b.package) {
-    return a.l3 == kNoObject && b.l3 == kNoObject ? pu_relation::same_package : pu_relation::different_l3;
-  }
-  return pu_relation::different_package;
+  return a.l3 == kNoObject && b.l3 == kNoObject ? pu_relation::same_package : pu_relation::different_l3;
+}
+
+std::string cpu_kind::name() const { return core_type.empty() ? fmt::format("kind {}", index) : core_type; }
+
+unsigned topology::performance_rank(unsigned os_index) const {
+  const int kind = pu(os_index).kind;
+  return kind == kNoObject ? 0U : static_cast<unsigned>(kind);
+}
+
+std::string topology::kind_name(unsigned os_index) const {
+  const int kind = pu(os_index).kind;
+  return kind == kNoObject ? std::string() : kinds_[static_cast<std::size_t>(kind)].name();
+}
+
+topology::per_cpu_table topology::cpu_table() const {
+  const auto index = [](int value) { return value == kNoObject ? std::string("-") : std::to_string(value); };
+  per_cpu_table table;
+  table.package = per_cpu_list(pus_, [](const pu_info& pu) { return std::to_string(pu.package); });
+  table.l3 = per_cpu_list(pus_, [&](const pu_info& pu) { return index(pu.l3); });
+  table.numa_node = per_cpu_list(pus_, [&](const pu_info& pu) { return index(pu.numa); });
+  table.core = per_cpu_list(pus_, [](const pu_info& pu) { return std::to_string(pu.core); });
+  table.kind = per_cpu_list(pus_, [&](const pu_info& pu) { return index(pu.kind); });
+  for (const cpu_kind& kind : kinds_) table.kinds += (table.kinds.empty() ? "" : ",") + kind.name();
+  return table;
 }
 
 void topology::restrict_affinity(std::vector<unsigned> os_indices) {
@@ -250,7 +363,10 @@ void topology::restrict_affinity(std::vector<unsigned> os_indices) {
 }
 
 std::string topology::summary() const {
-  return fmt::format("packages={} l3={} cores={} pus={}", packages_, l3_domains_, core_count(), pu_count());
+  std::string text = fmt::format("packages={} l3={} cores={} pus={}", packages_, l3_domains_, core_count(), pu_count());
+  if (numa_nodes_ > 1) text += fmt::format(" numa={}", numa_nodes_);
+  if (hybrid()) text += fmt::format(" kinds={}", kinds_.size());
+  return text;
 }
 
 }  // namespace lockstep::platform

@@ -5,8 +5,11 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <iterator>
 #include <regex>
+#include <set>
 #include <string>
+#include <string_view>
 
 #include <gtest/gtest.h>
 
@@ -63,7 +66,95 @@ TEST(Topology, RelationLabelsAreTheAgreedWords) {
   EXPECT_EQ(to_string(pu_relation::shared_l2), "shared L2");
   EXPECT_EQ(to_string(pu_relation::shared_l3), "shared L3");
   EXPECT_EQ(to_string(pu_relation::different_l3), "different L3");
+  EXPECT_EQ(to_string(pu_relation::other_numa_node), "other NUMA node");
   EXPECT_EQ(to_string(pu_relation::different_package), "different package");
+  std::set<std::string_view> labels;
+  for (pu_relation relation : lockstep::platform::kRelationsClosestFirst) labels.insert(to_string(relation));
+  EXPECT_EQ(labels.size(), std::size(lockstep::platform::kRelationsClosestFirst)) << "one label per relation";
+}
+
+// NUMA nodes: each PU's node by the kernel's number, and the relation of two
+// PUs of one package on two nodes.
+TEST(TopologyNuma, TwoPackagesOfTwoNodesEach) {
+  // 2 packages x 2 nodes x one L3 each x 4 cores x 2 PUs: node N holds PUs 8N .. 8N+7.
+  const topology machine = topology::from_synthetic("pack:2 numa:2 l3:1 core:4 pu:2");
+  EXPECT_EQ(machine.numa_nodes(), 4U);
+  EXPECT_EQ(machine.summary(), "packages=2 l3=4 cores=16 pus=32 numa=4");
+  for (const auto& pu : machine.pus()) EXPECT_EQ(pu.numa, static_cast<int>(pu.os_index / 8)) << pu.os_index;
+  for (const auto& core : machine.cores()) EXPECT_EQ(core.numa, machine.pu(core.pus.front()).numa);
+  EXPECT_EQ(machine.relation(0, 2), pu_relation::shared_l3);
+  EXPECT_EQ(machine.relation(0, 8), pu_relation::other_numa_node) << "one package, two nodes (NPS2)";
+  EXPECT_EQ(machine.relation(0, 16), pu_relation::different_package);
+}
+
+TEST(TopologyNuma, SubNumaClustersUnderOneL3AreOtherNodes) {
+  // Intel's sub-NUMA clustering: one L3 over the package, two nodes inside it.
+  const topology machine = topology::from_synthetic("pack:2 l3:1 group:2 numa:1 core:4 pu:2");
+  EXPECT_EQ(machine.numa_nodes(), 4U);
+  EXPECT_EQ(machine.pu(0).l3, machine.pu(8).l3) << "hwloc shows them one L3";
+  EXPECT_EQ(machine.relation(0, 8), pu_relation::other_numa_node);
+  EXPECT_EQ(machine.relation(0, 6), pu_relation::shared_l3);
+}
+
+TEST(TopologyNuma, OneNodePerPackageAndOneNodeMachines) {
+  const topology two = topology::from_synthetic("pack:2 [numa] l3:2 core:4 pu:2");
+  EXPECT_EQ(two.numa_nodes(), 2U);
+  EXPECT_EQ(two.relation(0, 8), pu_relation::different_l3) << "one package, one node, two L3 domains";
+  EXPECT_EQ(two.relation(0, 16), pu_relation::different_package);
+  EXPECT_EQ(two.pu(16).numa, 1);
+  const topology one = topology::from_synthetic("package:2 l3:2 core:4 pu:2");
+  EXPECT_EQ(one.numa_nodes(), 1U);
+  for (const auto& pu : one.pus()) EXPECT_EQ(pu.numa, 0);
+  EXPECT_EQ(one.summary(), "packages=2 l3=4 cores=16 pus=32") << "one node: the summary reads as before";
+}
+
+TEST(TopologyNuma, PerCpuTableIsIndexedByTheKernelsNumbers) {
+  const topology machine = topology::from_synthetic("pack:2 [numa] l3:1 core:2 pu:2");
+  const auto table = machine.cpu_table();
+  EXPECT_EQ(table.package, "0,0,0,0,1,1,1,1");
+  EXPECT_EQ(table.numa_node, "0,0,0,0,1,1,1,1");
+  EXPECT_EQ(table.l3, "0,0,0,0,1,1,1,1");
+  EXPECT_EQ(table.core, "0,0,1,1,2,2,3,3");
+  EXPECT_EQ(table.kind, "-,-,-,-,-,-,-,-") << "no CPU kinds in a synthetic topology";
+  EXPECT_EQ(table.kinds, "");
+}
+
+// CPU kinds, from the hybrid XML fixtures (tests/fixtures/topology/README.md).
+std::string fixture(const std::string& name) {
+  return std::string(LOCKSTEP_SOURCE_DIR) + "/tests/fixtures/topology/" + name;
+}
+
+TEST(TopologyKinds, HybridXmlHasTwoKindsRankedByPerformance) {
+  const topology machine = topology::from_xml_file(fixture("hybrid-8p-8e.xml"));
+  EXPECT_EQ(machine.summary(), "packages=1 l3=1 cores=16 pus=24 kinds=2");
+  ASSERT_TRUE(machine.hybrid());
+  ASSERT_EQ(machine.kinds().size(), 2U);
+  const auto& efficient = machine.kinds()[0];
+  const auto& performant = machine.kinds()[1];
+  EXPECT_EQ(efficient.name(), "IntelAtom");
+  EXPECT_EQ(efficient.max_mhz, 3900U);
+  EXPECT_EQ(efficient.pus, (std::vector<unsigned>{16, 17, 18, 19, 20, 21, 22, 23}));
+  EXPECT_EQ(performant.name(), "IntelCore");
+  EXPECT_EQ(performant.max_mhz, 5200U);
+  EXPECT_EQ(performant.pus.size(), 16U);
+  EXPECT_GT(performant.efficiency, efficient.efficiency) << "hwloc ranks the P cores above the E cores";
+  EXPECT_GT(machine.performance_rank(0), machine.performance_rank(16));
+  EXPECT_EQ(machine.kind_name(1), "IntelCore");
+  EXPECT_EQ(machine.kind_name(23), "IntelAtom");
+  for (const auto& core : machine.cores()) EXPECT_EQ(core.kind, machine.pu(core.pus.front()).kind);
+  const auto table = machine.cpu_table();
+  EXPECT_EQ(table.kinds, "IntelAtom,IntelCore");
+  EXPECT_EQ(table.kind, "1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,1,0,0,0,0,0,0,0,0");
+  EXPECT_EQ(machine.relation(0, 1), pu_relation::smt_siblings);
+  EXPECT_EQ(machine.relation(16, 17), pu_relation::shared_l2) << "E cores share an L2 by four";
+  EXPECT_EQ(machine.relation(0, 16), pu_relation::shared_l3);
+}
+
+TEST(TopologyKinds, HomogeneousMachinesHaveOneRank) {
+  const topology machine = topology::from_synthetic("package:1 l3:2 core:4 pu:2");
+  EXPECT_FALSE(machine.hybrid());
+  for (const auto& pu : machine.pus()) EXPECT_EQ(machine.performance_rank(pu.os_index), 0U);
+  EXPECT_EQ(machine.kind_name(0), "");
 }
 
 TEST(Topology, UnknownPuAndBadDescriptionsAreErrors) {
