@@ -61,6 +61,8 @@ bool augment(std::size_t index, const std::vector<std::vector<unsigned>>& allowe
 
 // A maximum matching of the machine's ranks (by index) to their allowed
 // CPUs, each rank trying `preferred` first; `assigned` as it left them.
+// `allowed` lists are in the order ranks try CPUs in (plan_machine's: the
+// plan's), not ascending, so membership is a search, not a binary search.
 std::vector<std::optional<unsigned>> maximum_matching(const std::vector<std::vector<unsigned>>& allowed,
                                                       const std::vector<std::optional<unsigned>>& preferred,
                                                       std::map<unsigned, std::size_t>& owner,
@@ -68,7 +70,8 @@ std::vector<std::optional<unsigned>> maximum_matching(const std::vector<std::vec
   std::vector<std::optional<unsigned>> assigned(allowed.size());
   for (std::size_t index = 0; index < allowed.size(); ++index) {
     const std::optional<unsigned> cpu = preferred[index];
-    if (cpu && contains(allowed[index], *cpu) && owner.find(*cpu) == owner.end()) {
+    if (cpu && std::find(allowed[index].begin(), allowed[index].end(), *cpu) != allowed[index].end() &&
+        owner.find(*cpu) == owner.end()) {
       owner[*cpu] = index;
       assigned[index] = *cpu;
     }

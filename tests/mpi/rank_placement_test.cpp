@@ -206,4 +206,42 @@ TEST(RankPlacement, KernelIdentityIsStable) {
   EXPECT_EQ(first, dist::kernel_identity(machine, "here"));
 }
 
+// `lockstep mpi --ranks 8` on a machine of two NUMA nodes (2 packages of one
+// node, 4 cores with SMT each: node N holds CPUs 8N .. 8N+7), every rank given
+// every CPU: the ranks follow the placement's plan across the nodes.
+std::vector<int> nodes_of_ranks(const topology& machine, const placed_job& job) {
+  std::vector<int> nodes;
+  for (const auto& rank : job.ranks) {
+    EXPECT_EQ(rank.cpus_bound.size(), 1U) << "rank " << rank.rank;
+    nodes.push_back(rank.cpus_bound.empty() ? -1 : machine.pu(rank.cpus_bound.front()).numa);
+  }
+  return nodes;
+}
+
+TEST(RankPlacementNuma, EightRanksFollowThePlansAcrossTwoNodes) {
+  const topology machine = topology::from_synthetic("pack:2 [numa] l3:1 core:4 pu:2");
+  ASSERT_EQ(machine.numa_nodes(), 2U);
+  std::vector<unsigned> every_cpu;
+  for (unsigned cpu = 0; cpu < 16; ++cpu) every_cpu.push_back(cpu);
+  for (const bool two_hosts : {false, true}) {
+    std::vector<dist::rank_report> ranks;
+    for (int rank = 0; rank < 8; ++rank)
+      ranks.push_back(report(rank, two_hosts && rank >= 4 ? "b" : "a", "boot id K", every_cpu));
+    const placed_job compact = place(machine, placement::compact, ranks);
+    EXPECT_EQ(nodes_of_ranks(machine, compact), (std::vector<int>{0, 0, 0, 0, 1, 1, 1, 1}))
+        << "compact fills node 0's cores, then node 1's";
+    const placed_job scatter = place(machine, placement::scatter, ranks);
+    EXPECT_EQ(nodes_of_ranks(machine, scatter), (std::vector<int>{0, 1, 0, 1, 0, 1, 0, 1}))
+        << "scatter alternates the nodes";
+    std::set<unsigned> cores;
+    for (const auto& rank : compact.ranks) cores.insert(machine.pu(rank.cpus_bound.front()).core);
+    EXPECT_EQ(cores.size(), 8U) << "one rank a core: no SMT sibling while a core is free";
+    EXPECT_FALSE(compact.verdicts[0].crowded);
+  }
+  std::vector<dist::rank_report> four;
+  for (int rank = 0; rank < 4; ++rank) four.push_back(report(rank, "a", "K", every_cpu));
+  EXPECT_EQ(nodes_of_ranks(machine, place(machine, placement::compact, four)), (std::vector<int>{0, 0, 0, 0}))
+      << "four ranks fit one node";
+}
+
 }  // namespace
