@@ -150,6 +150,31 @@ std::string per_cpu_list(const std::vector<pu_info>& pus, Value value) {
   return text;
 }
 
+// The caches, grouped by (level, kind); the size and line of the first instance.
+std::vector<cache_info> read_caches(hwloc_topology_t handle) {
+  std::map<std::tuple<unsigned, int>, cache_info> caches;
+  for (hwloc_obj_type_t type : {HWLOC_OBJ_L1CACHE, HWLOC_OBJ_L2CACHE, HWLOC_OBJ_L3CACHE, HWLOC_OBJ_L4CACHE,
+                                HWLOC_OBJ_L5CACHE, HWLOC_OBJ_L1ICACHE, HWLOC_OBJ_L2ICACHE, HWLOC_OBJ_L3ICACHE}) {
+    const int count = hwloc_get_nbobjs_by_type(handle, type);
+    for (int index = 0; index < count; ++index) {
+      hwloc_obj_t cache = hwloc_get_obj_by_type(handle, type, static_cast<unsigned>(index));
+      if (cache == nullptr || cache->attr == nullptr) continue;
+      const auto& attributes = cache->attr->cache;
+      auto [slot, inserted] = caches.try_emplace({attributes.depth, static_cast<int>(attributes.type)});
+      if (inserted) {
+        slot->second.level = attributes.depth;
+        slot->second.kind = std::string(cache_kind(attributes.type));
+        slot->second.size_bytes = attributes.size;
+        slot->second.line_bytes = attributes.linesize;
+      }
+      ++slot->second.instances;
+    }
+  }
+  std::vector<cache_info> result;
+  for (auto& [key, cache] : caches) result.push_back(std::move(cache));
+  return result;
+}
+
 // CPUs of the calling process (its main thread's mask), or empty if unknown.
 std::vector<unsigned> process_affinity() {
   std::vector<unsigned> cpus;
@@ -236,26 +261,7 @@ struct topology_loader {
     machine.l2_domains_ = static_cast<unsigned>(l2_seen.size());
     machine.l3_domains_ = static_cast<unsigned>(l3_seen.size());
 
-    // Caches, grouped by (level, kind); the size and line of the first instance.
-    std::map<std::tuple<unsigned, int>, cache_info> caches;
-    for (hwloc_obj_type_t type : {HWLOC_OBJ_L1CACHE, HWLOC_OBJ_L2CACHE, HWLOC_OBJ_L3CACHE, HWLOC_OBJ_L4CACHE,
-                                  HWLOC_OBJ_L5CACHE, HWLOC_OBJ_L1ICACHE, HWLOC_OBJ_L2ICACHE, HWLOC_OBJ_L3ICACHE}) {
-      const int count = hwloc_get_nbobjs_by_type(handle, type);
-      for (int index = 0; index < count; ++index) {
-        hwloc_obj_t cache = hwloc_get_obj_by_type(handle, type, static_cast<unsigned>(index));
-        if (cache == nullptr || cache->attr == nullptr) continue;
-        const auto& attributes = cache->attr->cache;
-        auto [slot, inserted] = caches.try_emplace({attributes.depth, static_cast<int>(attributes.type)});
-        if (inserted) {
-          slot->second.level = attributes.depth;
-          slot->second.kind = std::string(cache_kind(attributes.type));
-          slot->second.size_bytes = attributes.size;
-          slot->second.line_bytes = attributes.linesize;
-        }
-        ++slot->second.instances;
-      }
-    }
-    for (auto& [key, cache] : caches) machine.caches_.push_back(std::move(cache));
+    machine.caches_ = read_caches(handle);
 
     // The affinity set: every PU for a machine that is not this one.
     std::vector<unsigned> allowed;
