@@ -1,6 +1,7 @@
 // lockstep c2c: the core-to-core latency matrix, each pair labelled with its
-// hwloc relation (SMT siblings, shared L2, shared L3, different L3, different
-// package). The measurement is the c2c probe (bench/probes/core_to_core.hpp),
+// hwloc relation (SMT siblings, shared L2, shared L3, different L3, other NUMA
+// node, different package) and, where they differ, its two NUMA nodes. The
+// measurement is the c2c probe (bench/probes/core_to_core.hpp),
 // the pairs its plan (bench/probes/c2c_pairs.hpp), what it means and its two
 // readings bench/probe_reports/c2c_report.hpp; this file is the options, their
 // checks, that call and the readings.
@@ -75,7 +76,8 @@ void run_c2c(const c2c_options& options, int& result) {
 
   // --synthetic: the labels only (a synthetic machine cannot be measured).
   if (!options.synthetic.empty()) {
-    for (const auto& pair : plan.pairs) fmt::print("{} {} {}\n", pair.a, pair.b, pair.relation);
+    for (const auto& pair : plan.pairs)
+      fmt::print("{} {} {}\n", pair.a, pair.b, probes::pair_words(pair.relation, pair.node_a, pair.node_b));
     result = kExitOk;
     return;
   }

@@ -126,7 +126,8 @@ probes::delay_settings check_input(const delay_options& options) {
     }
     if (options.compare_pinning && plan.kind == platform::placement::none)
       throw usage_error(
-          "--compare-pinning compares a pinned placement with none: give --pin compact, scatter or migrate");
+          "--compare-pinning compares a pinned placement with none: give --pin compact, compact_smt, scatter or "
+          "migrate");
   }
   if (options.fifo) {
     const int low = platform::fifo_min_priority();
@@ -249,7 +250,7 @@ void add_delay(CLI::App& app, int& result) {
                   bench::kStallDominatedFactor));
   command->add_option("--sync", options->sync, "Synchronisation primitive (lockstep list)")->capture_default_str();
   command->add_option("--layout", options->layout, "Data layout (lockstep list)")->capture_default_str();
-  auto* pin = command->add_option("--pin", options->pin, "Placement: none, compact, scatter, migrate")
+  auto* pin = command->add_option("--pin", options->pin, "Placement: none, compact, compact_smt, scatter, migrate")
                   ->capture_default_str();
   auto* threads = command->add_option("--threads", options->threads,
                                       fmt::format("Participants sharing the step (1: like cyclictest -t1); up to {} "

@@ -111,7 +111,7 @@ checked_options check(const mpi_options& options, unsigned ranks) {
     throw usage_error(std::string("--pin: ") + e.what());
   }
   if (checked.pin == platform::placement::migrate)
-    throw usage_error("--pin: migrate moves threads of one process; ranks take none, compact or scatter");
+    throw usage_error("--pin: migrate moves threads of one process; ranks take none, compact, compact_smt or scatter");
   checked.watchdog_ns = parse_duration_ns(options.watchdog, "--watchdog", 100'000'000, 3'600'000'000'000);
 
   if (const char* fault = std::getenv(kFaultVariable); fault != nullptr && *fault != '\0') {
@@ -368,7 +368,7 @@ void add_mpi(CLI::App& app, int& result) {
   command->add_option("--pingpong", options->pingpong, "Ping-pong round trips per round (after a tenth as many untimed, as osu_latency skips 1,000 of 10,000)")
       ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{100'000'000}))
       ->capture_default_str();
-  command->add_option("--pin", options->pin, "Placement of a host's ranks: none, compact, scatter")
+  command->add_option("--pin", options->pin, "Placement of a host's ranks: none, compact, compact_smt, scatter")
       ->capture_default_str();
   add_masses_option(*command, options->masses, "rank");
   command->add_option("--watchdog", options->watchdog,

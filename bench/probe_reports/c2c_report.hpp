@@ -28,6 +28,7 @@ struct c2c_matrix {
 
 struct c2c_analysis {
   std::vector<std::string> relations;           // per measured pair, hwloc's label (platform/topology.hpp)
+  std::vector<std::pair<int, int>> nodes;       // per measured pair, its CPUs' NUMA nodes (kNoObject: none)
   std::vector<platform::distribution> one_way;  // per measured pair
   std::vector<c2c_matrix> matrices;             // per method, in the order asked
 };

@@ -112,6 +112,15 @@ nlohmann::json machine_context(const platform::topology& machine) {
   context["topology_l3"] = std::to_string(machine.l3_domains());
   context["topology_cores"] = std::to_string(machine.core_count());
   context["topology_pus"] = std::to_string(machine.pu_count());
+  // Each CPU's place, position = the CPU's number (platform/topology.hpp, cpu_table).
+  const platform::topology::per_cpu_table cpus = machine.cpu_table();
+  context["topology_numa_nodes"] = std::to_string(machine.numa_nodes());
+  context["topology_kinds"] = cpus.kinds.empty() ? "none" : cpus.kinds;
+  context["topology_cpu_package"] = cpus.package;
+  context["topology_cpu_l3"] = cpus.l3;
+  context["topology_cpu_numa_node"] = cpus.numa_node;
+  context["topology_cpu_core"] = cpus.core;
+  context["topology_cpu_kind"] = cpus.kind;
   context["affinity_cpus"] = std::to_string(machine.affinity().size());
   context["hwloc_version"] = machine.hwloc_version();
   context["benchmark_version"] = LOCKSTEP_BENCHMARK_VERSION;

@@ -27,7 +27,10 @@ using context_map = std::map<std::string, std::string>;
 
 // lockstep_version, lockstep_schema, git_revision, compiler, cxx_flags,
 // build_type, sanitizer, cpu_model, hypervisor, kernel, host_name, num_cpus, topology,
-// topology_packages, topology_l3, topology_cores, topology_pus, hwloc_version,
+// topology_packages, topology_l3, topology_cores, topology_pus, topology_numa_nodes,
+// topology_kinds (kind names by index, "none"), the per-CPU table topology_cpu_package,
+// topology_cpu_l3, topology_cpu_numa_node, topology_cpu_core, topology_cpu_kind (comma lists,
+// position = the CPU's number; platform/topology.hpp, cpu_table), hwloc_version,
 // benchmark_version, boost_version, clocksource, migrations (available or why
 // not), and the machine's state: governor, boost, SMT, isolated CPUs, IRQs,
 // huge pages, the frequency during the command (add_machine_state,

@@ -22,6 +22,7 @@ class C2cFile:
     label: str
     pairs: list[C2cPair]
     sampled: bool
+    relations_closest_first: tuple[str, ...] = ()  # the writer's ranking of its labels (older files: none)
 
     def methods(self) -> list[str]:
         """The measuring methods present (`lockstep c2c --method both` writes cas and store_load pairs)."""
@@ -42,4 +43,5 @@ def read_c2c(path: str, label: str, document: dict) -> C2cFile:
         if p50 is not None and p50 < fields.SHORTEST_NS:
             fail(path, ("pairs", index, "one_way_ns", "p50"), f"is {p50:g} ns: a time is positive")
         pairs.append(C2cPair(int(a), int(b), method, pair["relation"], p50))
-    return C2cFile(path=path, label=label, pairs=pairs, sampled=bool(document.get("sampled")))
+    return C2cFile(path=path, label=label, pairs=pairs, sampled=bool(document.get("sampled")),
+                   relations_closest_first=tuple(document.get("relations_closest_first", ())))

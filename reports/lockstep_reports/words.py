@@ -16,8 +16,8 @@ from __future__ import annotations
 LAYOUTS = (("packed", "shared", 0), ("padded64", "shared", 64), ("padded128", "shared", 128),
            ("per_thread", "private_copy", 64))
 # The order of the placements' groups, and each one's marker in the CPU figure.
-PIN_ORDER = ("compact", "scatter", "none", "migrate")
-PIN_MARKERS = {"compact": "o", "scatter": "^", "none": "s", "migrate": "D"}
+PIN_ORDER = ("compact", "compact_smt", "scatter", "none", "migrate")
+PIN_MARKERS = {"compact": "o", "compact_smt": "v", "scatter": "^", "none": "s", "migrate": "D"}
 # A migration's comparison in a file without lockstep_planned_pairs (matrix.penalty_rows): the placements that
 # move the threads against the one that pins them, and what each move is called.
 PINNED_PLACEMENT = "compact"

@@ -289,6 +289,25 @@ class Pieces(unittest.TestCase):
         self.assertEqual(order[:4], [0, 8, 1, 9])
         self.assertEqual(set(order[:8]), {0, 1, 2, 3, 8, 9, 10, 11})
 
+    def test_topology_order_ranks_the_labels_the_binary_writes(self):
+        # A 2-package machine of 2 nodes, numbered so that numeric order is not topology order: CPU c sits in
+        # package c % 2, SMT siblings c and c + 4.
+        from lockstep_reports.c2c_reader import C2cPair
+        place = {cpu: (cpu % 4, cpu % 2) for cpu in range(8)}  # cpu -> (core, package)
+        pairs = []
+        for a in range(8):
+            for b in range(a + 1, 8):
+                relation = ("SMT siblings" if place[a][0] == place[b][0] else
+                            "shared L3" if place[a][1] == place[b][1] else "different package")
+                pairs.append(C2cPair(a, b, "cas", relation, 30.0))
+        self.assertEqual(c2c_analysis.topology_order(pairs), [0, 4, 2, 6, 1, 5, 3, 7])
+        closest_first = ("same PU", "SMT siblings", "shared L2", "shared L3", "same package", "different L3",
+                         "other NUMA node", "different package")
+        self.assertEqual(c2c_analysis.topology_order(pairs, closest_first), [0, 4, 2, 6, 1, 5, 3, 7])
+        # The file's order ranks a label; one it does not list comes after all of them.
+        self.assertEqual(c2c_analysis.relation_rank("other NUMA node", closest_first), 6)
+        self.assertEqual(c2c_analysis.relation_rank("a label from the future", closest_first), 8)
+
     def test_model_roots_and_the_papers(self):
         fast, slow = paper.model_roots()
         self.assertAlmostEqual(fast, 51.49, places=2)

@@ -37,6 +37,24 @@ TEST(C2cPairLabels, TwoSocketsWithEveryLevel) {
   EXPECT_EQ(counts.size(), 5u);
 }
 
+TEST(C2cPairLabels, NodesInsideAndAcrossPackages) {
+  // 2 packages x 2 NUMA nodes x 2 cores (an L3 a node): 8 CPUs, 28 pairs; node N holds CPUs 2N, 2N+1.
+  const auto machine = topology::from_synthetic("pack:2 numa:2 l3:1 core:2 pu:1");
+  const auto plan = probes::plan_c2c_pairs(machine, cli::usable_cpus(machine, false), 1000, 1);
+  const auto counts = count_relations(plan);
+  EXPECT_EQ(counts.at("shared L3"), 4);           // one pair per node
+  EXPECT_EQ(counts.at("other NUMA node"), 8);     // 2 packages x (2 x 2) across its two nodes
+  EXPECT_EQ(counts.at("different package"), 16);  // 4 x 4
+  EXPECT_EQ(counts.size(), 3u);
+  for (const auto& pair : plan.pairs) {
+    EXPECT_EQ(pair.node_a, pair.a / 2);
+    EXPECT_EQ(pair.node_b, pair.b / 2);
+  }
+  EXPECT_EQ(probes::pair_words("different package", 0, 2), "different package (nodes 0 and 2)");
+  EXPECT_EQ(probes::pair_words("other NUMA node", 0, 1), "other NUMA node (nodes 0 and 1)");
+  EXPECT_EQ(probes::pair_words("shared L3", 1, 1), "shared L3") << "one node: nothing to add";
+}
+
 TEST(C2cPairLabels, WithoutSmtOnePuPerCore) {
   const auto machine = topology::from_synthetic("pack:2 l3:2 l2:2 core:2 pu:2");
   const auto cpus = cli::usable_cpus(machine, false);
