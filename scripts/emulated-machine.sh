@@ -154,6 +154,8 @@ fetch_package() {
     fail "apt-get download $1:$debian_arch failed (is Debian's archive reachable? for arm64, scripts/setup.sh --emulated adds the architecture)"
   dpkg-deb --fsys-tarfile "$fetched"/*.deb | tar -x -C "$fetched" --wildcards './boot/vmlinuz-*' './bin/busybox' 2>/dev/null || true
   rm -f "$fetched"/*.deb
+  ls "$fetched"/boot/vmlinuz-* "$fetched"/bin/busybox >/dev/null 2>&1 ||
+    fail "$1:$debian_arch holds neither a kernel (boot/vmlinuz-*) nor bin/busybox"
   touch "$fetched/.extracted"
 }
 
@@ -230,6 +232,7 @@ if [ -n "$interpreter" ]; then
     file="${pending[0]}"; pending=("${pending[@]:1}")
     [ -f "$file" ] || continue
     for needed in $(readelf -d "$file" 2>/dev/null | sed -n 's/.*(NEEDED).*\[\(.*\)\]/\1/p'); do
+      [ "$needed" = "$(basename "$interpreter")" ] && continue
       [ -e "$root/opt/lockstep/lib/$needed" ] && continue
       [ -e "$root/lib/$needed" ] && continue
       found=""
