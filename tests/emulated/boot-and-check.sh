@@ -7,8 +7,8 @@
 #
 # The files stay in BUILD_DIR/emulated/TOPOLOGY for a look after a failure.
 # The machine's bound (300 s) is a guard against a hang, not a timing: the
-# whole test took 95 to 175 s on the 2-vCPU development VM while other
-# builds kept its load at 11 to 19.
+# whole test took 170 to 205 s in four runs on the 2-vCPU development VM
+# while other builds kept its load at 13 to 22.
 # Exits 77 (skipped) where QEMU is not installed (scripts/setup.sh --test
 # installs it).
 set -euo pipefail

@@ -91,6 +91,8 @@ class KernelView:
         self.die = {cpu: (self.package[cpu], int(files.get("topology/die_id", "0")))
                     for cpu, files in per_cpu.items()}
         self.core = {cpu: cpu_list(files["topology/thread_siblings_list"]) for cpu, files in per_cpu.items()}
+        self.cluster = {cpu: cpu_list(files["topology/cluster_cpus_list"])
+                        for cpu, files in per_cpu.items() if "topology/cluster_cpus_list" in files}
         self.caches = {}  # level -> {cpu: the CPUs sharing its cache of that level}
         for cpu, files in per_cpu.items():
             for name, level in files.items():
@@ -113,6 +115,9 @@ class KernelView:
 
     def cores(self):
         return set(self.core.values())
+
+    def clusters(self):
+        return set(self.cluster.values())
 
     def cache_domains(self, level):
         return set(self.caches.get(level, {}).values())

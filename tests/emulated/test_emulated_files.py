@@ -25,6 +25,7 @@ SHAPES = {
     "two-socket-16": (16, 2, 2, 2, 8, 2, 2),
     "ccd-16": (16, 1, 2, 2, 8, 2, 1),
     "two-socket-64": (64, 2, 2, 2, 32, 2, 2),
+    "arm64-8": (8, 2, 2, 0, 8, 1, 2),
 }
 
 
@@ -75,6 +76,11 @@ class FixturesHold(unittest.TestCase):
                          len(kernel.cache_domains(3)), len(kernel.cores()), threads.pop(),
                          max(len(kernel.nodes), 1))
                 self.assertEqual(SHAPES[directory.name], shape)
+
+
+    def test_the_arm64_guest_sees_its_clusters(self):
+        kernel = emulated_files.KernelView.read(FIXTURES / "arm64-8")
+        self.assertEqual("{0-1} {2-3} {4-5} {6-7}", emulated_files.shown(kernel.clusters()))
 
 
 class EditsAreCaught(unittest.TestCase):
