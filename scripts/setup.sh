@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # Installs what lockstep needs from Debian's packages, and only what is missing.
 #
-#   scripts/setup.sh          what building and running lockstep needs
+#   scripts/setup.sh          what building and running lockstep needs (and the x86-64
+#                             bundle: dpkg-dev unpacks Debian's sources, scripts/sysroot.sh)
+#   scripts/setup.sh --cross  that, and what the aarch64 build needs: Debian's cross compiler,
+#                             and qemu-user-static, which runs its static programs here
 #   scripts/setup.sh --emulated  that, and what the emulated machines need
 #                             (scripts/emulated-machine.sh): qemu-system-x86 and
 #                             qemu-system-arm (QEMU, pure emulation), busybox-static (the
@@ -12,7 +15,8 @@
 #                             libbenchmark-tools: Google Benchmark's compare.py,
 #                             spin: the Promela models in tests/spin, compiled with gcc;
 #                             iproute2: `ip netns`, two hosts for tests/mpi/netns-hosts.sh;
-#                             the emulated machines': CTest emulated.two_socket_16 boots one)
+#                             the emulated machines': CTest emulated.two_socket_16 boots one;
+#                             the tests cross-build aarch64, so --cross's too)
 #
 # Idempotent: when everything is present it checks and returns in well under a
 # second. Runs apt-get as root, or through sudo; says plainly what it installs.
@@ -26,17 +30,20 @@ build_packages=(
   python3 python3-numpy python3-scipy python3-matplotlib python3-jinja2 python3-jsonschema
   openmpi-bin libopenmpi-dev
   patchelf  # scripts/bundle.sh: the bundled Open MPI libraries find theirs beside them
+  dpkg-dev  # scripts/sysroot.sh: dpkg-source unpacks the sources of the static libraries
 )
+cross_packages=(g++-aarch64-linux-gnu qemu-user-static)
 test_packages=(rt-tests chromium libbenchmark-tools spin iproute2)
 emulated_packages=(qemu-system-x86 qemu-system-arm busybox-static)
 
 packages=("${build_packages[@]}")
 foreign_architectures=()
 case "${1:-}" in
-  --test) packages+=("${test_packages[@]}" "${emulated_packages[@]}"); foreign_architectures=(arm64) ;;
+  --test) packages+=("${cross_packages[@]}" "${test_packages[@]}" "${emulated_packages[@]}"); foreign_architectures=(arm64) ;;
+  --cross) packages+=("${cross_packages[@]}") ;;
   --emulated) packages+=("${emulated_packages[@]}"); foreign_architectures=(arm64) ;;
   "") ;;
-  *) echo "setup.sh: unknown option '$1' (use --test, --emulated or nothing)" >&2; exit 2 ;;
+  *) echo "setup.sh: unknown option '$1' (use --test, --cross, --emulated or nothing)" >&2; exit 2 ;;
 esac
 
 missing=()

@@ -326,7 +326,15 @@ void run_mpi(const mpi_options& options, int& result) {
 #else
   (void)options;
   (void)result;
+#if LOCKSTEP_STATIC_BUILD
+  // The static build (the bundle) carries no MPI: Open MPI has no static
+  // library, and an MPI program must use the cluster's own MPI and launcher.
+  throw usage_error(
+      "this lockstep is the static bundle, built without MPI: build lockstep on the cluster, against its own MPI "
+      "(README.md, \"Taking lockstep to another machine\")");
+#else
   throw usage_error("this lockstep was built without MPI (install libopenmpi-dev: scripts/setup.sh, then rebuild)");
+#endif
 #endif
 }
 
