@@ -68,9 +68,10 @@ newest_glibc() {
 too_new=false
 for object in "$root$lockstep" $(find "$root/opt/$name" -path '*/lib/*' -name '*.so*' -type f | sort); do
   label="${object#"$root/opt/"}"
+  version_words=$(newest_glibc "$object")
   if ! readelf -d "$object" 2>/dev/null | grep -q '(NEEDED)' && ! readelf -l "$object" 2>/dev/null | grep -q INTERP &&
      [ "$object" = "$root$lockstep" ]; then
-    echo "check-bundle: $label: static, needs no glibc (objdump -T: $(objdump -T "$object" 2>&1 | sed -n '/DYNAMIC SYMBOL TABLE/{n;p;}'))" >&2
+    echo "check-bundle: $label: static, needs no glibc (objdump -T: ${version_words:-no GLIBC_ version})" >&2
     continue
   fi
   version=$(newest_glibc "$object")
