@@ -19,6 +19,7 @@
 #include "bench/results/build_info.hpp"
 #include "bench/results/machine_state_context.hpp"
 #include "platform/clock.hpp"
+#include "platform/cpu_identity.hpp"
 #include "platform/thread_accounting.hpp"
 
 #ifndef LOCKSTEP_BENCHMARK_VERSION
@@ -27,18 +28,7 @@
 
 namespace lockstep::bench {
 
-std::string cpu_model() {
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) != 0) continue;
-    const std::size_t colon = line.find(':');
-    if (colon == std::string::npos) break;
-    std::size_t start = line.find_first_not_of(" \t", colon + 1);
-    return start == std::string::npos ? "unavailable" : line.substr(start);
-  }
-  return "unavailable";
-}
+std::string cpu_model() { return platform::cpu_model(); }
 
 namespace {
 

@@ -49,7 +49,8 @@ void merge_into_result(nlohmann::json& result, const nlohmann::json& keys);
 nlohmann::json result_document(const std::string& kind, const platform::topology& machine);
 
 
-// "AMD EPYC" (from /proc/cpuinfo's model name), or "unavailable".
+// The CPU's name from /proc/cpuinfo (platform/cpu_identity.hpp: x86's model
+// name; arm64's MIDR implementer and part, named), or "unavailable".
 std::string cpu_model();
 // The hypervisor's vendor from CPUID leaf 0x40000000 ("KVMKVMKVM" -> "kvm"),
 // "none" when the CPU reports no hypervisor, with the container kind appended
