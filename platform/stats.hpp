@@ -11,6 +11,8 @@
 // Histogram: bucket i counts samples in [first + i w, first + (i + 1) w);
 // samples below `first` and at or above `first + buckets w` are counted apart
 // (below(), above()), never dropped and never folded into an end bucket.
+//
+// Mean: the compensated sum (compensated_sum) over the count.
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
@@ -36,6 +38,29 @@ struct distribution {
   double mean = 0;
 };
 
+// The sum of samples in double, compensated (Neumaier's improvement of
+// Kahan's summation): the rounding error of every addition is carried in a
+// second double and added back at the end, so the result is within about one
+// ulp of the exact sum whatever the count (a plain double sum drifts by up to
+// one ulp per addition). It replaces a long double sum: long double is the
+// 80-bit x87 format on x86-64 but a 128-bit software float on AArch64, slower
+// and rounded differently, so the same samples gave two means. This uses IEEE
+// double additions, subtractions, fabs and comparisons only (no product a
+// compiler could fuse into a multiply-add), so x86-64 (SSE2) and AArch64 give
+// the same bits for the same samples.
+template <class Sample>
+double compensated_sum(std::span<const Sample> samples) noexcept {
+  double sum = 0.0;
+  double carried = 0.0;  // the low-order parts the additions rounded away
+  for (const Sample& sample : samples) {
+    const auto value = static_cast<double>(sample);
+    const double next = sum + value;
+    carried += std::fabs(sum) >= std::fabs(value) ? (sum - next) + value : (value - next) + sum;
+    sum = next;
+  }
+  return sum + carried;
+}
+
 template <class Sample>
 distribution summarize_sorted(std::span<const Sample> sorted) {
   if (sorted.empty()) throw std::invalid_argument("a distribution of no samples");
@@ -46,9 +71,7 @@ distribution summarize_sorted(std::span<const Sample> sorted) {
   result.p50 = quantile_of_sorted(sorted, 0.50);
   result.p99 = quantile_of_sorted(sorted, 0.99);
   result.p999 = quantile_of_sorted(sorted, 0.999);
-  long double sum = 0;
-  for (const Sample& sample : sorted) sum += static_cast<long double>(sample);
-  result.mean = static_cast<double>(sum / static_cast<long double>(sorted.size()));
+  result.mean = compensated_sum(sorted) / static_cast<double>(sorted.size());
   return result;
 }
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <numeric>
+#include <span>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -35,6 +36,20 @@ TEST(Stats, OneToAThousandAndOne) {
   EXPECT_DOUBLE_EQ(result.p99, 991);
   EXPECT_DOUBLE_EQ(result.p999, 1000);
   EXPECT_DOUBLE_EQ(result.max, 1001);
+}
+
+// The mean's sum is compensated in double (no long double, whose width is
+// each architecture's own): additions a plain sum rounds away are carried.
+TEST(Stats, TheMeanKeepsWhatAPlainSumRoundsAway) {
+  // Sorted, the 1s come between -1e100 and 1e100: a plain double sum (and an
+  // 80-bit long double one) absorbs them and gives 0; the exact sum is 2.
+  const auto result = summarize(std::vector<double>{1.0, 1e100, 1.0, -1e100});
+  EXPECT_EQ(result.mean, 0.5);
+  // A million samples of 1e9 + 0.1 ns: each addition rounds in a plain double
+  // sum; compensated, the mean is the sample itself, to the bit.
+  const std::vector<double> near_a_second(1'000'000, 1e9 + 0.1);
+  EXPECT_EQ(lockstep::platform::compensated_sum(std::span<const double>(near_a_second)) / 1e6, 1e9 + 0.1);
+  EXPECT_EQ(summarize(near_a_second).mean, 1e9 + 0.1);
 }
 
 TEST(Stats, InterpolatesBetweenNeighbours) {
