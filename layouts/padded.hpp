@@ -2,17 +2,26 @@
 // padded64, padded128: what each thread writes sits in blocks of its own
 // (docs/design.md, Layouts).
 //
+// The names are strides, fixed at compile time and proved below: padded64's
+// blocks are 64 bytes, padded128's 128, whatever the machine. Each keeps
+// writers on lines of their own only where the machine's cache line is no
+// wider than its stride (64 bytes on x86-64 and most AArch64 parts; 128 on
+// Apple M-series, 256 on Fujitsu A64FX): kWriterIsolation states the stride,
+// and a run compares it with the line it reads from the machine
+// (platform::machine_cache_line; layouts/registry.hpp: writer_isolation_note)
+// and says so where a layout's isolation does not hold.
+//
 // Each participant owns one region that starts on a `Pad`-byte boundary and
 // fills whole `Pad`-byte blocks; inside it, its equations' five slots
 // (shared_slots.hpp) slot-major: x_even[b], x_odd[b], k_0[b], k_1[b], k_2[b]
 // for its b equations. No block holds values of two writers, so a
 // publication invalidates only the lines its readers need.
-//   padded64  = padded<platform::kCacheLine>:   one 64-byte line per writer at least.
-//   padded128 = padded<platform::kPrefetchPair>: whole 128-byte line pairs, because
+//   padded64  = padded<kPadded64Stride>:  64-byte blocks, one 64-byte line per writer at least.
+//   padded128 = padded<kPadded128Stride>: 128-byte blocks: whole 64-byte line pairs, because
 //               the adjacent-line prefetcher pulls 64-byte lines in pairs and can
 //               make two writers 64 bytes apart interfere anyway.
-// The sizes are the named constants of platform/cache_line.hpp, never
-// std::hardware_destructive_interference_size (see there why).
+// The strides are the named constants of platform/cache_line.hpp (kCacheLine,
+// kPrefetchPair), never std::hardware_destructive_interference_size (see there why).
 //
 // Access costs one table lookup (the region of the equation's owner) more
 // than packed; the tables are written once and only read afterwards.
@@ -26,6 +35,12 @@
 #include "platform/cache_line.hpp"
 
 namespace lockstep::layouts {
+
+// The padded layouts' strides, by the names the layouts carry.
+inline constexpr std::size_t kPadded64Stride = platform::kCacheLine;
+inline constexpr std::size_t kPadded128Stride = platform::kPrefetchPair;
+static_assert(kPadded64Stride == 64, "padded64's blocks are 64 bytes: the name says so");
+static_assert(kPadded128Stride == 128, "padded128's blocks are 128 bytes: the name says so");
 
 // Bytes of the region of a participant that owns `block_size` equations.
 [[nodiscard]] constexpr std::size_t padded_region_bytes(std::size_t block_size, std::size_t pad) noexcept {
@@ -53,19 +68,20 @@ namespace lockstep::layouts {
 
 template <std::size_t Pad>
 class padded {
-  static_assert(Pad == platform::kCacheLine || Pad == platform::kPrefetchPair,
-                "padded is measured at one cache line or one prefetch pair (platform/cache_line.hpp)");
+  static_assert(Pad == kPadded64Stride || Pad == kPadded128Stride,
+                "padded is measured at the two named strides, 64 and 128 bytes (platform/cache_line.hpp)");
   static_assert(Pad % sizeof(double) == 0, "a region must hold whole doubles");
 
  public:
   static constexpr std::size_t kPad = Pad;
-  static constexpr std::string_view kName = Pad == platform::kCacheLine ? "padded64" : "padded128";
+  static constexpr std::string_view kName = Pad == kPadded64Stride ? "padded64" : "padded128";
   static constexpr std::string_view kDescription =
-      Pad == platform::kCacheLine
+      Pad == kPadded64Stride
           ? "what each thread writes on cache lines of its own (64-byte blocks)"
           : "what each thread writes on 128-byte line pairs of its own (adjacent-line prefetch)";
   static constexpr layout_kind kKind = layout_kind::shared;
-  static constexpr std::size_t kWriterIsolation = Pad;  // proved below (padded_proof)
+  // Proved below (padded_proof); isolates writers where the line is at most Pad.
+  static constexpr std::size_t kWriterIsolation = Pad;
 
   explicit padded(const partition& blocks)
       : slots_(padded_region_offset(blocks.equations(), blocks.participants(), blocks.grain(), Pad,
@@ -103,8 +119,10 @@ class padded {
   std::vector<std::size_t> block_size_;  // per equation: its owner's block size (the slot stride)
 };
 
-using padded64 = padded<platform::kCacheLine>;
-using padded128 = padded<platform::kPrefetchPair>;
+using padded64 = padded<kPadded64Stride>;
+using padded128 = padded<kPadded128Stride>;
+static_assert(padded64::kWriterIsolation == 64 && padded128::kWriterIsolation == 128,
+              "each padded layout states its stride as its writer isolation");
 
 // Proofs, with the offset function the constructor uses: no block of Pad
 // bytes holds values of two owners, for the paper's case (4 equations on 4
@@ -126,28 +144,28 @@ constexpr bool contiguous() {
   constexpr auto owner = [](std::size_t equation) { return owner_of(Equations, Participants, equation, Grain); };
   return owner_blocks_contiguous(offset, owner, Equations, kSharedSlots);
 }
-static_assert(padded_region_bytes(1, platform::kCacheLine) == 64,
+static_assert(padded_region_bytes(1, kPadded64Stride) == 64,
               "padded64: one equation's five slots (40 bytes) round up to one line");
-static_assert(padded_region_bytes(2, platform::kCacheLine) == 128,
+static_assert(padded_region_bytes(2, kPadded64Stride) == 128,
               "padded64: two equations' ten slots (80 bytes) round up to two lines");
-static_assert(padded_region_bytes(1, platform::kPrefetchPair) == 128,
+static_assert(padded_region_bytes(1, kPadded128Stride) == 128,
               "padded128: one equation's slots take a whole line pair");
-static_assert(padded_region_offset(4, 4, 1, platform::kCacheLine, 3) == 3 * 64,
+static_assert(padded_region_offset(4, 4, 1, kPadded64Stride, 3) == 3 * 64,
               "padded64, paper's case: thread p's region starts on line p");
-static_assert(padded_offset(4, 4, 1, platform::kPrefetchPair, stage_slot(2), 1) == 128 + 4 * sizeof(double),
+static_assert(padded_offset(4, 4, 1, kPadded128Stride, stage_slot(2), 1) == 128 + 4 * sizeof(double),
               "padded128: k_2 of equation 1 is the fifth double of the second line pair");
-static_assert(padded_offset(10, 2, 2, platform::kCacheLine, stage_slot(0), 7) ==
-                  padded_region_bytes(6, platform::kCacheLine) + (stage_slot(0) * 4 + 1) * sizeof(double),
+static_assert(padded_offset(10, 2, 2, kPadded64Stride, stage_slot(0), 7) ==
+                  padded_region_bytes(6, kPadded64Stride) + (stage_slot(0) * 4 + 1) * sizeof(double),
               "padded64, a 5-mass chain on 2 threads: k_0 of equation 7 (mass 4's velocity) is its owner's second");
-static_assert(isolated<4, 4, 1, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 4)");
-static_assert(isolated<4, 2, 1, platform::kCacheLine>(), "padded64: no line holds two writers (4 on 2)");
-static_assert(isolated<6, 4, 1, platform::kCacheLine>(), "padded64: no line holds two writers (6 on 4)");
-static_assert(isolated<10, 2, 2, platform::kCacheLine>(), "padded64: no line holds two writers (5 masses on 2)");
-static_assert(isolated<4, 4, 1, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 on 4)");
-static_assert(isolated<6, 4, 1, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (6 on 4)");
-static_assert(isolated<8, 3, 2, platform::kPrefetchPair>(), "padded128: no line pair holds two writers (4 masses on 3)");
-static_assert(contiguous<4, 2, 1, platform::kCacheLine>() && contiguous<6, 4, 1, platform::kPrefetchPair>() &&
-                  contiguous<10, 2, 2, platform::kCacheLine>(),
+static_assert(isolated<4, 4, 1, kPadded64Stride>(), "padded64: no line holds two writers (4 on 4)");
+static_assert(isolated<4, 2, 1, kPadded64Stride>(), "padded64: no line holds two writers (4 on 2)");
+static_assert(isolated<6, 4, 1, kPadded64Stride>(), "padded64: no line holds two writers (6 on 4)");
+static_assert(isolated<10, 2, 2, kPadded64Stride>(), "padded64: no line holds two writers (5 masses on 2)");
+static_assert(isolated<4, 4, 1, kPadded128Stride>(), "padded128: no line pair holds two writers (4 on 4)");
+static_assert(isolated<6, 4, 1, kPadded128Stride>(), "padded128: no line pair holds two writers (6 on 4)");
+static_assert(isolated<8, 3, 2, kPadded128Stride>(), "padded128: no line pair holds two writers (4 masses on 3)");
+static_assert(contiguous<4, 2, 1, kPadded64Stride>() && contiguous<6, 4, 1, kPadded128Stride>() &&
+                  contiguous<10, 2, 2, kPadded64Stride>(),
               "padded: each owner's block of a slot is one array");
 }  // namespace padded_proof
 

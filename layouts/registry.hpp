@@ -18,15 +18,22 @@
 //   for_each_layout([]<class L>() { ... info_of<L>() ... });
 //   for (const layout_info& info : all_layout_info) ...
 //   find_layout("padded64")  (nullptr when no layout has that name)
+//   writer_isolation_note(platform::machine_cache_line().bytes)
+//                            whether each layout's writer isolation holds on
+//                            the machine's line, as one line for a run
 #include <array>
 #include <cstddef>
+#include <string>
 #include <string_view>
 #include <tuple>
+
+#include <fmt/core.h>
 
 #include "layouts/concepts.hpp"
 #include "layouts/packed.hpp"
 #include "layouts/padded.hpp"
 #include "layouts/per_thread.hpp"
+#include "platform/cache_line.hpp"
 
 namespace lockstep::layouts {
 
@@ -74,6 +81,33 @@ constexpr const layout_info* find_layout(std::string_view name) noexcept {
   for (const auto& info : all_layout_info)
     if (info.name == name) return &info;
   return nullptr;
+}
+
+// Whether a layout keeps its writers on separate lines of a machine whose
+// cache line is `line_bytes`: it claims isolation (not packed) and its blocks
+// are at least a line (every size here is a power of two, so a block is then
+// a whole number of lines, aligned to them).
+constexpr bool isolates_writers(const layout_info& layout, std::size_t line_bytes) noexcept {
+  return layout.writer_isolation != 0 && layout.writer_isolation >= line_bytes;
+}
+
+// One line for a run's summary and context: that every layout claiming writer
+// isolation has it on this line, or which do not and what that means for
+// what they measure (their claim is compile-time; the line is the machine's).
+inline std::string writer_isolation_note(std::size_t line_bytes) {
+  std::string narrower;
+  for (const layout_info& layout : all_layout_info) {
+    if (layout.writer_isolation == 0 || isolates_writers(layout, line_bytes)) continue;
+    narrower += fmt::format("{}{} ({} bytes)", narrower.empty() ? "" : ", ", layout.name, layout.writer_isolation);
+  }
+  if (narrower.empty())
+    return fmt::format("holds: every layout that keeps writers apart does so on this machine's {}-byte cache line",
+                       line_bytes);
+  return fmt::format(
+      "does not hold for {}: blocks narrower than this machine's {}-byte cache line, so two participants' values "
+      "share a line and these layouts measure false sharing like packed, not its absence (the primitives' own "
+      "words are {}-byte aligned too)",
+      narrower, line_bytes, platform::kCacheLine);
 }
 
 namespace detail {

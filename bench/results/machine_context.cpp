@@ -18,6 +18,7 @@
 
 #include "bench/results/build_info.hpp"
 #include "bench/results/machine_state_context.hpp"
+#include "platform/cache_line.hpp"
 #include "platform/clock.hpp"
 #include "platform/cpu_identity.hpp"
 #include "platform/thread_accounting.hpp"
@@ -122,7 +123,17 @@ nlohmann::json machine_context(const platform::topology& machine) {
                               : "unavailable (no se.nr_migrations in /proc/self/task/TID/sched): "
                                 "migrations_per_kstep and cross_core_csw_pct are omitted";
   add_machine_state(context, machine.affinity());
+  const nlohmann::json constants = machine_constants();
+  for (const auto& [key, value] : constants.items()) context[key] = value;
   return context;
+}
+
+nlohmann::json machine_constants() {
+  nlohmann::json constants = nlohmann::json::object();
+  const platform::cache_line_reading line = platform::machine_cache_line();
+  constants["cache_line_bytes"] = std::to_string(line.bytes);
+  constants["cache_line_source"] = line.source;
+  return constants;
 }
 
 

@@ -32,13 +32,19 @@ using context_map = std::map<std::string, std::string>;
 // topology_cpu_l3, topology_cpu_numa_node, topology_cpu_core, topology_cpu_kind (comma lists,
 // position = the CPU's number; platform/topology.hpp, cpu_table), hwloc_version,
 // benchmark_version, boost_version, clocksource, migrations (available or why
-// not), and the machine's state: governor, boost, SMT, isolated CPUs, IRQs,
+// not), the machine's state: governor, boost, SMT, isolated CPUs, IRQs,
 // huge pages, the frequency during the command (add_machine_state,
-// bench/results/machine_state_context.hpp, for the CPUs of the affinity set).
-// Values the machine cannot give are "unavailable".
+// bench/results/machine_state_context.hpp, for the CPUs of the affinity set),
+// and machine_constants()'s keys. Values the machine cannot give are
+// "unavailable".
 // Every value is a string but num_cpus, a whole number as Google Benchmark
 // writes it (a reader of either file sees one type).
 nlohmann::json machine_context(const platform::topology& machine);
+
+// The constants a result's times depend on that lockstep reads on the machine
+// instead of compiling in:
+//   cache_line_bytes, cache_line_source   platform::machine_cache_line()
+nlohmann::json machine_constants();
 
 // Sets (or replaces) these keys in a result document's context.
 void merge_into_result(nlohmann::json& result, const context_map& keys);

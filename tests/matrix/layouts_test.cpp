@@ -277,6 +277,36 @@ TEST(LayoutRegistry, NamesOnceAndOneLineDescriptions) {
   }
 }
 
+// The writer-isolation facts are compile-time strides; the machine's line is
+// read at run time. On a 64-byte line every isolating layout holds; on a
+// wider one (Apple M-series: 128 bytes; Fujitsu A64FX: 256) the narrower
+// layouts are named as not isolating, with what they then measure.
+TEST(LayoutRegistry, WriterIsolationAgainstTheMachinesLine) {
+  const layout_info& packed_info = *find_layout("packed");
+  const layout_info& padded64_info = *find_layout("padded64");
+  const layout_info& padded128_info = *find_layout("padded128");
+  const layout_info& per_thread_info = *find_layout("per_thread");
+  EXPECT_FALSE(isolates_writers(packed_info, 64)) << "packed shares lines on purpose";
+  EXPECT_TRUE(isolates_writers(padded64_info, 64));
+  EXPECT_TRUE(isolates_writers(per_thread_info, 64));
+  EXPECT_FALSE(isolates_writers(padded64_info, 128));
+  EXPECT_TRUE(isolates_writers(padded128_info, 128));
+  EXPECT_FALSE(isolates_writers(padded128_info, 256));
+
+  const std::string holds = writer_isolation_note(64);
+  EXPECT_EQ(holds.rfind("holds", 0), 0U) << holds;
+  EXPECT_NE(holds.find("64-byte"), std::string::npos) << holds;
+
+  const std::string apple = writer_isolation_note(128);
+  EXPECT_EQ(apple.rfind("does not hold for padded64 (64 bytes), per_thread (64 bytes):", 0), 0U) << apple;
+  EXPECT_EQ(apple.find("padded128"), std::string::npos) << apple;
+  EXPECT_NE(apple.find("128-byte cache line"), std::string::npos) << apple;
+
+  const std::string a64fx = writer_isolation_note(256);
+  EXPECT_EQ(a64fx.rfind("does not hold for padded64 (64 bytes), padded128 (128 bytes), per_thread (64 bytes):", 0), 0U)
+      << a64fx << " (packed claims no isolation to lose)";
+}
+
 // A layout lacking one trait is not a registered_layout (the registry then
 // fails to compile, naming the trait).
 struct lacks_writer_isolation {

@@ -49,7 +49,8 @@ TEST(Fingerprint, RunC2cAndDelayWriteOneMachineContext) {
   // context); run and delay carry every one of those keys with the same value.
   const nlohmann::json reference = context_of(c2c);
   for (const char* key : {"cpu_model", "hypervisor", "kernel", "topology", "num_cpus", "host_name", "compiler",
-                          "git_revision", "hwloc_version", "lockstep_version", "lockstep_schema"})
+                          "git_revision", "hwloc_version", "lockstep_version", "lockstep_schema", "cache_line_bytes",
+                          "cache_line_source"})
     EXPECT_TRUE(reference.contains(key)) << key;
   // The machine state's per-command readings (the frequency during the
   // command, the IRQs' effective CPUs) are every file's own: present, not equal.
