@@ -1,6 +1,6 @@
 #pragma once
 // futex_spin: the suite's own barrier. Sense-reversing, spins with the CPU's
-// pause for a bounded budget, then sleeps on a futex; the last arriver calls
+// spin hint for a bounded time, then sleeps on a futex; the last arriver calls
 // FUTEX_WAKE only when someone sleeps; the spin budget adapts to
 // oversubscription. One primitive for both regimes: spin like the pure-spin
 // barriers when every participant has a CPU, block like the blocking ones when
@@ -27,9 +27,12 @@
 // futex_wakes per FUTEX_WAKE issued, yields per sched_yield. timeouts stay 0
 // (it never times out). Every futex wait is counted (kCountsFutexWaits).
 //
-// Budget: a waiter spins `budget` pause iterations: kDedicatedSpin when the
-// participants fit in the union of their affinity sets (learned during phase
-// 0; see cpu_union), kOversubscribedSpin when they do not. Oversubscribed, it
+// Budget: a waiter spins for a time, in polls calibrated to this CPU at
+// start-up (futex_spin_budgets below; platform/wait_calibration.hpp): about
+// one futex round trip, itself measured at start-up, when the participants
+// fit in the union of their affinity sets (learned during phase 0; see
+// cpu_union), as the channels do (sync/wait_policy.hpp says why the whole
+// round trip); about kOversubscribedSpinNs when they do not. Oversubscribed, it
 // then yields its CPU up to kOversubscribedYields times before it sleeps: the
 // participant it waits for is most likely runnable on this very CPU, and
 // sched_yield hands the CPU over for the price of a syscall, where a futex
@@ -43,7 +46,7 @@
 // out and it sleeps too), settling into sleeping every phase even with a core
 // per participant.
 //
-// Across processes (template parameter futex_scope, sync/futex.hpp): with
+// Across processes (template parameter futex_scope, platform/futex.hpp): with
 // futex_scope::process_shared the barrier lives in memory that several
 // processes map (distributed/shm_window.hpp places it in an MPI-3 shared
 // window); it then holds everything inline (no heap pointer another process
@@ -82,12 +85,31 @@
 #include <type_traits>
 
 #include "platform/cache_line.hpp"
-#include "platform/cpu_relax.hpp"
+#include "platform/futex.hpp"
+#include "platform/spin_budget.hpp"
+#include "platform/wait_calibration.hpp"
 #include "sync/affinity.hpp"
 #include "sync/concepts.hpp"
-#include "sync/futex.hpp"
+#include "sync/wait_policy.hpp"
 
 namespace lockstep::sync {
+
+// With more participants than CPUs, the thread a waiter waits for is likely
+// queued behind it on its own CPU: spin only long enough to catch a phase
+// that is completing on another CPU right now, then get out of its way.
+// 500 ns is what the earlier fixed count (32 pauses) lasted on the
+// development VM (15 ns a PAUSE).
+inline constexpr double kOversubscribedSpinNs = 500;
+// futex_spin's budgets on a machine so calibrated: dedicated, polls lasting one
+// futex round trip (the channels' figure: channel_budgets); oversubscribed,
+// polls lasting kOversubscribedSpinNs, then the channels' kOversubscribedYields
+// yields (each hands the CPU to a runnable participant, ~1 us when one is
+// queued here, ~0.3 us when not: 64 bound the wait at about two futex round
+// trips).
+inline wait_budgets futex_spin_budgets(const platform::wait_calibration& machine) noexcept {
+  return {channel_budgets(machine).dedicated,
+          wait_budget{machine.polls_lasting(kOversubscribedSpinNs), kOversubscribedYields}};
+}
 
 // Where the phase's words live (the template parameter of basic_futex_spin).
 //  * one_line: the arrival counter, the sense word every spinner reads and
@@ -130,45 +152,37 @@ static_assert(offsetof(futex_spin_phase<phase_lines::split_lines>, sleepers) / p
               "split_lines: the sleepers count shares the sense word's line");
 }  // namespace detail
 
-template <phase_lines Lines, futex_scope Scope = futex_scope::process_private>
+template <phase_lines Lines, platform::futex_scope Scope = platform::futex_scope::process_private>
 class basic_futex_spin {
   using phase_word = detail::futex_spin_phase<Lines>;
-  static constexpr bool kInline = Scope == futex_scope::process_shared;
+  static constexpr bool kInline = Scope == platform::futex_scope::process_shared;
 
  public:
   static constexpr std::string_view kName = Lines == kDefaultPhaseLines ? "futex_spin" : phase_word::kAlternativeName;
   static constexpr std::string_view kDescription =
       Lines == phase_lines::one_line
-          ? "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
+          ? "sense-reversing barrier: bounded spin (a time), then FUTEX_WAIT; wakes only when someone sleeps; "
             "spin budget adapts to oversubscription; counter and sense on one line"
-          : "sense-reversing barrier: bounded pause-spin, then FUTEX_WAIT; wakes only when someone sleeps; "
+          : "sense-reversing barrier: bounded spin (a time), then FUTEX_WAIT; wakes only when someone sleeps; "
             "spin budget adapts to oversubscription; counter and sense on separate lines";
   static constexpr phase_lines kPhaseLines = Lines;
   static constexpr primitive_kind kKind = primitive_kind::barrier;
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // at most kDedicatedSpin pauses (~10-45 us), then yield or sleep
+  // At most one futex round trip of spinning (measured at start-up, capped at
+  // platform::kLongestRoundTripSpinNs), then yield or sleep.
+  static constexpr bool kSpinsLong = false;
   static constexpr bool kVisibleToTsan = true;  // C++ atomics
 
-  // Pause iterations before sleeping when every participant has a CPU. A pause
-  // costs about 10-45 ns (Zen 2 .. Skylake), so this is roughly 10-45 us: about
-  // the price of a futex sleep plus wake-up in a VM (a syscall on each side and
-  // an IPI), which is where spinning longer stops paying (competitive spinning).
-  // To be refined with a measurement on a quiet machine.
-  static constexpr std::uint32_t kDedicatedSpin = 1024;
-  // With more participants than CPUs, the thread we wait for is likely queued
-  // behind us on our own CPU: spin only long enough to catch a phase that is
-  // completing on the other CPU right now, then get out of its way.
-  static constexpr std::uint32_t kOversubscribedSpin = 32;
-  // Yields before sleeping when oversubscribed: each hands the CPU to a
-  // runnable participant (~1 us when one is queued here, ~0.3 us when not), so
-  // 64 of them bound the wait at about the cost of two futex round trips.
-  static constexpr std::uint32_t kOversubscribedYields = 64;
   // The most participants a process-shared barrier holds (its slots are inline).
   static constexpr unsigned kSharedParticipantsMax = 256;
 
-  explicit basic_futex_spin(unsigned participants) : participants_(participants), slots_(make_slots(participants)) {
+  // `budgets`: this machine's calibrated ones (futex_spin_budgets) unless a
+  // test passes others.
+  explicit basic_futex_spin(unsigned participants,
+                            const wait_budgets& budgets = futex_spin_budgets(platform::machine_wait_calibration()))
+      : participants_(participants), budgets_(budgets), slots_(make_slots(participants)) {
     assert(participants >= 1);
     assert(!kInline || participants <= kSharedParticipantsMax);
     phase_.remaining.store(participants, std::memory_order_relaxed);  // published by the thread start
@@ -183,13 +197,14 @@ class basic_futex_spin {
     slot& mine = slots_[self.id];
     if (mine.arrivals == 0) {
       // Phase 0: add our CPUs to the union; (1) publishes it with our arrival.
+      // Until the union is known, wait as if every participant had a CPU.
       cpus_.add_calling_thread();
+      mine.budget = budgets_.dedicated;
     } else if (mine.arrivals == 1) {
       // Phase 0 is over, so every participant's add is visible ((1) then (3)/(4)).
       const unsigned cpus = cpus_.count();
       const bool oversubscribed = cpus != 0 && participants_ > cpus;
-      mine.budget = oversubscribed ? kOversubscribedSpin : kDedicatedSpin;
-      mine.yields = oversubscribed ? kOversubscribedYields : 0;
+      mine.budget = oversubscribed ? budgets_.oversubscribed : budgets_.dedicated;
     }
     ++mine.arrivals;
     const std::uint32_t sense = mine.sense ^ 1u;  // the value the sense word takes when this phase ends
@@ -209,20 +224,19 @@ class basic_futex_spin {
       phase_.sense.store(sense, std::memory_order_seq_cst);
       // (7) seq_cst: see (3) and (5).
       if (phase_.sleepers.load(std::memory_order_seq_cst) != 0) {
-        futex_wake<Scope>(phase_.sense);
+        platform::futex_wake<Scope>(phase_.sense);
         ++self.counters.futex_wakes;
       }
       return;
     }
 
     // Spin. (4) acquire: pairs with the release half of (3).
-    for (std::uint32_t spin = 0; spin < mine.budget; ++spin) {
-      if (phase_.sense.load(std::memory_order_acquire) == sense) return;
-      platform::cpu_relax();
-    }
+    if (platform::spin_until([&] { return phase_.sense.load(std::memory_order_acquire) == sense; },
+                             mine.budget.spins))
+      return;
     // Yield (oversubscribed only). (4') acquire: as (4), pairs with the
     // release half of (3).
-    for (std::uint32_t yield = 0; yield < mine.yields; ++yield) {
+    for (std::uint32_t yield = 0; yield < mine.budget.yields; ++yield) {
       sched_yield();
       ++self.counters.yields;
       if (phase_.sense.load(std::memory_order_acquire) == sense) return;
@@ -236,7 +250,7 @@ class basic_futex_spin {
     // kernel repeats atomically inside FUTEX_WAIT. A spurious or early return
     // (EINTR, EAGAIN, a wake-up for another word value) just loops here.
     while (phase_.sense.load(std::memory_order_seq_cst) != sense) {
-      futex_wait<Scope>(phase_.sense, sense ^ 1u);
+      platform::futex_wait<Scope>(phase_.sense, sense ^ 1u);
       ++self.counters.futex_waits;
     }
     // (8) relaxed: the count only steers (7); a late decrement costs at most
@@ -249,8 +263,7 @@ class basic_futex_spin {
   // Per participant, touched only by its own thread.
   struct alignas(platform::kCacheLine) slot {
     std::uint32_t sense = 0;
-    std::uint32_t budget = kDedicatedSpin;
-    std::uint32_t yields = 0;
+    wait_budget budget;  // set at phase 0 (dedicated), fixed at phase 1 (by regime)
     std::uint64_t arrivals = 0;
   };
   static_assert(alignof(phase_word) >= platform::kCacheLine, "the phase words must not share a line with anything else");
@@ -267,6 +280,7 @@ class basic_futex_spin {
   }
 
   const unsigned participants_;
+  const wait_budgets budgets_;
   phase_word phase_;
   slot_storage slots_;
   cpu_union cpus_;
@@ -280,7 +294,7 @@ static_assert(phase_barrier<futex_spin>);
 static_assert(phase_barrier<futex_spin_alternative>);
 
 // The registry's futex_spin for processes that share its memory.
-using process_shared_futex_spin = basic_futex_spin<kDefaultPhaseLines, futex_scope::process_shared>;
+using process_shared_futex_spin = basic_futex_spin<kDefaultPhaseLines, platform::futex_scope::process_shared>;
 static_assert(phase_barrier<process_shared_futex_spin>);
 static_assert(std::is_trivially_destructible_v<process_shared_futex_spin>,
               "a process-shared futex_spin owns no resource (no heap pointer another process could not follow)");

@@ -40,8 +40,8 @@
 //   (checked for 2..24 masses on 2..min(2s, 48) participants: 575 graphs,
 //   d <= 3 everywhere); any graph that does is still correct, through them.
 // Progress: blocking. A consumer polls its producer's epoch word by the
-// regime policy of wait_policy.hpp (dedicated: spin about one measured futex
-// round trip, kDedicatedSpins; oversubscribed: no spin, kOversubscribedYields
+// regime policy of wait_policy.hpp (dedicated: spin about one futex round
+// trip, measured at start-up; oversubscribed: no spin, kOversubscribedYields
 // yields), then sleeps on that word (FUTEX_WAIT): the word of the first
 // producer it still misses, since it receives its producers one by one. The
 // producer wakes it. A producer held back by an acknowledgement waits by
@@ -88,7 +88,7 @@
 #include "platform/cache_line.hpp"
 #include "sync/channel_rows.hpp"
 #include "sync/concepts.hpp"
-#include "sync/futex.hpp"
+#include "platform/futex.hpp"
 #include "sync/storage.hpp"
 #include "sync/wait_policy.hpp"
 
@@ -105,7 +105,7 @@ class basic_mailbox {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then sleeps
+  static constexpr bool kSpinsLong = false;  // spins about a measured futex round trip, then sleeps
   static constexpr bool kVisibleToTsan = true;  // C++ atomics and futexes
   static constexpr std::size_t kDepth = Depth;
   static_assert(Depth >= 2, "a producer and a consumer that depend on each other need two slots (see the header)");
@@ -214,7 +214,7 @@ class basic_mailbox {
       detail::channel_overrun(kName, self.id, stage - Depth, version_of(old));
     if ((old & kWaiterBit) != 0) {
       // (P3) after (P2): see the header.
-      futex_wake<Storage::kScope>(line.epoch, INT_MAX);
+      platform::futex_wake<Storage::kScope>(line.epoch, INT_MAX);
       ++self.counters.futex_wakes;
     }
     mine.next_publish = stage + 1;
@@ -349,7 +349,7 @@ class basic_mailbox {
             expected != (previous | kWaiterBit))
           continue;
         // (C5) sleeps only while the word still holds previous | kWaiterBit.
-        futex_wait<Storage::kScope>(line.epoch, previous | kWaiterBit);
+        platform::futex_wait<Storage::kScope>(line.epoch, previous | kWaiterBit);
         ++self.counters.futex_waits;
       }
     };

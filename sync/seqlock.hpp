@@ -182,7 +182,7 @@ class basic_seqlock {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then yield (wait_policy.hpp)
+  static constexpr bool kSpinsLong = false;  // spins about a measured futex round trip, then yields (wait_policy.hpp)
   static constexpr bool kVisibleToTsan = true;  // C++ atomics (payload orders strengthened under TSan)
   static constexpr std::size_t kDepth = Depth;
   static_assert(Depth >= 2, "back-pressure needs at least two slots per producer");

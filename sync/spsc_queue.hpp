@@ -59,7 +59,7 @@ class basic_spsc_queue {
   static constexpr bool kPureSpin = false;
   static constexpr bool kMayLoseWakeups = false;
   static constexpr bool kCountsFutexWaits = true;
-  static constexpr bool kSpinsLong = false;  // about a futex round trip of pauses (~50-80 us), then yield (wait_policy.hpp)
+  static constexpr bool kSpinsLong = false;  // spins about a measured futex round trip, then yields (wait_policy.hpp)
   static constexpr bool kVisibleToTsan = true;  // Boost.Lockfree: C++ atomics
   static constexpr std::size_t kDepth = Depth;
 

@@ -29,13 +29,13 @@
 #include <utility>
 #include <vector>
 
-#include "sync/futex.hpp"
+#include "platform/futex.hpp"
 
 namespace lockstep::sync {
 
 class heap_storage {
  public:
-  static constexpr futex_scope kScope = futex_scope::process_private;
+  static constexpr platform::futex_scope kScope = platform::futex_scope::process_private;
 
   template <class T>
   T* make_array(std::size_t count) {
@@ -63,7 +63,7 @@ class heap_storage {
 
 class process_shared_storage {
  public:
-  static constexpr futex_scope kScope = futex_scope::process_shared;
+  static constexpr platform::futex_scope kScope = platform::futex_scope::process_shared;
 
   // `block` must be aligned to at least the largest alignment handed out (a
   // prefetch pair, 128 bytes). An MPI shared window's base is not: Open MPI

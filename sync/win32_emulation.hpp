@@ -43,7 +43,7 @@
 #include <span>
 
 #include "sync/concepts.hpp"
-#include "sync/futex.hpp"
+#include "platform/futex.hpp"
 
 namespace lockstep::sync::win32 {
 
@@ -74,7 +74,7 @@ class manual_reset_event {
     // through set() + reset() still see that it was released.
     while (!state_.compare_exchange_weak(state, ((state >> 1) + 1) << 1 | kSignalled, std::memory_order_seq_cst))
       ;
-    futex_wake(state_);
+    platform::futex_wake(state_);
     ++counters.futex_wakes;
   }
 
@@ -96,7 +96,7 @@ class manual_reset_event {
         remaining = deadline - std::chrono::steady_clock::now();
         if (remaining.count() <= 0) break;
       }
-      futex_wait(state_, seen, remaining);
+      platform::futex_wait(state_, seen, remaining);
       ++counters.futex_waits;
       seen = state_.load(std::memory_order_seq_cst);
       // Released by a set() since we began waiting, even if reset() followed.

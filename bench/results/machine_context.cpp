@@ -22,6 +22,7 @@
 #include "platform/clock.hpp"
 #include "platform/cpu_identity.hpp"
 #include "platform/thread_accounting.hpp"
+#include "platform/wait_calibration.hpp"
 
 #ifndef LOCKSTEP_BENCHMARK_VERSION
 #define LOCKSTEP_BENCHMARK_VERSION "unavailable"
@@ -133,6 +134,13 @@ nlohmann::json machine_constants() {
   const platform::cache_line_reading line = platform::machine_cache_line();
   constants["cache_line_bytes"] = std::to_string(line.bytes);
   constants["cache_line_source"] = line.source;
+  const platform::wait_calibration& waits = platform::machine_wait_calibration();
+  constants["spin_hint"] = std::string(waits.hint);
+  constants["spin_poll_ns"] = fmt::format("{:.2f}", waits.poll_ns);
+  constants["futex_round_trip_ns"] = fmt::format("{:.0f}", waits.futex.ns);
+  constants["futex_round_trip_p90_ns"] = fmt::format("{:.0f}", waits.futex.p90_ns);
+  constants["futex_round_trip_source"] = waits.futex.how;
+  constants["spin_budget_polls"] = std::to_string(waits.round_trip_spin_polls());
   return constants;
 }
 

@@ -15,8 +15,10 @@
 // host_name and num_cpus with the same figures from here).
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <map>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "platform/topology.hpp"
@@ -41,10 +43,24 @@ using context_map = std::map<std::string, std::string>;
 // writes it (a reader of either file sees one type).
 nlohmann::json machine_context(const platform::topology& machine);
 
-// The constants a result's times depend on that lockstep reads on the machine
-// instead of compiling in:
+// The constants a result's times depend on that lockstep reads or measures on
+// the machine instead of compiling in:
 //   cache_line_bytes, cache_line_source   platform::machine_cache_line()
+//   spin_hint                             the instruction a spin poll issues (platform/cpu_relax.hpp)
+//   spin_poll_ns                          one poll of a spin loop, measured at start-up
+//   futex_round_trip_ns, futex_round_trip_p90_ns, futex_round_trip_source
+//                                         the futex hand-over's median and 90th percentile,
+//                                         measured at start-up (or the assumed figure, and why)
+//   spin_budget_polls                     the polls a dedicated wait spins: the 90th percentile
+//                                         round trip at spin_poll_ns (sync/wait_policy.hpp)
+// from platform::machine_wait_calibration(), measured once per process (its
+// first call measures: 1-60 ms).
 nlohmann::json machine_constants();
+// The keys of machine_constants() that each process measures afresh: two
+// runs on one machine write different values (as c2c_one_way_ns), so they are
+// not fingerprint keys and the one-machine check skips them.
+inline constexpr std::array<std::string_view, 5> kMeasuredContextKeys = {
+    "spin_poll_ns", "futex_round_trip_ns", "futex_round_trip_p90_ns", "futex_round_trip_source", "spin_budget_polls"};
 
 // Sets (or replaces) these keys in a result document's context.
 void merge_into_result(nlohmann::json& result, const context_map& keys);

@@ -1,6 +1,8 @@
 #pragma once
 // Linux futex calls on a std::atomic<std::uint32_t>, for the blocking
-// primitives in sync/ (futex_spin, the Win32 event emulation).
+// primitives in sync/ (futex_spin, mailbox, the Win32 event emulation) and
+// for the start-up measurement of a futex round trip
+// (platform/wait_calibration.hpp).
 //
 // What it is: thin wrappers over syscall(SYS_futex, ...). By default with the
 // PRIVATE flag (futex_scope::process_private: the word is never shared across
@@ -36,7 +38,7 @@
 #include <sys/syscall.h>
 #include <unistd.h>
 
-namespace lockstep::sync {
+namespace lockstep::platform {
 
 static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t),
               "the futex word must be exactly a 32-bit integer");
@@ -106,4 +108,4 @@ inline int futex_wake(std::atomic<std::uint32_t>& word, int count = INT_MAX) noe
   return static_cast<int>(woken);
 }
 
-}  // namespace lockstep::sync
+}  // namespace lockstep::platform

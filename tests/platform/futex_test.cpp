@@ -1,4 +1,4 @@
-// sync/futex.hpp: a futex call that fails for good ends the process with a
+// platform/futex.hpp: a futex call that fails for good ends the process with a
 // line instead of returning "interrupted" to a wait loop that would spin on
 // it for ever.
 #include <sys/mman.h>
@@ -10,13 +10,13 @@
 #include <chrono>
 #include <cstdint>
 
-#include "sync/futex.hpp"
+#include "platform/futex.hpp"
 
 namespace {
 
-using lockstep::sync::futex_result;
-using lockstep::sync::futex_wait;
-using lockstep::sync::futex_wake;
+using lockstep::platform::futex_result;
+using lockstep::platform::futex_wait;
+using lockstep::platform::futex_wake;
 
 // A word in a page nobody may read: the kernel's read of it fails (EFAULT)
 // on every call. Nothing in this process touches the word itself.
