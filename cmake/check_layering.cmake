@@ -24,7 +24,9 @@ set(allowed_layouts              layouts platform)
 # (target lockstep::step) reach into sync/ and layouts/.
 set(allowed_step                 kernels sync layouts platform)
 set(allowed_distributed          distributed kernels sync layouts platform)
-set(allowed_bench/results        bench/results platform)
+# An entry's spec (bench/results/entry_spec.hpp) carries its model
+# (kernels/model_choice.hpp), which every reader of the results reads.
+set(allowed_bench/results        bench/results kernels platform)
 set(allowed_bench/probes         bench/probes kernels sync layouts platform)
 set(allowed_bench/probe_reports  bench/probe_reports bench/results bench/probes kernels sync layouts platform)
 set(allowed_bench/delay          bench/delay bench/results bench/probes kernels sync layouts platform)

@@ -31,13 +31,4 @@ std::vector<derived_ratio> derived_ratios(const std::map<std::string, double>& c
   return ratios;
 }
 
-bool has_derived_ratios(const std::map<std::string, std::string>& fields) {
-  const auto field = [&](const char* key) {
-    const auto found = fields.find(key);
-    return found == fields.end() ? std::string{} : found->second;
-  };
-  return (field("kind") == "rk4" && field("variant") != "serial") || field("kind") == "overhead";
-}
-
-
 }  // namespace lockstep::bench

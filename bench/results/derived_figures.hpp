@@ -6,7 +6,8 @@
 //   vs_serial  = ns_per_step / the run's serial step (rk4/serial median)
 //   vs_c2c     = sync_ns_per_stage / the run's core-to-core one-way latency
 //                (c2c/pin:compact/threads:2 median)
-// Both only on the composed step's entries (rk4/sync:..., overhead/...).
+// Both only on the composed step's entries (rk4/sync:..., overhead/...:
+// entry_spec::is_parallel_step, bench/results/entry_spec.hpp).
 // vs_c2c_paired divides by the latency measured in the entry's own call
 // (rk4_entries.cpp) and is measured, not derived after the run.
 #include <map>
@@ -34,10 +35,6 @@ struct derived_ratio {
 // The derived ratios of one row of counters, each present only when its
 // counter and its calibration are (and the calibration is positive).
 std::vector<derived_ratio> derived_ratios(const std::map<std::string, double>& counters, const calibrations& run);
-
-// Whether an entry, by its name's fields (parse_entry_name), carries the
-// derived ratios: the composed step's entries, not the calibrations.
-bool has_derived_ratios(const std::map<std::string, std::string>& fields);
 
 // "12.3 ns", "4.56 us", "7.89 ms": platform/format.hpp's, the one nanosecond
 // formatter of the C++ side.

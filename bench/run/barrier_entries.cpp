@@ -26,7 +26,7 @@ void barrier_entry(benchmark::State& state, harness_state& harness, const entry_
     for (std::uint64_t episode = 0; episode < count; ++episode) barrier.arrive_and_wait(self);
   };
   entry_call call{state, harness, spec.name(), sync::find_primitive(info.name), plan, harness.settings.accounting,
-                  "episode", {}};
+                  spec.unit(), {}};
   const auto result = measure_entry(call, team_call_runner(team, slots, plan, harness.settings, episodes));
   if (!result) return;
 
@@ -42,27 +42,27 @@ void barrier_entry(benchmark::State& state, harness_state& harness, const entry_
   }
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
   state.counters["oversubscribed"] = plan.oversubscribed ? 1.0 : 0.0;
-  set_accounting_counters(state, *result, "episode");
+  set_accounting_counters(state, *result, spec.unit());
 }
 
 }  // namespace
 
-std::vector<std::string> register_barrier_benchmarks(const run_selection& selection, harness_state& harness) {
-  std::vector<std::string> registered;
+std::vector<entry_spec> register_barrier_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<entry_spec> registered;
   sync::for_each_primitive([&]<class Primitive>() {
     const std::string name(Primitive::kName);
     if (std::find(selection.syncs.begin(), selection.syncs.end(), name) == selection.syncs.end()) return;
     for (unsigned threads : selection.threads) {
       if (threads < 2) continue;  // one participant never waits: an episode of nothing
       for (platform::placement pin : selection.pins) {
-        const entry_spec spec{entry_kind::barrier, name, {}, pin, threads};
+        const entry_spec spec = entry_spec::barrier_episode(name, pin, threads);
         auto* entry = benchmark::RegisterBenchmark(spec.name().c_str(), [&harness, spec](benchmark::State& state) {
           barrier_entry<Primitive>(state, harness, spec);
         });
         constexpr sync::primitive_info info = sync::info_of<Primitive>();
         size_entry(*entry, &info, threads, harness);
         entry->UseManualTime()->Unit(benchmark::kNanosecond);
-        registered.push_back(spec.name());
+        registered.push_back(spec);
         // The entry's side of a paired comparison (paired_blocks.hpp).
         using episode_barrier = sync::as_barrier_t<Primitive>;
         harness.block_runners[spec.name()] =

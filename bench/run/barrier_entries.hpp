@@ -28,8 +28,8 @@
 
 namespace lockstep::bench {
 
-// Registers one entry per selected (sync, pin, threads); returns their names.
+// Registers one entry per selected (sync, pin, threads); returns their specs.
 // Unknown names must have been rejected before (bench/cli/run.cpp validates them).
-std::vector<std::string> register_barrier_benchmarks(const run_selection& selection, harness_state& harness);
+std::vector<entry_spec> register_barrier_benchmarks(const run_selection& selection, harness_state& harness);
 
 }  // namespace lockstep::bench

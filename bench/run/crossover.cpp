@@ -222,7 +222,7 @@ std::optional<std::string> ceiling_line(const crossover_sweep& sweep, const cros
       "Ceiling at {} threads (pin:{}), {} masses: {} blocks of the chain stepped at once with no exchange and no "
       "sync (what the machine gives an even split) give {:.2f}x [{:.2f}, {:.2f}] the serial "
       "step's speed",
-      ceiling.threads, ceiling.pin, at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
+      ceiling.threads, platform::to_string(ceiling.pin), at->masses, ceiling.threads, at->speedup.median, at->speedup.low,
       at->speedup.high);
   // Each primitive that leads here (the choice, and a rival tied with it).
   for (const auto& series : sweep.series) {
@@ -284,7 +284,8 @@ std::vector<std::string> crossover_lines(const crossover_sweep& sweep) {
   for (const auto& series : sweep.series) by_threads[series.threads].push_back(&series);
   std::vector<std::string> lines;
   for (const auto& [threads, all] : by_threads) {
-    std::string line = fmt::format("Crossover at {} threads (pin:{}): ", threads, all.front()->pin);
+    std::string line = fmt::format("Crossover at {} threads (pin:{}): ", threads,
+                                   platform::to_string(all.front()->pin));
     bool pays_off = false;
     std::size_t set_aside = 0;
     for (std::size_t index = 0; index < all.size(); ++index) {
@@ -330,7 +331,7 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
     }
     const bool crossed = found.masses.has_value();
     crossovers.push_back({{"threads", series.threads},
-                          {"pin", series.pin},
+                          {"pin", std::string(platform::to_string(series.pin))},
                           {"sync", series.sync},
                           {"layout", series.layout},
                           {"leader", series.leader},
@@ -358,7 +359,7 @@ nlohmann::json crossover_json(const crossover_sweep& sweep) {
     }
     const crossover_sweep_point* quoted = ceiling_quoted(sweep, ceiling);
     ceilings.push_back({{"threads", ceiling.threads},
-                        {"pin", ceiling.pin},
+                        {"pin", std::string(platform::to_string(ceiling.pin))},
                         {"quoted_masses", quoted != nullptr ? nlohmann::json(quoted->masses) : nlohmann::json(nullptr)},
                         {"points", points}});
   }

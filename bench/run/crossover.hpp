@@ -35,6 +35,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/results/paired_ratio.hpp"
+#include "platform/placement.hpp"
 
 namespace lockstep::bench {
 
@@ -85,7 +86,7 @@ struct crossover_sweep_point {
 
 struct crossover_series {
   unsigned threads = 2;
-  std::string pin;
+  platform::placement pin = platform::placement::compact;
   std::string sync;
   std::string layout;
   // The run's choice at this thread count, or the rival its pair could not
@@ -115,7 +116,7 @@ struct crossover_series {
 // (rk4_entries.cpp, split_block_runner says why not the batch clock).
 struct crossover_ceiling {
   unsigned threads = 2;
-  std::string pin;
+  platform::placement pin = platform::placement::compact;
   std::vector<crossover_sweep_point> points;
 };
 

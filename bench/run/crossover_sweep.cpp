@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 
+#include "bench/run/ranking.hpp"
 #include "bench/run/rk4_entries.hpp"
 #include "bench/run/run_plan.hpp"
 #include "kernels/rk4.hpp"
@@ -91,15 +92,18 @@ std::vector<std::size_t> plan_ceilings(harness_state& harness, const crossover_s
       return sweep.series[series].threads == ceiling.threads;
     });
     if (!wanted) continue;
-    block_runner_factory factory = chain_split_runner(harness, platform::parse_placement(ceiling.pin),
-                                                      ceiling.threads, masses, ceiling.threads <= cpus);
+    block_runner_factory factory =
+        chain_split_runner(harness, ceiling.pin, ceiling.threads, masses, ceiling.threads <= cpus);
     if (!factory) continue;
-    const std::string name =
-        fmt::format("crossover/model:chain{}/blocks_at_once/pin:{}/threads:{}", masses, ceiling.pin, ceiling.threads);
+    // The ceiling's side is no entry of the run: this key names it among the
+    // harness's block runners only.
+    const std::string name = fmt::format("crossover/model:chain{}/blocks_at_once/pin:{}/threads:{}", masses,
+                                         platform::to_string(ceiling.pin), ceiling.threads);
     harness.units_per_batch[name] = probe_units(factory, harness.settings);
     harness.block_runners[name] = std::move(factory);
     plan.push_back({comparison_kind::crossover,
-                    fmt::format("ceiling pin:{} threads:{} masses:{}", ceiling.pin, ceiling.threads, masses),
+                    fmt::format("ceiling pin:{} threads:{} masses:{}", platform::to_string(ceiling.pin),
+                                ceiling.threads, masses),
                     serial_name, name});
     planned.push_back(index);
   }
@@ -129,14 +133,14 @@ void add_batch(paired_result& into, const paired_result& more, double noise) {
 }
 
 std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices) {
+  const std::vector<ranked_group> ranked = rank_groups(book, entry_kind::rk4);
   std::map<unsigned, std::vector<const headline_choice*>> by_threads;
   for (const auto& choice : choices)
     if (choice.threads > 1) by_threads[choice.threads].push_back(&choice);
-  const std::string compact(platform::to_string(platform::placement::compact));
   std::vector<crossover_series> planned;
   for (const auto& [threads, here] : by_threads) {
     const auto compact_choice = std::find_if(here.begin(), here.end(), [&](const headline_choice* choice) {
-      return choice->pin == compact;
+      return choice->pin == platform::placement::compact;
     });
     const headline_choice& chosen = compact_choice != here.end() ? **compact_choice : *here.front();
     const auto stage_sync_of = [&](crossover_series& series, const std::string& entry) {
@@ -163,20 +167,19 @@ std::vector<crossover_series> plan_crossover_series(const run_book& book, const 
       planned.push_back(tied);
     }
     if (chosen.sync == sync::kBaselinePrimitive) continue;
-    // The baseline on its best layout here: the lowest median.
-    std::optional<measured_entry> best;
-    for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step")) {
-      const captured_entry& entry = *step.entry;
-      if (entry.field("sync") != sync::kBaselinePrimitive || entry.field("pin") != chosen.pin ||
-          entry.field("threads") != std::to_string(threads) || entry.field("model") != chosen.model)
-        continue;
-      if (!best || step.median < best->median) best = step;
-    }
-    if (!best) continue;
+    // The baseline on its best layout here: its first in the choice's group of the ranking.
+    const auto group = std::find_if(ranked.begin(), ranked.end(), [&](const ranked_group& one) {
+      return one.threads == threads && one.model == chosen.model && one.pin == chosen.pin;
+    });
+    if (group == ranked.end()) continue;
+    const auto best = std::find_if(group->entries.begin(), group->entries.end(), [](const measured_entry& step) {
+      return step.entry->spec.sync == sync::kBaselinePrimitive;
+    });
+    if (best == group->entries.end()) continue;
     crossover_series baseline = leader;
     baseline.leader = false;
-    baseline.sync = best->entry->field("sync");
-    baseline.layout = best->entry->field("layout");
+    baseline.sync = best->entry->spec.sync;
+    baseline.layout = best->entry->spec.layout;
     baseline.stage_sync_ns.reset();
     stage_sync_of(baseline, best->entry->name);
     planned.push_back(baseline);
@@ -239,27 +242,24 @@ crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_s
       stop_going("budget");
       break;
     }
-    entry_spec serial{entry_kind::serial, {}, {}, platform::placement::none, 1};
-    serial.masses = masses;
-    const std::string serial_name = serial.name();
+    const std::string serial_name = entry_spec::serial_step(kernels::model_choice{masses}).name();
     std::vector<comparison> plan;
     std::vector<std::size_t> which;
     for (std::size_t index = 0; index < sweep.series.size(); ++index) {
       if (!going[index]) continue;
       const crossover_series& one = sweep.series[index];
-      const platform::placement pin = platform::parse_placement(one.pin);
+      const platform::placement pin = one.pin;
       const bool oversubscribed = one.threads > cpus;
       block_runner_factory factory =
           chain_step_runner(harness, one.sync, one.layout, pin, one.threads, masses, !oversubscribed);
       if (!factory) continue;  // too few masses for the threads at this size: the next one
-      entry_spec parallel{entry_kind::rk4, one.sync, one.layout, pin, one.threads};
-      parallel.masses = masses;
-      const std::string name = parallel.name();
+      const std::string name =
+          entry_spec::parallel_step(one.sync, one.layout, pin, one.threads, kernels::model_choice{masses}).name();
       harness.units_per_batch[name] = probe_units(factory, harness.settings);
       harness.block_runners[name] = std::move(factory);
       plan.push_back({comparison_kind::crossover,
                       fmt::format("crossover sync:{} layout:{} pin:{} threads:{} masses:{}", one.sync, one.layout,
-                                  one.pin, one.threads, masses),
+                                  platform::to_string(one.pin), one.threads, masses),
                       serial_name, name});
       which.push_back(index);
     }

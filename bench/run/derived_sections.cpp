@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "bench/run/paired_blocks.hpp"
+#include "bench/run/ranking.hpp"
 #include "kernels/normal_modes.hpp"
 #include "kernels/oscillator.hpp"
 #include "kernels/rk4.hpp"
@@ -53,21 +54,17 @@ nlohmann::json entry_medians_json(const run_book& book) {
 }
 
 nlohmann::json rankings_json(const run_book& book) {
-  std::map<std::tuple<unsigned, std::string>, std::vector<measured_entry>> groups;
-  for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step"))
-    groups[{static_cast<unsigned>(std::stoul(step.entry->field("threads"))), step.entry->field("pin")}].push_back(step);
   nlohmann::json rankings = nlohmann::json::array();
-  for (auto& [key, steps] : groups) {
-    std::stable_sort(steps.begin(), steps.end(),
-                     [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
+  for (const ranked_group& group : rank_groups(book, entry_kind::rk4)) {
     nlohmann::json entries = nlohmann::json::array();
-    for (const measured_entry& step : steps) {
+    for (const measured_entry& step : group.entries) {
       const auto vs_serial = step.entry->median("vs_serial");
       entries.push_back({{"entry", step.entry->name},
                          {"ns_per_step", step.median},
                          {"vs_serial", vs_serial ? nlohmann::json(*vs_serial) : nlohmann::json(nullptr)}});
     }
-    rankings.push_back({{"pin", std::get<1>(key)}, {"threads", std::get<0>(key)}, {"entries", entries}});
+    rankings.push_back(
+        {{"pin", std::string(platform::to_string(group.pin))}, {"threads", group.threads}, {"entries", entries}});
   }
   return rankings;
 }
@@ -94,9 +91,8 @@ std::vector<mode_medians> entries_in_several_modes(const run_book& book) {
   if (!book.pace || book.pace->modes.size() < 2) return several;
   for (const auto& entry : book.entries()) {
     if (!entry.error.empty()) continue;
-    const std::string kind = entry.field("kind");
-    if (kind != "rk4" && kind != "barrier") continue;
-    auto modes = entry.by_pace_mode(kind == "barrier" ? "ns_per_episode" : "ns_per_step");
+    if (entry.spec.kind != entry_kind::rk4 && entry.spec.kind != entry_kind::barrier) continue;
+    auto modes = entry.by_pace_mode(entry.spec.time_counter());
     const auto moded = std::count_if(modes.begin(), modes.end(), [](const auto& mode) { return mode.first >= 0; });
     if (moded >= 2) several.push_back({&entry, std::move(modes)});
   }

@@ -14,6 +14,7 @@
 #include "bench/probe_reports/falseshare_report.hpp"
 #include "bench/probes/falseshare.hpp"
 #include "bench/run/paired_blocks.hpp"
+#include "bench/run/ranking.hpp"
 #include "bench/run/run_book.hpp"
 #include "platform/format.hpp"
 #include "sync/registry.hpp"
@@ -55,42 +56,30 @@ std::string rival_text(const headline_rival& rival, bool spelled_out) {
                      rival_verdict_words(rival.verdict));
 }
 
-std::string model_words(const std::string& model) { return model.empty() ? std::string() : "model:" + model + " "; }
-
-// The against_best_other group name of rk4 entries (paired_blocks.cpp).
-std::string step_group(const std::string& pin, unsigned threads) {
-  return fmt::format("RK4 step pin:{} threads:{}", pin, threads);
+std::string model_words(const kernels::model_choice& model) {
+  return model.is_chain() ? "model:" + model.name() + " " : std::string();
 }
 
 std::optional<headline_rival> rival_from(const best_other_view& view, const run_book& book) {
   const captured_entry* other = book.find(view.entry);
   if (other == nullptr) return std::nullopt;
-  return headline_rival{view.entry, other->field("sync"), other->field("layout"), view.estimate, view.verdict};
+  return headline_rival{view.entry, other->spec.sync, other->spec.layout, view.estimate, view.verdict};
 }
 
 std::vector<headline_choice> choose(const run_book& book) {
-  // (model, threads, pin) -> the entries that count, fastest first
-  using group_key = std::tuple<std::string, unsigned, std::string>;
-  std::map<group_key, std::vector<measured_entry>> groups;
-  for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step")) {
-    const captured_entry& entry = *step.entry;
-    groups[{entry.field("model"), static_cast<unsigned>(std::stoul(entry.field("threads"))), entry.field("pin")}]
-        .push_back(step);
-  }
   std::vector<headline_choice> choices;
-  for (auto& [key, steps] : groups) {
-    std::sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
-    const auto& [model, threads, pin] = key;
-    const captured_entry* chosen = steps.front().entry;
+  for (const ranked_group& group : rank_groups(book, entry_kind::rk4)) {
+    const captured_entry* chosen = group.entries.front().entry;
     headline_choice choice;
-    choice.model = model;
-    choice.threads = threads;
-    choice.pin = pin;
+    choice.model = group.model;
+    choice.threads = group.threads;
+    choice.pin = group.pin;
     choice.median_leader = chosen->name;
     choice.basis = "medians";
     // Each primitive against the leader, paired (the leader's view is the
     // inverse of its pair with the runner-up).
-    const std::vector<best_other_view> views = against_best_other_views(book, step_group(pin, threads));
+    const std::vector<best_other_view> views =
+        against_best_other_views(book, against_best_other_group(entry_kind::rk4, group.pin, group.threads));
     const best_other_view* leader_view = nullptr;
     for (const auto& view : views)
       if (view.entry == chosen->name) leader_view = &view;
@@ -105,10 +94,10 @@ std::vector<headline_choice> choose(const run_book& book) {
       if (leader_view->estimate.low > 1.0 && other != nullptr) {
         chosen = other;
         const captured_entry* leader = book.find(leader_view->entry);
-        choice.runner_up = headline_rival{leader_view->entry, leader->field("sync"), leader->field("layout"),
+        choice.runner_up = headline_rival{leader_view->entry, leader->spec.sync, leader->spec.layout,
                                           leader_view->estimate, leader_view->verdict};
       } else if (other != nullptr) {
-        choice.runner_up = headline_rival{leader_view->other, other->field("sync"), other->field("layout"),
+        choice.runner_up = headline_rival{leader_view->other, other->spec.sync, other->spec.layout,
                                           inverse(leader_view->estimate), inverse(leader_view->verdict)};
       }
       // Only a rival slower beyond the noise band leaves one winner; within
@@ -116,8 +105,8 @@ std::vector<headline_choice> choose(const run_book& book) {
       choice.tied = choice.runner_up && choice.runner_up->verdict != ratio_verdict::penalty;
     }
     choice.entry = chosen->name;
-    choice.sync = chosen->field("sync");
-    choice.layout = chosen->field("layout");
+    choice.sync = chosen->spec.sync;
+    choice.layout = chosen->spec.layout;
     choice.ns_per_step = chosen->median("ns_per_step").value_or(0.0);
     choice.fastest_ns = choice.slowest_ns = choice.ns_per_step;
     if (const auto range = chosen->range("ns_per_step"); range && choice.ns_per_step > 0.0) {
@@ -136,15 +125,12 @@ std::vector<headline_choice> choose(const run_book& book) {
     // is against the median leader, which is the choice unless overturned.
     for (const auto& view : views) {
       const captured_entry* entry = book.find(view.entry);
-      if (entry == nullptr || entry->field("sync") != sync::kBaselinePrimitive || view.entry == choice.entry) continue;
+      if (entry == nullptr || entry->spec.sync != sync::kBaselinePrimitive || view.entry == choice.entry) continue;
       if (view.other == choice.entry) choice.baseline = rival_from(view, book);
     }
     choices.push_back(std::move(choice));
   }
-  std::stable_sort(choices.begin(), choices.end(), [](const headline_choice& a, const headline_choice& b) {
-    return std::tie(a.threads, a.model) < std::tie(b.threads, b.model);
-  });
-  return choices;
+  return choices;  // in the ranking's order: threads, model, placement
 }
 
 // "+-4.2 %", and where the spread comes from when the machine changed pace
@@ -164,7 +150,7 @@ void choice_lines(std::vector<std::string>& lines, const headline_choice& choice
     named = fmt::format("{} or {} + {} (tied)", chosen, choice.runner_up->sync, choice.runner_up->layout);
   }
   std::string first = fmt::format("  {}threads:{} pin:{:<8} {}: {} a step ({})", model_words(choice.model),
-                                  choice.threads, choice.pin, named, format_ns(choice.ns_per_step),
+                                  choice.threads, platform::to_string(choice.pin), named, format_ns(choice.ns_per_step),
                                   spread_words(choice));
   if (choice.cpus_busy) first += fmt::format(", {:.1f} CPUs busy", *choice.cpus_busy);
   if (choice.oversubscribed) first += fmt::format(" ({} threads on {} CPUs)", choice.threads, cpus);
@@ -211,11 +197,12 @@ std::optional<headline_answer> answer_of(const run_book& book, const std::vector
 
 std::string answer_line(const headline_answer& answer) {
   std::string line = fmt::format("Best here: {}threads:{} pin:{}, {} a step", model_words(answer.model),
-                                 answer.threads, answer.pin, format_ns(answer.ns_per_step));
+                                 answer.threads, platform::to_string(answer.pin), format_ns(answer.ns_per_step));
   if (!answer.level.empty()) {
     std::vector<std::string> others;
     for (const auto& other : answer.level)
-      others.push_back(fmt::format("threads:{} pin:{} ({})", other.threads, other.pin, format_ns(other.ns_per_step)));
+      others.push_back(fmt::format("threads:{} pin:{} ({})", other.threads, platform::to_string(other.pin),
+                                   format_ns(other.ns_per_step)));
     line += fmt::format(", tied with {}: their repetitions overlap and no pair compared them",
                         fmt::join(others, " and "));
   }
@@ -322,8 +309,8 @@ void migration_lines(std::vector<std::string>& lines, const run_book& book, cons
   }
   std::size_t unpinned = 0;
   std::size_t migrated = 0;
-  for (const measured_entry& step : measured_of(book, "rk4", "ns_per_step")) {
-    if (step.entry->field("pin") != "none") continue;
+  for (const measured_entry& step : measured_of(book, entry_kind::rk4)) {
+    if (step.entry->spec.pin != platform::placement::none) continue;
     const auto migrations = step.entry->median("migrations_per_kstep");
     if (!migrations) continue;
     ++unpinned;
@@ -361,20 +348,21 @@ std::vector<headline_stopped> stopped_entries(const run_book& book) {
 void left_out_lines(std::vector<std::string>& lines, const run_book& book) {
   if (!book.collapsed.empty()) {
     std::vector<std::string> syncs;
-    std::set<std::string> threads;
+    std::set<unsigned> threads;
     double fastest = 0.0;
     double slowest = 0.0;
     for (const std::string& name : book.collapsed) {
       const captured_entry* entry = book.find(name);
       if (entry == nullptr) continue;
-      if (std::find(syncs.begin(), syncs.end(), entry->field("sync")) == syncs.end()) syncs.push_back(entry->field("sync"));
-      threads.insert("threads:" + entry->field("threads"));
-      const auto time = entry->median(entry->field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+      if (std::find(syncs.begin(), syncs.end(), entry->spec.sync) == syncs.end()) syncs.push_back(entry->spec.sync);
+      threads.insert(entry->spec.threads);
+      const auto time = entry->median_time();
       if (!time) continue;
       fastest = fastest == 0.0 ? *time : std::min(fastest, *time);
       slowest = std::max(slowest, *time);
     }
-    std::vector<std::string> thread_list(threads.begin(), threads.end());
+    std::vector<std::string> thread_list;  // in numeric order
+    for (const unsigned count : threads) thread_list.push_back(fmt::format("threads:{}", count));
     lines.push_back(fmt::format("Collapsed when threads outnumber CPUs ({} entries at {}, {}..{} a step or "
                                 "episode, left out of rankings): {}",
                                 book.collapsed.size(), short_list(thread_list), format_ns(fastest), format_ns(slowest),
@@ -486,9 +474,9 @@ nlohmann::json headline_json(const run_headline& headline) {
   };
   nlohmann::json recommendations = nlohmann::json::array();
   for (const auto& choice : headline.choices) {
-    recommendations.push_back({{"model", choice.model},
+    recommendations.push_back({{"model", choice.model.name()},
                                {"threads", choice.threads},
-                               {"pin", choice.pin},
+                               {"pin", platform::to_string(choice.pin)},
                                {"entry", choice.entry},
                                {"sync", choice.sync},
                                {"layout", choice.layout},
@@ -539,15 +527,15 @@ nlohmann::json headline_json(const run_headline& headline) {
   const auto level_json = [](const std::vector<headline_level>& level) {
     nlohmann::json json = nlohmann::json::array();
     for (const auto& other : level)
-      json.push_back({{"threads", other.threads}, {"pin", other.pin}, {"entry", other.entry},
+      json.push_back({{"threads", other.threads}, {"pin", platform::to_string(other.pin)}, {"entry", other.entry},
                       {"ns_per_step", other.ns_per_step}});
     return json;
   };
   nlohmann::json answer = nullptr;
   if (const auto& best = headline.answer)
-    answer = {{"model", best->model},
+    answer = {{"model", best->model.name()},
               {"threads", best->threads},
-              {"pin", best->pin},
+              {"pin", platform::to_string(best->pin)},
               {"entry", best->entry},
               {"ns_per_step", best->ns_per_step},
               {"serial_ns_per_step", optional_json(best->serial_ns_per_step)},

@@ -49,6 +49,8 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/results/paired_ratio.hpp"
+#include "kernels/model_choice.hpp"
+#include "platform/placement.hpp"
 #include "platform/stats.hpp"
 
 namespace lockstep::bench {
@@ -69,9 +71,9 @@ struct headline_rival {
 
 // The combination to use at one model, thread count and placement.
 struct headline_choice {
-  std::string model;  // the entry's model field; empty: the paper's two-mass system
+  kernels::model_choice model;  // the entry's model
   unsigned threads = 0;
-  std::string pin;
+  platform::placement pin = platform::placement::compact;
   std::string entry;
   std::string sync;
   std::string layout;
@@ -137,7 +139,7 @@ struct known_answers {
 // repetitions' ranges (median +- spread) overlap.
 struct headline_level {
   unsigned threads = 0;
-  std::string pin;
+  platform::placement pin = platform::placement::compact;
   std::string entry;
   double ns_per_step = 0.0;
 };
@@ -147,9 +149,9 @@ struct headline_level {
 // The best is the lowest median; the choices as good as far as the run can
 // tell are named beside it (`level`), so that a tie is said as a tie.
 struct headline_answer {
-  std::string model;
+  kernels::model_choice model;
   unsigned threads = 0;
-  std::string pin;
+  platform::placement pin = platform::placement::compact;
   std::string entry;
   double ns_per_step = 0.0;
   std::optional<double> serial_ns_per_step;

@@ -3,6 +3,7 @@
 
 #include <benchmark/benchmark.h>
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
@@ -12,6 +13,7 @@
 #include <map>
 #include <memory>
 #include <regex>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -45,45 +47,52 @@ namespace {
 // How many paired comparisons the plan expects of these entries: any figure
 // will do, plan_comparisons reads which entries exist (a run plans fewer:
 // collapsed entries and unpinned entries that did not migrate drop out).
-std::size_t planned_comparisons(const std::vector<std::string>& names) {
+std::size_t planned_comparisons(const std::vector<entry_spec>& entries) {
   run_book planned;
-  for (const auto& name : names) {
+  for (const entry_spec& spec : entries) {
     captured_entry entry;
-    entry.name = name;
-    entry.fields = parse_entry_name(name);
+    entry.spec = spec;
+    entry.name = spec.name();
     entry.repetitions.push_back({{"ns_per_step", 1.0}, {"ns_per_episode", 1.0}, {"migrations_per_kstep", 1.0}});
     planned.record(std::move(entry));
   }
   return plan_comparisons(planned).size();
 }
 
-std::string plan_of(const platform::topology& machine, const matrix_request& request,
-               const std::vector<std::string>& names, const run_book& book, const run_cost& cost) {
-  const run_selection& selection = request.selection;
-  std::map<std::string, std::size_t> by_kind;
-  for (const auto& name : names) ++by_kind[parse_entry_name(name)["kind"]];
-  const std::size_t comparisons = planned_comparisons(names);
-  const run_estimate estimate = estimate_run(names.size(), comparisons, cost);
-  std::string models;
-  std::vector<std::size_t> seen;
-  for (const unsigned threads : selection.threads) {
-    const kernels::model_choice model = kernels::model_for(threads, selection.masses);
-    if (std::find(seen.begin(), seen.end(), model.masses) != seen.end()) continue;
-    seen.push_back(model.masses);
-    std::string at;
-    for (const unsigned other : selection.threads)
-      if (kernels::model_for(other, selection.masses) == model) at += fmt::format("{}{}", at.empty() ? "" : ",", other);
-    models += fmt::format("{}{} at threads {}", models.empty() ? "" : "; ", model.description(), at);
+// "the paper's two-mass system at threads 2,4; a chain of 4 masses (8
+// equations) at threads 8": each model the registered parallel steps
+// integrate, with their thread counts.
+std::string models_of(const std::vector<entry_spec>& entries) {
+  std::vector<std::pair<kernels::model_choice, std::set<unsigned>>> models;
+  for (const entry_spec& spec : entries) {
+    if (!spec.is_parallel_step()) continue;
+    auto found = std::find_if(models.begin(), models.end(), [&](const auto& model) { return model.first == spec.model; });
+    if (found == models.end()) found = models.insert(models.end(), {spec.model, {}});
+    found->second.insert(spec.threads);
   }
+  std::string text;
+  for (const auto& [model, threads] : models)
+    text += fmt::format("{}{} at threads {}", text.empty() ? "" : "; ", model.description(), fmt::join(threads, ","));
+  return text;
+}
+
+std::string plan_of(const platform::topology& machine, const matrix_request& request,
+                    const std::vector<entry_spec>& entries, const run_book& book, const run_cost& cost) {
+  const run_selection& selection = request.selection;
+  std::map<std::string_view, std::size_t> by_kind;
+  for (const entry_spec& spec : entries) ++by_kind[to_string(spec.kind)];
+  const std::size_t comparisons = planned_comparisons(entries);
+  const run_estimate estimate = estimate_run(entries.size(), comparisons, cost);
+  const std::string models = models_of(entries);
   std::string kinds;
   for (const auto& [kind, count] : by_kind) kinds += fmt::format("{}{} {}", kinds.empty() ? "" : ", ", count, kind);
   std::string thread_list;
   for (const unsigned threads : selection.threads)
     thread_list += (thread_list.empty() ? "" : ", ") + std::to_string(threads);
-  std::string entries;
-  for (const auto& name : names) entries += "  " + name + "\n";
-  if (!book.not_applicable.empty()) entries += "not applicable:\n";
-  for (const auto& skipped : book.not_applicable) entries += "  " + skipped.name + ": " + skipped.reason + "\n";
+  std::string listed;
+  for (const entry_spec& spec : entries) listed += "  " + spec.name() + "\n";
+  if (!book.not_applicable.empty()) listed += "not applicable:\n";
+  for (const auto& skipped : book.not_applicable) listed += "  " + skipped.name + ": " + skipped.reason + "\n";
   std::string crossover;
   if (request.crossover) {
     std::size_t counts = 0;
@@ -110,17 +119,17 @@ std::string plan_of(const platform::topology& machine, const matrix_request& req
              "estimated time: {} (matrix {}, pairs {}; calibrated on a 2-vCPU VM, an estimate)\n"
              "{}"
              "entries to measure:\n{}",
-             machine.source(), machine.summary(), machine.affinity().size(), thread_list, models, names.size(), kinds,
-             cost.repetitions, book.not_applicable.size(), comparisons, cost.pairs,
+             machine.source(), machine.summary(), machine.affinity().size(), thread_list, models, entries.size(),
+             kinds, cost.repetitions, book.not_applicable.size(), comparisons, cost.pairs,
              format_seconds(estimate.total_s()), format_seconds(estimate.matrix_s),
-             format_seconds(estimate.pairs_s), crossover, entries);
+             format_seconds(estimate.pairs_s), crossover, listed);
 }
 
 // How many registered entries Google Benchmark's own --benchmark_filter keeps
 // (for the progress estimate only).
-std::size_t count_selected(const std::vector<std::string>& names) {
+std::size_t count_selected(const std::vector<entry_spec>& entries) {
   std::string filter = benchmark::GetBenchmarkFilter();
-  if (filter.empty() || filter == "." || filter == "all") return names.size();
+  if (filter.empty() || filter == "." || filter == "all") return entries.size();
   bool negative = false;
   if (filter.front() == '-') {
     negative = true;
@@ -128,11 +137,11 @@ std::size_t count_selected(const std::vector<std::string>& names) {
   }
   try {
     const std::regex pattern(filter);
-    return static_cast<std::size_t>(std::count_if(names.begin(), names.end(), [&](const std::string& name) {
-      return std::regex_search(name, pattern) != negative;
+    return static_cast<std::size_t>(std::count_if(entries.begin(), entries.end(), [&](const entry_spec& spec) {
+      return std::regex_search(spec.name(), pattern) != negative;
     }));
   } catch (const std::regex_error&) {
-    return names.size();
+    return entries.size();
   }
 }
 
@@ -169,7 +178,8 @@ struct prepared_matrix {
   int repetitions = kDefaultRepetitions;
   pairing_settings pairing;
   run_cost cost;
-  std::vector<std::string> names;
+  std::vector<entry_spec> entries;  // as registered, in registration order
+  registered_entries registered;    // the same by name, for the reporters
   std::vector<std::string> benchmark_arguments;  // what Google Benchmark was initialised with
 };
 
@@ -269,20 +279,22 @@ std::unique_ptr<prepared_matrix> prepare_matrix(const matrix_request& request, c
   run->book.clock_read_ns = platform::clock_read_cost_ns();
   initialize_benchmark(request, run->repetitions, benchmark_out, run->benchmark_arguments);
   add_run_context(request, *run);
-  run->names = register_calibration_benchmarks(request.selection, run->harness);
-  for (auto& name : register_overhead_pair(request.selection, run->harness)) run->names.push_back(std::move(name));
-  for (auto& name : register_barrier_benchmarks(request.selection, run->harness)) run->names.push_back(std::move(name));
-  for (auto& name : register_rk4_benchmarks(request.selection, run->harness)) run->names.push_back(std::move(name));
+  for (auto* register_entries : {&register_calibration_benchmarks, &register_overhead_pair,
+                                 &register_barrier_benchmarks, &register_rk4_benchmarks})
+    for (entry_spec& spec : (*register_entries)(request.selection, run->harness)) {
+      run->registered.emplace(spec.name(), spec);
+      run->entries.push_back(std::move(spec));
+    }
   return run;
 }
 
 // The matrix under Google Benchmark, its progress on stderr; then the
 // ratios derived from the whole run's calibrations and the collapsed entries.
 void measure_entries(prepared_matrix& run, const std::string& destination) {
-  const std::size_t selected = count_selected(run.names);
+  const std::size_t selected = count_selected(run.entries);
   // The estimate comes from the plan (run_plan.hpp), the same one --plan prints.
-  const run_estimate planned = estimate_run(selected, planned_comparisons(run.names), run.cost);
-  progress_reporter progress(run.book, selected, planned.matrix_s);
+  const run_estimate planned = estimate_run(selected, planned_comparisons(run.entries), run.cost);
+  progress_reporter progress(run.book, run.registered, selected, planned.matrix_s);
   run.harness.after_call = [&progress] { progress.tick(); };
   result_json_reporter json;
   fmt::print(stderr,
@@ -378,7 +390,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
   }
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
-  derive_ratios(document, run.book);
+  derive_ratios(document, run.book, run.registered);
   write_pace_and_pairs(document, run.book, &run.pace, modes);
   write_derived_sections(document, run.book);
   document["lockstep_headline"] = headline_json(run.book.headline);
@@ -399,7 +411,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
 
 std::string plan_text(const matrix_request& request, const platform::topology& machine) {
   const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine, "/dev/null");
-  return plan_of(machine, request, run->names, run->book, run->cost);
+  return plan_of(machine, request, run->entries, run->book, run->cost);
 }
 
 run_book run_matrix(const matrix_request& request, const platform::topology& machine,

@@ -45,15 +45,14 @@ bool writers_isolated(const std::string& layout) {
 
 void plan_false_sharing(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
   // (sync, pin, threads) -> the sharing entry and the best isolating one
-  std::map<std::tuple<std::string, std::string, std::string>,
+  std::map<std::tuple<std::string, std::string_view, unsigned>,
            std::pair<std::optional<measured_entry>, std::optional<measured_entry>>>
       groups;
   for (const auto& step : steps) {
-    auto& [sharing, isolated] =
-        groups[{step.entry->field("sync"), step.entry->field("pin"), step.entry->field("threads")}];
-    const std::string layout = step.entry->field("layout");
-    if (writers_share_lines(layout) && !sharing) sharing = step;
-    if (writers_isolated(layout) && (!isolated || step.median < isolated->median)) isolated = step;
+    const entry_spec& spec = step.entry->spec;
+    auto& [sharing, isolated] = groups[{spec.sync, platform::to_string(spec.pin), spec.threads}];
+    if (writers_share_lines(spec.layout) && !sharing) sharing = step;
+    if (writers_isolated(spec.layout) && (!isolated || step.median < isolated->median)) isolated = step;
   }
   for (const auto& [key, sides] : groups) {
     if (!sides.first || !sides.second) continue;
@@ -65,15 +64,17 @@ void plan_false_sharing(std::vector<comparison>& plan, const std::vector<measure
 
 void plan_migration(std::vector<comparison>& plan, const std::vector<measured_entry>& steps) {
   // (sync, threads) -> layout -> pin -> entry
-  std::map<std::pair<std::string, std::string>, std::map<std::string, std::map<std::string, measured_entry>>> groups;
-  for (const auto& step : steps)
-    groups[{step.entry->field("sync"), step.entry->field("threads")}][step.entry->field("layout")].insert_or_assign(
-        step.entry->field("pin"), step);
+  std::map<std::pair<std::string, unsigned>, std::map<std::string, std::map<platform::placement, measured_entry>>>
+      groups;
+  for (const auto& step : steps) {
+    const entry_spec& spec = step.entry->spec;
+    groups[{spec.sync, spec.threads}][spec.layout].insert_or_assign(spec.pin, step);
+  }
   for (const auto& [key, layouts] : groups) {
     std::optional<std::pair<measured_entry, measured_entry>> best;  // (none, compact) on the best pinned layout
     for (const auto& [layout, pins] : layouts) {
-      const auto compact = pins.find("compact");
-      const auto none = pins.find("none");
+      const auto compact = pins.find(platform::placement::compact);
+      const auto none = pins.find(platform::placement::none);
       if (compact == pins.end() || none == pins.end()) continue;
       // A penalty of migration needs migrations: an unpinned entry the OS
       // left in place (or one that did not count) prices nothing.
@@ -83,34 +84,31 @@ void plan_migration(std::vector<comparison>& plan, const std::vector<measured_en
     if (!best) continue;
     plan.push_back({comparison_kind::migration,
                     fmt::format("sync:{} threads:{} layout:{}", key.first, key.second,
-                                best->second.entry->field("layout")),
+                                best->second.entry->spec.layout),
                     best->first.entry->name, best->second.entry->name});
   }
 }
 
-void plan_against_best_other(std::vector<comparison>& plan, const std::vector<measured_entry>& entries,
-                             const char* what) {
-  // (pin, threads) -> sync -> its best entry
-  std::map<std::pair<std::string, std::string>, std::map<std::string, measured_entry>> groups;
-  for (const auto& item : entries) {
-    auto& best = groups[{item.entry->field("pin"), item.entry->field("threads")}];
-    const auto found = best.find(item.entry->field("sync"));
-    if (found == best.end() || item.median < found->second.median)
-      best.insert_or_assign(item.entry->field("sync"), item);
-  }
-  for (const auto& [key, best] : groups) {
+// Per placement and thread count (placements first, as the summary prints
+// them), every other primitive's best entry against the leader's.
+void plan_against_best_other(std::vector<comparison>& plan, std::vector<ranked_group> ranked, entry_kind kind) {
+  std::stable_sort(ranked.begin(), ranked.end(), [](const ranked_group& a, const ranked_group& b) {
+    return platform::to_string(a.pin) < platform::to_string(b.pin);
+  });
+  for (const ranked_group& group : ranked) {
+    // Each primitive's best entry: its first in the group, which is fastest first.
+    std::vector<measured_entry> best;
+    for (const measured_entry& item : group.entries)
+      if (std::none_of(best.begin(), best.end(),
+                       [&](const measured_entry& seen) { return seen.entry->spec.sync == item.entry->spec.sync; }))
+        best.push_back(item);
     if (best.size() < 2) continue;
-    std::vector<measured_entry> ranked;
-    for (const auto& [sync, item] : best) ranked.push_back(item);
-    std::sort(ranked.begin(), ranked.end(),
-              [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
     // Every other primitive against the leader; the leader against the
     // runner-up would be the runner-up's pair again, measured a second
     // time, and two measurements of one comparison can disagree.
-    for (std::size_t index = 1; index < ranked.size(); ++index)
-      plan.push_back({comparison_kind::against_best_other,
-                      fmt::format("{} pin:{} threads:{}", what, key.first, key.second), ranked[index].entry->name,
-                      ranked[0].entry->name});
+    for (std::size_t index = 1; index < best.size(); ++index)
+      plan.push_back({comparison_kind::against_best_other, against_best_other_group(kind, group.pin, group.threads),
+                      best[index].entry->name, best[0].entry->name});
   }
 }
 
@@ -217,28 +215,15 @@ paired_result finish_comparison(comparison_in_progress& progress, const pairing_
 
 }  // namespace
 
-std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter) {
-  std::vector<measured_entry> found;
-  for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != kind || !entry.error.empty() || entry.field("variant") == "serial") continue;
-    if (book.collapsed.count(entry.name) > 0) continue;
-    if (const auto median = entry.median(counter)) found.push_back({&entry, *median});
-  }
-  return found;
-}
-
 std::set<std::string> find_collapsed(const run_book& book) {
   // (kind, model, threads) -> the best median of the group
-  using group_key = std::tuple<std::string, std::string, std::string>;
+  using group_key = std::tuple<entry_kind, std::size_t, unsigned>;
   const auto key_of = [](const captured_entry& entry) {
-    return group_key{entry.field("kind"), entry.field("model"), entry.field("threads")};
+    return group_key{entry.spec.kind, entry.spec.model.masses, entry.spec.threads};
   };
-  const auto time_of = [](const captured_entry& entry) {
-    return entry.median(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
-  };
+  const auto time_of = [](const captured_entry& entry) { return entry.median_time(); };
   const auto counts = [](const captured_entry& entry) {
-    const std::string kind = entry.field("kind");
-    return (kind == "rk4" || kind == "barrier") && entry.error.empty() && entry.field("variant") != "serial";
+    return (entry.spec.kind == entry_kind::rk4 || entry.spec.kind == entry_kind::barrier) && entry.error.empty();
   };
   std::map<group_key, double> best;
   for (const auto& entry : book.entries()) {
@@ -259,6 +244,11 @@ std::set<std::string> find_collapsed(const run_book& book) {
   return collapsed;
 }
 
+std::string against_best_other_group(entry_kind kind, platform::placement pin, unsigned threads) {
+  return fmt::format("{} pin:{} threads:{}", kind == entry_kind::barrier ? "bare episode" : "RK4 step",
+                     platform::to_string(pin), threads);
+}
+
 std::vector<best_other_view> against_best_other_views(const run_book& book, const std::string& group) {
   std::vector<best_other_view> views;
   const paired_result* runner_up = nullptr;
@@ -276,11 +266,11 @@ std::vector<best_other_view> against_best_other_views(const run_book& book, cons
 
 std::vector<comparison> plan_comparisons(const run_book& book) {
   std::vector<comparison> plan;
-  const std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  const std::vector<measured_entry> steps = measured_of(book, entry_kind::rk4);
   plan_false_sharing(plan, steps);
   plan_migration(plan, steps);
-  plan_against_best_other(plan, steps, "RK4 step");
-  plan_against_best_other(plan, measured_of(book, "barrier", "ns_per_episode"), "bare episode");
+  plan_against_best_other(plan, rank_groups(book, entry_kind::rk4), entry_kind::rk4);
+  plan_against_best_other(plan, rank_groups(book, entry_kind::barrier), entry_kind::barrier);
   return plan;
 }
 

@@ -38,6 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/results/paired_ratio.hpp"
+#include "bench/run/ranking.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/team_driver.hpp"
 
@@ -54,15 +55,6 @@ struct pairing_settings {
   std::int64_t budget_ns = 200'000'000;
 };
 inline constexpr unsigned kMinPairs = 3;
-
-// An entry that measured a counter, with its median over repetitions.
-struct measured_entry {
-  const captured_entry* entry;
-  double median;
-};
-// Entries of one kind ("rk4", "barrier"; rk4/serial left out) that measured
-// `counter` without error and did not collapse (book.collapsed).
-std::vector<measured_entry> measured_of(const run_book& book, const std::string& kind, const std::string& counter);
 
 // Collapse: a pure spinner with more threads than CPUs waits for a scheduler
 // quantum at every stage, and its step lasts tens of milliseconds where the
@@ -95,6 +87,10 @@ struct best_other_view {
   ratio_estimate estimate;  // entry / other
   ratio_verdict verdict = ratio_verdict::unsure;
 };
+// The name of an against_best_other group ("RK4 step pin:compact threads:4",
+// "bare episode pin:none threads:2"): the plan names its comparisons so, and
+// the answer finds a group's pairs by it.
+std::string against_best_other_group(entry_kind kind, platform::placement pin, unsigned threads);
 // Every primitive's line of one against_best_other group, in the order of
 // the plan (leader first); empty when the group has no measured pair.
 std::vector<best_other_view> against_best_other_views(const run_book& book, const std::string& group);

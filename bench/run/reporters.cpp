@@ -25,28 +25,6 @@
 namespace lockstep::bench {
 
 
-std::map<std::string, std::string> parse_entry_name(const std::string& name) {
-  std::map<std::string, std::string> fields;
-  std::size_t start = 0;
-  bool first = true;
-  while (start <= name.size()) {
-    std::size_t end = name.find('/', start);
-    if (end == std::string::npos) end = name.size();
-    const std::string segment = name.substr(start, end - start);
-    const std::size_t colon = segment.find(':');
-    if (first) {
-      fields["kind"] = segment;
-      first = false;
-    } else if (colon == std::string::npos) {
-      fields["variant"] = segment;
-    } else {
-      fields[segment.substr(0, colon)] = segment.substr(colon + 1);
-    }
-    start = end + 1;
-  }
-  return fields;
-}
-
 std::string plain_name(const benchmark::BenchmarkReporter::Run& run) {
   benchmark::BenchmarkName name = run.run_name;
   name.iterations.clear();
@@ -93,8 +71,10 @@ void result_json_reporter::ReportRuns(const std::vector<Run>& runs) {
   JSONReporter::ReportRuns(renamed);
 }
 
-progress_reporter::progress_reporter(run_book& book, std::size_t expected_entries, double planned_s)
+progress_reporter::progress_reporter(run_book& book, const registered_entries& registered,
+                                     std::size_t expected_entries, double planned_s)
     : book_(book),
+      registered_(registered),
       expected_(expected_entries),
       planned_s_(planned_s),
       start_(std::chrono::steady_clock::now()),
@@ -124,14 +104,13 @@ void progress_reporter::line(bool force) {
   std::fflush(stderr);
 }
 
-void derive_ratios(nlohmann::json& result, const run_book& book) {
+void derive_ratios(nlohmann::json& result, const run_book& book, const registered_entries& registered) {
   if (!result.contains("benchmarks") || !result["benchmarks"].is_array()) return;
   for (nlohmann::json& row : result["benchmarks"]) {
     if (!row.is_object() || !row.contains("run_name") || !row["run_name"].is_string()) continue;
-    const auto fields = parse_entry_name(row["run_name"].get<std::string>());
-    if (!has_derived_ratios(fields)) continue;
-    const auto model = fields.find("model");
-    const calibrations run = book.calibrations_for(model == fields.end() ? std::string{} : model->second);
+    const auto spec = registered.find(row["run_name"].get<std::string>());
+    if (spec == registered.end() || !spec->second.is_parallel_step()) continue;
+    const calibrations run = book.calibrations_for(spec->second.model);
     std::map<std::string, double> counters;
     for (const auto& [key, value] : row.items())
       if (value.is_number()) counters[key] = value.get<double>();
@@ -167,7 +146,8 @@ void progress_reporter::ReportRuns(const std::vector<Run>& runs) {
     for (const auto& [key, counter] : run.counters) counters[key] = counter.value;
     entry.repetitions.push_back(std::move(counters));
   }
-  entry.fields = parse_entry_name(entry.name);
+  // The spec as registered: every run Google Benchmark reports is one of ours.
+  entry.spec = registered_.at(entry.name);
   // Some repetitions measured, some stopped: the entry counts as measured
   // (its medians come from the measured ones), with its stopped repetitions
   // counted and their reason kept (the summary and the answer name it).

@@ -29,7 +29,10 @@ namespace lockstep::bench {
 // every call of an entry) or from a completed entry, and one at the end.
 class progress_reporter : public benchmark::BenchmarkReporter {
  public:
-  progress_reporter(run_book& book, std::size_t expected_entries, double planned_s);
+  // `registered`: every entry's spec by its name, as registration recorded
+  // them (Google Benchmark reports a run by the name alone).
+  progress_reporter(run_book& book, const registered_entries& registered, std::size_t expected_entries,
+                    double planned_s);
 
   bool ReportContext(const Context& context) override;
   void ReportRuns(const std::vector<Run>& runs) override;
@@ -42,6 +45,7 @@ class progress_reporter : public benchmark::BenchmarkReporter {
   void line(bool force);
 
   run_book& book_;
+  const registered_entries& registered_;
   std::size_t expected_;
   double planned_s_;
   std::size_t finished_ = 0;
@@ -74,16 +78,13 @@ class result_json_reporter : public benchmark::JSONReporter {
 // The run's name without Google Benchmark's suffixes (see above).
 std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
 
-// Splits an entry name into its fields: "kind" (the first segment) and every
-// key:value segment. "rk4/serial" gives kind=rk4, variant=serial.
-std::map<std::string, std::string> parse_entry_name(const std::string& name);
-
 // The same derivation as run_book::derive_ratios, on the result JSON Google
 // Benchmark wrote: every iteration and aggregate row of an rk4 or overhead
-// entry gets vs_serial and vs_c2c from the run's calibrations (either may be
-// absent, and so then is its ratio). Dividing by a constant scales a mean, a
-// median and a standard deviation alike; a coefficient of variation does not
-// change, so a cv row's ratio is its counter's cv.
-void derive_ratios(nlohmann::json& result, const run_book& book);
+// entry (its registered spec says which) gets vs_serial and vs_c2c from the
+// run's calibrations (either may be absent, and so then is its ratio).
+// Dividing by a constant scales a mean, a median and a standard deviation
+// alike; a coefficient of variation does not change, so a cv row's ratio is
+// its counter's cv.
+void derive_ratios(nlohmann::json& result, const run_book& book, const registered_entries& registered);
 
 }  // namespace lockstep::bench

@@ -33,7 +33,7 @@ namespace {
 // own two pinned threads), all samples pooled. Once a repetition failed, the
 // later ones fail too (team_driver.hpp, measure_entry, says why).
 void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, unsigned cpu_b) {
-  const std::string name = entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name();
+  const std::string name = entry_spec::c2c_calibration().name();
   if (const auto failed = harness.stalled.find(name); failed != harness.stalled.end()) {
     state.SkipWithError(("an earlier repetition failed: " + failed->second).c_str());
     return;
@@ -69,7 +69,7 @@ void c2c_entry(benchmark::State& state, harness_state& harness, unsigned cpu_a, 
 template <class Model>
 Model model_of(const entry_spec& spec) {
   if constexpr (std::is_same_v<Model, kernels::chain_model>)
-    return kernels::chain_model(kernels::model_choice{spec.masses}.chain());
+    return kernels::chain_model(spec.model.chain());
   else
     return Model{};
 }
@@ -178,7 +178,7 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
   // enough to be measured at all, and its clock readings (8 per sampled step)
   // stay a tiny share of it; a fast one keeps the default period.
   kernels::stage_sync_time sync_before{};
-  entry_call call{state, harness, spec.name(), sync::find_primitive(info.name), plan, kInstrumented, "step",
+  entry_call call{state, harness, spec.name(), sync::find_primitive(info.name), plan, kInstrumented, spec.unit(),
                   [&](std::uint64_t units) {
                     if constexpr (Timing == kernels::sync_timing::sampled) {
                       constexpr std::uint64_t kSampledStepsPerBatch = 8;
@@ -220,7 +220,7 @@ void rk4_entry(benchmark::State& state, harness_state& harness, const entry_spec
       }
     }
   }
-  set_accounting_counters(state, *result, "step");
+  set_accounting_counters(state, *result, spec.unit());
   if constexpr (info.counts_futex_waits)  // else unavailable: omitted, never a 0 nobody counted
     state.counters["futex_waits_per_step"] = static_cast<double>(result->sync_totals.futex_waits) / steps_run;
   state.counters["timeouts"] = static_cast<double>(result->sync_totals.timeouts);
@@ -418,8 +418,8 @@ benchmark::internal::Benchmark* register_rk4_entry(const entry_spec& spec, harne
 
 }  // namespace
 
-std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
-  std::vector<std::string> registered;
+std::vector<entry_spec> register_rk4_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<entry_spec> registered;
   sync::for_each_primitive([&]<class Sync>() {
     if (!selected(selection.syncs, Sync::kName)) return;
     layouts::for_each_layout([&]<class Layout>() {
@@ -427,8 +427,8 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
       for (unsigned threads : selection.threads) {
         const kernels::model_choice model = kernels::model_for(threads, selection.masses);
         for (platform::placement pin : selection.pins) {
-          entry_spec spec{entry_kind::rk4, std::string(Sync::kName), std::string(Layout::kName), pin, threads};
-          spec.masses = model.masses;
+          const entry_spec spec =
+              entry_spec::parallel_step(std::string(Sync::kName), std::string(Layout::kName), pin, threads, model);
           const std::string reason = kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads);
           if (!reason.empty()) {
             harness.book->not_applicable.push_back({spec.name(), reason});
@@ -444,7 +444,7 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
                                   kernels::parallel_rk4<Sync, Layout, Model, kernels::sync_timing::off>>(
                       harness, pin, threads, run_steps{}, model_of<Model>(spec), kBenchmarkStepSeconds, threads);
             });
-            registered.push_back(spec.name());
+            registered.push_back(spec);
           }
         }
       }
@@ -453,8 +453,8 @@ std::vector<std::string> register_rk4_benchmarks(const run_selection& selection,
   return registered;
 }
 
-std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness) {
-  std::vector<std::string> registered;
+std::vector<entry_spec> register_overhead_pair(const run_selection& selection, harness_state& harness) {
+  std::vector<entry_spec> registered;
   // The preferred combination first: the fastest and steadiest step of the
   // matrix (seqlock on private copies, pinned, two threads: one per core
   // here), where a fixed cost of the harness weighs most. futex_spin's 2-thread
@@ -477,13 +477,12 @@ std::vector<std::string> register_overhead_pair(const run_selection& selection, 
     if constexpr (kernels::applicable<Sync, Layout>().applicable) {
       if (!kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads).empty()) return;
       for (bool accounting : {false, true}) {
-        entry_spec spec{entry_kind::overhead, std::string(Sync::kName), std::string(Layout::kName),
-                        pin,                  threads,                 accounting};
-        spec.masses = model.masses;
+        const entry_spec spec = entry_spec::overhead_side(accounting, std::string(Sync::kName),
+                                                          std::string(Layout::kName), pin, threads, model);
         auto* entry = with_model(
             model, [&]<class Model>() { return register_rk4_entry<Sync, Layout, Model>(spec, harness, accounting); });
         if (harness.settings.overhead_repetitions > 0) entry->Repetitions(harness.settings.overhead_repetitions);
-        registered.push_back(spec.name());
+        registered.push_back(spec);
       }
       done = true;
     }
@@ -495,9 +494,9 @@ std::vector<std::string> register_overhead_pair(const run_selection& selection, 
   return registered;
 }
 
-std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness) {
-  std::vector<std::string> registered;
-  const entry_spec c2c_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2};
+std::vector<entry_spec> register_calibration_benchmarks(const run_selection& selection, harness_state& harness) {
+  std::vector<entry_spec> registered;
+  const entry_spec c2c_spec = entry_spec::c2c_calibration();
   const platform::placement_plan plan = platform::plan_placement(*harness.machine, platform::placement::compact, 2);
   const auto pu_a = plan.pu_at(0);
   const auto pu_b = plan.pu_at(1);
@@ -510,22 +509,21 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
         ->Iterations(3)
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
-    registered.push_back(c2c_spec.name());
+    registered.push_back(c2c_spec);
   } else {
     harness.book->not_applicable.push_back(
         {c2c_spec.name(), "needs two CPUs in the affinity set; vs_c2c is omitted in this run"});
   }
   // The serial step of every model the run integrates (vs_serial divides an
   // entry's step by its own model's), the paper's system always.
-  std::vector<std::size_t> masses{0};
+  std::vector<kernels::model_choice> models{kernels::model_choice{}};
   for (const unsigned threads : selection.threads) {
     const kernels::model_choice model = kernels::model_for(threads, selection.masses);
-    if (std::find(masses.begin(), masses.end(), model.masses) == masses.end()) masses.push_back(model.masses);
+    if (std::find(models.begin(), models.end(), model) == models.end()) models.push_back(model);
   }
-  for (const std::size_t model_masses : masses) {
-    entry_spec spec{entry_kind::serial, {}, {}, platform::placement::none, 1};
-    spec.masses = model_masses;
-    with_model(kernels::model_choice{model_masses}, [&]<class Model>() {
+  for (const kernels::model_choice& model : models) {
+    const entry_spec spec = entry_spec::serial_step(model);
+    with_model(model, [&]<class Model>() {
       benchmark::RegisterBenchmark(spec.name().c_str(),
                                    [&harness, spec](benchmark::State& state) {
                                      serial_entry<Model>(state, harness, spec);
@@ -534,7 +532,7 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
           ->UseManualTime()
           ->Unit(benchmark::kNanosecond);
     });
-    registered.push_back(spec.name());
+    registered.push_back(spec);
   }
   return registered;
 }
@@ -550,8 +548,7 @@ block_runner_factory chain_step_runner(const harness_state& harness, const std::
       if (Layout::kName != layout) return;
       if constexpr (kernels::applicable<Sync, Layout>().applicable) {
         if (!kernels::not_applicable_reason<Sync, Layout>(model.equations(), threads).empty()) return;
-        entry_spec spec{entry_kind::rk4, sync, layout, pin, threads};
-        spec.masses = masses;
+        const entry_spec spec = entry_spec::parallel_step(sync, layout, pin, threads, model);
         block_runner_factory bare =
             block_runner_of<sync::team_of_t<Sync>,
                             kernels::parallel_rk4<Sync, Layout, kernels::chain_model, kernels::sync_timing::off>>(

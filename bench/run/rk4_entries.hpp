@@ -41,8 +41,8 @@ inline constexpr double kBenchmarkStepSeconds = 1e-4;
 
 // c2c and rk4/serial, and rk4/model:chainS/serial for every chain the
 // selection's thread counts integrate. c2c needs two CPUs in the affinity set; without them it
-// is recorded as not applicable in the run book. Returns the names registered.
-std::vector<std::string> register_calibration_benchmarks(const run_selection& selection, harness_state& harness);
+// is recorded as not applicable in the run book. Returns the specs registered.
+std::vector<entry_spec> register_calibration_benchmarks(const run_selection& selection, harness_state& harness);
 
 // rk4/sync:S/layout:L/pin:P/threads:T for every selected combination that
 // applies; the others go into the run book's not_applicable list with the
@@ -75,13 +75,13 @@ std::vector<std::string> register_calibration_benchmarks(const run_selection& se
 //   oversubscribed       1 when the threads outnumber the CPUs
 // With settings.accounting off the entries run without instrumentation and
 // without accounting (their counters are omitted).
-std::vector<std::string> register_rk4_benchmarks(const run_selection& selection, harness_state& harness);
+std::vector<entry_spec> register_rk4_benchmarks(const run_selection& selection, harness_state& harness);
 
 // The harness-overhead pair, side by side: overhead/accounting:off/... and
 // overhead/accounting:on/... on one combination (seqlock, per_thread,
 // compact, 2 threads when selected; else the first selected that applies).
 // The summary quotes on / off.
-std::vector<std::string> register_overhead_pair(const run_selection& selection, harness_state& harness);
+std::vector<entry_spec> register_overhead_pair(const run_selection& selection, harness_state& harness);
 
 // The sides of the crossover sweep's pairs (crossover_sweep.hpp), with
 // accounting as asked (block_runner::last_facts): the chain of `masses` masses

@@ -1,8 +1,7 @@
-// The run book, entry names and batch sizing (run_book.hpp).
+// The run book and batch sizing (run_book.hpp).
 #include "bench/run/run_book.hpp"
 
 #include "bench/results/derived_figures.hpp"
-#include "kernels/model_choice.hpp"
 #include "platform/statistics.hpp"
 
 #include <algorithm>
@@ -10,32 +9,13 @@
 
 namespace lockstep::bench {
 
-std::string entry_spec::name() const {
-  const std::string pin_name{platform::to_string(pin)};
-  const std::string tail = "/pin:" + pin_name + "/threads:" + std::to_string(threads);
-  const std::string model = kernels::model_choice{masses}.name_segment();
-  switch (kind) {
-    case entry_kind::c2c:
-      return "c2c" + tail;
-    case entry_kind::serial:
-      return "rk4" + model + "/serial";
-    case entry_kind::barrier:
-      return "barrier/sync:" + sync + tail;
-    case entry_kind::rk4:
-      return "rk4" + model + "/sync:" + sync + "/layout:" + layout + tail;
-    case entry_kind::overhead:
-      return std::string("overhead") + model + "/accounting:" + (accounting ? "on" : "off") + "/sync:" + sync +
-             "/layout:" + layout + tail;
-  }
-  return {};
-}
-
 namespace {
 
-std::vector<double> values_of(const captured_entry& entry, const std::string& counter) {
+std::vector<double> values_of(const captured_entry& entry, std::string_view counter) {
   std::vector<double> values;
+  const std::string key(counter);
   for (const auto& repetition : entry.repetitions) {
-    const auto found = repetition.find(counter);
+    const auto found = repetition.find(key);
     if (found != repetition.end()) values.push_back(found->second);
   }
   return values;
@@ -43,33 +23,29 @@ std::vector<double> values_of(const captured_entry& entry, const std::string& co
 
 }  // namespace
 
-std::optional<double> captured_entry::median(const std::string& counter) const {
+std::optional<double> captured_entry::median(std::string_view counter) const {
   const std::vector<double> values = values_of(*this, counter);
   if (values.empty()) return std::nullopt;
   return platform::median(values);
 }
 
-std::optional<std::pair<double, double>> captured_entry::range(const std::string& counter) const {
+std::optional<std::pair<double, double>> captured_entry::range(std::string_view counter) const {
   const std::vector<double> values = values_of(*this, counter);
   if (values.empty()) return std::nullopt;
   const auto [low, high] = std::minmax_element(values.begin(), values.end());
   return std::pair{*low, *high};
 }
 
-std::map<int, std::vector<double>> captured_entry::by_pace_mode(const std::string& counter) const {
+std::map<int, std::vector<double>> captured_entry::by_pace_mode(std::string_view counter) const {
   std::map<int, std::vector<double>> modes;
+  const std::string key(counter);
   for (const auto& repetition : repetitions) {
     const auto mode = repetition.find("pace_mode");
-    const auto value = repetition.find(counter);
+    const auto value = repetition.find(key);
     if (mode != repetition.end() && value != repetition.end())
       modes[static_cast<int>(mode->second)].push_back(value->second);
   }
   return modes;
-}
-
-std::string captured_entry::field(const std::string& key) const {
-  const auto found = fields.find(key);
-  return found == fields.end() ? std::string{} : found->second;
 }
 
 void run_book::record(captured_entry entry) {
@@ -89,27 +65,27 @@ const captured_entry* run_book::find(const std::string& name) const {
 }
 
 std::optional<double> run_book::c2c_one_way_ns() const {
-  const captured_entry* entry = find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
+  const captured_entry* entry = find(entry_spec::c2c_calibration().name());
   if (entry == nullptr || !entry->error.empty()) return std::nullopt;
-  return entry->median("one_way_ns");
+  return entry->median_time();
 }
 
-std::optional<double> run_book::serial_step_ns(const std::string& model) const {
-  const captured_entry* entry = find("rk4" + (model.empty() ? std::string{} : "/model:" + model) + "/serial");
+std::optional<double> run_book::serial_step_ns(const kernels::model_choice& model) const {
+  const captured_entry* entry = find(entry_spec::serial_step(model).name());
   if (entry == nullptr || !entry->error.empty()) return std::nullopt;
-  return entry->median("ns_per_step");
+  return entry->median_time();
 }
 
 void run_book::derive_ratios() {
   for (captured_entry& entry : entries_) {
-    if (!has_derived_ratios(entry.fields)) continue;
-    const calibrations run = calibrations_for(entry.field("model"));
+    if (!entry.spec.is_parallel_step()) continue;
+    const calibrations run = calibrations_for(entry.spec.model);
     for (auto& repetition : entry.repetitions)
       for (const derived_ratio& ratio : derived_ratios(repetition, run)) repetition[ratio.name] = ratio.value;
   }
 }
 
-calibrations run_book::calibrations_for(const std::string& model) const {
+calibrations run_book::calibrations_for(const kernels::model_choice& model) const {
   return {c2c_one_way_ns(), serial_step_ns(model)};
 }
 

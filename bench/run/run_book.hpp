@@ -40,9 +40,11 @@
 #include <optional>
 #include <set>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "bench/results/derived_figures.hpp"
+#include "bench/results/entry_spec.hpp"
 #include "bench/run/crossover.hpp"
 #include "bench/run/headline.hpp"
 #include "bench/run/pace.hpp"
@@ -93,29 +95,12 @@ struct run_settings {
   std::int64_t call_budget_ns = 3'000'000'000;
 };
 
-// The name segments of an entry (docs/names-and-counters.md).
-enum class entry_kind { c2c, serial, barrier, rk4, overhead };
-
-struct entry_spec {
-  entry_kind kind = entry_kind::rk4;
-  std::string sync;    // barrier, rk4, overhead
-  std::string layout;  // rk4, overhead
-  platform::placement pin = platform::placement::compact;
-  unsigned threads = 1;
-  bool accounting = true;  // overhead: which side of the pair
-  std::size_t masses = 0;  // rk4, serial, overhead: the model (kernels::model_choice; 0 the paper's)
-
-  // rk4/sync:S/layout:L/pin:P/threads:T, rk4/serial, barrier/sync:S/pin:P/threads:T,
-  // c2c/pin:compact/threads:2, overhead/accounting:on|off/sync:S/layout:L/pin:P/threads:T;
-  // a chain's entries carry its model after the kind: rk4/model:chain8/sync:..., rk4/model:chain8/serial
-  std::string name() const;
-};
-
-// One entry as the run saw it: its name split into fields, and the counters of
-// each repetition (aggregates are recomputed from these, never read back).
+// One entry as the run saw it: its spec (as registered: bench/results/entry_spec.hpp),
+// its name, and the counters of each repetition (aggregates are recomputed
+// from these, never read back).
 struct captured_entry {
-  std::string name;
-  std::map<std::string, std::string> fields;  // "kind" plus every key:value segment
+  entry_spec spec;
+  std::string name;  // spec.name(): the entry's identity in the book, the pairs and the file
   std::vector<std::map<std::string, double>> repetitions;
   std::string error;  // non-empty: skipped, with the reason
   // Repetitions that stopped (stalled, lost wake-ups, out of budget) while
@@ -124,16 +109,20 @@ struct captured_entry {
   std::string stop_reason;  // the first stopped repetition's
 
   // The median over repetitions of one counter, or empty if no repetition has it.
-  std::optional<double> median(const std::string& counter) const;
+  std::optional<double> median(std::string_view counter) const;
   // min and max over repetitions (empty as above).
-  std::optional<std::pair<double, double>> range(const std::string& counter) const;
+  std::optional<std::pair<double, double>> range(std::string_view counter) const;
+  // The median of the entry's time per unit (its spec's time_counter: a step, an episode, a transfer).
+  std::optional<double> median_time() const { return median(spec.time_counter()); }
   // The pace modes the repetitions ran in (their "pace_mode" counter, set
   // once the run's trace is analysed; -1: the repetition straddles a change),
   // each with its repetitions' values of `counter`; empty before the analysis.
-  std::map<int, std::vector<double>> by_pace_mode(const std::string& counter) const;
-  std::string field(const std::string& key) const;
+  std::map<int, std::vector<double>> by_pace_mode(std::string_view counter) const;
 };
 
+// The entries a run registered, by name (the name Google Benchmark reports
+// a run under: entry_spec::name).
+using registered_entries = std::map<std::string, entry_spec>;
 
 // A combination that was not registered, and why.
 struct skipped_combination {
@@ -158,11 +147,10 @@ class run_book {
   // In-run calibrations: medians of c2c/pin:compact/threads:2 (one_way_ns)
   // and rk4/serial (ns_per_step), once they ran.
   std::optional<double> c2c_one_way_ns() const;
-  // `model`: the model field of an entry's name ("chain8"; "" the paper's
-  // system): each model's step has its own serial calibration.
-  std::optional<double> serial_step_ns(const std::string& model = {}) const;
+  // Each model's step has its own serial calibration (rk4/model:chainS/serial).
+  std::optional<double> serial_step_ns(const kernels::model_choice& model = {}) const;
   // Both, for an entry of this model.
-  calibrations calibrations_for(const std::string& model) const;
+  calibrations calibrations_for(const kernels::model_choice& model) const;
 
   // Adds the derived ratios (derived_figures.hpp: vs_serial, vs_c2c)
   // (sync_ns_per_stage / c2c_one_way_ns) to every repetition of the rk4 and

@@ -16,12 +16,12 @@ namespace {
 
 // The placement the sweep held: compact when the run measured it, else the
 // first one its rk4 entries name.
-std::string held_pin(const run_book& book) {
-  std::string first;
+std::optional<platform::placement> held_pin(const run_book& book) {
+  std::optional<platform::placement> first;
   for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != "rk4" || entry.field("variant") == "serial" || !entry.error.empty()) continue;
-    if (entry.field("pin") == "compact") return "compact";
-    if (first.empty()) first = entry.field("pin");
+    if (entry.spec.kind != entry_kind::rk4 || !entry.error.empty()) continue;
+    if (entry.spec.pin == platform::placement::compact) return entry.spec.pin;
+    if (!first) first = entry.spec.pin;
   }
   return first;
 }
@@ -30,27 +30,27 @@ std::string held_pin(const run_book& book) {
 
 scaling_curve scaling_of(const run_book& book) {
   scaling_curve curve;
-  curve.pin = held_pin(book);
+  const std::optional<platform::placement> pin = held_pin(book);
+  if (pin) curve.pin = platform::to_string(*pin);
   // The sync time per stage where the run instrumented its steps; the step
   // time only when no entry has it (--no-accounting). An entry without it in
   // an instrumented run is left off the curve, not allowed to switch it.
   curve.counter = "ns_per_step";
   for (const auto& entry : book.entries())
-    if (entry.field("kind") == "rk4" && entry.error.empty() && entry.median("sync_ns_per_stage"))
+    if (entry.spec.kind == entry_kind::rk4 && entry.error.empty() && entry.median("sync_ns_per_stage"))
       curve.counter = "sync_ns_per_stage";
   std::map<std::pair<std::string, unsigned>, scaling_point> best;
   std::set<unsigned> counts;
   for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != "rk4" || entry.field("variant") == "serial" || !entry.error.empty()) continue;
-    if (entry.field("pin") != curve.pin) continue;
+    if (entry.spec.kind != entry_kind::rk4 || !entry.error.empty() || entry.spec.pin != pin) continue;
     const auto figure = entry.median(curve.counter);
     if (!figure) continue;
-    const auto threads = static_cast<unsigned>(std::stoul(entry.field("threads")));
+    const unsigned threads = entry.spec.threads;
     counts.insert(threads);
-    auto& point = best[{entry.field("sync"), threads}];
+    auto& point = best[{entry.spec.sync, threads}];
     const double current = curve.counter == "ns_per_step" ? point.ns_per_step : point.sync_ns_per_stage;
     if (!point.layout.empty() && current <= *figure) continue;
-    point = {entry.field("sync"), threads, entry.field("layout"), entry.field("model"),
+    point = {entry.spec.sync, threads, entry.spec.layout, entry.spec.model.name(),
              entry.median("sync_ns_per_stage").value_or(0.0), entry.median("ns_per_step").value_or(0.0),
              0.0, 0.0, entry.median("oversubscribed").value_or(0.0) > 0.5};
     const auto range = entry.range(curve.counter).value_or(std::pair{*figure, *figure});

@@ -6,6 +6,7 @@
 
 #include "bench/results/derived_figures.hpp"
 #include "bench/run/paired_blocks.hpp"
+#include "bench/run/ranking.hpp"
 #include "platform/statistics.hpp"
 
 #include <fmt/core.h>
@@ -44,9 +45,9 @@ std::string optional_number(const captured_entry& entry, const std::string& coun
 // The CPUs a step kept busy: the team's CPU time per step over the step's
 // wall time (both medians over the repetitions). A team that spins while it
 // waits reads near its thread count; one that sleeps, less.
-std::string cpus_busy(const captured_entry& entry, const char* unit) {
-  const auto cpu = entry.median(fmt::format("team_cpu_ns_per_{}", unit));
-  const auto wall = entry.median(fmt::format("ns_per_{}", unit));
+std::string cpus_busy(const captured_entry& entry) {
+  const auto cpu = entry.median(fmt::format("team_cpu_ns_per_{}", to_string(entry.spec.unit())));
+  const auto wall = entry.median_time();
   if (!cpu || !wall || !(*wall > 0.0)) return "-";
   return fmt::format("{:.1f}", *cpu / *wall);
 }
@@ -55,7 +56,7 @@ std::string cpus_busy(const captured_entry& entry, const char* unit) {
 std::string entry_flags(const captured_entry& entry) {
   std::string flags;
   if (entry.median("oversubscribed").value_or(0.0) > 0.5) flags += "  [oversubscribed]";
-  const auto modes = entry.by_pace_mode(entry.field("kind") == "barrier" ? "ns_per_episode" : "ns_per_step");
+  const auto modes = entry.by_pace_mode(entry.spec.time_counter());
   if (modes.count(-1) > 0) flags += "  [straddles a pace change]";
   if (entry.median("short_batches").value_or(0.0) > 0.5) flags += "  [short batches: the harness barrier weighs in]";
   return flags;
@@ -99,9 +100,8 @@ std::string comparison_figure(const run_book& book, const comparison& what) {
   }
   const captured_entry* a = book.find(what.a);
   const captured_entry* b = book.find(what.b);
-  const char* counter = what.a.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
-  const double median_a = a != nullptr ? a->median(counter).value_or(0.0) : 0.0;
-  const double median_b = b != nullptr ? b->median(counter).value_or(0.0) : 0.0;
+  const double median_a = a != nullptr ? a->median_time().value_or(0.0) : 0.0;
+  const double median_b = b != nullptr ? b->median_time().value_or(0.0) : 0.0;
   std::string why = pair != book.pairs.end() ? pair->failure : std::string("not measured as a pair");
   if (!(median_a > 0.0) || !(median_b > 0.0)) return why;
   return fmt::format("{:.2f}x (medians, unpaired: no interval; {})", median_a / median_b, why);
@@ -109,8 +109,7 @@ std::string comparison_figure(const run_book& book, const comparison& what) {
 
 std::string median_of(const run_book& book, const std::string& name) {
   const captured_entry* entry = book.find(name);
-  const char* counter = name.rfind("barrier/", 0) == 0 ? "ns_per_episode" : "ns_per_step";
-  const auto median = entry != nullptr ? entry->median(counter) : std::nullopt;
+  const auto median = entry != nullptr ? entry->median_time() : std::nullopt;
   return median ? format_ns(*median) : "-";
 }
 
@@ -124,7 +123,7 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
     if (a == nullptr || b == nullptr) continue;
     switch (kind) {
       case comparison_kind::false_sharing:
-        out += fmt::format("  {:<44} {}/{} ({} / {}): {}\n", what.group, a->field("layout"), b->field("layout"),
+        out += fmt::format("  {:<44} {}/{} ({} / {}): {}\n", what.group, a->spec.layout, b->spec.layout,
                            median_of(book, what.a), median_of(book, what.b), comparison_figure(book, what));
         break;
       case comparison_kind::migration:
@@ -144,9 +143,9 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
           const captured_entry* other = book.find(view.other);
           if (entry == nullptr || other == nullptr) continue;
           out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})\n",
-                             entry->field("sync"), median_of(book, view.entry),
-                             entry->field("layout").empty() ? std::string() : fmt::format("({})", entry->field("layout")),
-                             other->field("sync"), view.estimate.median, view.estimate.low, view.estimate.high,
+                             entry->spec.sync, median_of(book, view.entry),
+                             entry->spec.layout.empty() ? std::string() : fmt::format("({})", entry->spec.layout),
+                             other->spec.sync, view.estimate.median, view.estimate.low, view.estimate.high,
                              to_string(view.verdict), view.pair->ratios.size(),
                              view.inverted ? ", the runner-up's pair inverted" : "",
                              view.pair->budget_cut ? ", cut by the time budget: slow blocks" : "");
@@ -159,51 +158,38 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
 // The short ranking: the fastest few combinations of each model, thread
 // count and placement.
 void short_ranking(std::string& out, const run_book& book, std::size_t per_group) {
-  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
-  std::stable_sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) {
-    const auto key = [](const measured_entry& item) {
-      return std::tuple(std::stoul(item.entry->field("threads")), item.entry->field("model"), item.entry->field("pin"),
-                        item.median);
-    };
-    return key(a) < key(b);
-  });
-  if (steps.empty()) return;
+  const std::vector<ranked_group> groups = rank_groups(book, entry_kind::rk4);
+  if (groups.empty()) return;
   out += fmt::format("\nFastest {} per thread count and placement (median step, spread over repetitions, stage "
                      "sync in core-to-core transfers, CPUs the team kept busy):\n",
                      per_group);
-  std::string group;
-  std::size_t shown = 0;
-  for (const auto& step : steps) {
-    const captured_entry& entry = *step.entry;
-    const std::string this_group = fmt::format("{}threads:{} pin:{}",
-                                               entry.field("model").empty() ? "" : "model:" + entry.field("model") + " ",
-                                               entry.field("threads"), entry.field("pin"));
-    if (this_group != group) {
-      group = this_group;
-      shown = 0;
-      out += "  " + group + "\n";
+  for (const ranked_group& group : groups) {
+    out += fmt::format("  {}threads:{} pin:{}\n", group.model.is_chain() ? "model:" + group.model.name() + " " : "",
+                       group.threads, platform::to_string(group.pin));
+    for (std::size_t index = 0; index < group.entries.size() && index < per_group; ++index) {
+      const measured_entry& step = group.entries[index];
+      const captured_entry& entry = *step.entry;
+      out += fmt::format("    {:>11} {:>8} {:>6} {:>4} CPU  {} + {}{}\n", format_ns(step.median),
+                         spread_of(entry, "ns_per_step"), optional_number(entry, "vs_c2c", "{:.2f}"), cpus_busy(entry),
+                         entry.spec.sync, entry.spec.layout, entry_flags(entry));
     }
-    if (shown++ >= per_group) continue;
-    out += fmt::format("    {:>11} {:>8} {:>6} {:>4} CPU  {} + {}{}\n", format_ns(step.median),
-                       spread_of(entry, "ns_per_step"), optional_number(entry, "vs_c2c", "{:.2f}"),
-                       cpus_busy(entry, "step"), entry.field("sync"), entry.field("layout"), entry_flags(entry));
   }
 }
 
 }  // namespace
 
 std::string oversubscribed_note(const run_book& book, unsigned cpus) {
-  std::set<std::string> thread_counts;
+  std::set<unsigned> thread_counts;  // in numeric order
   std::size_t count = 0;
   for (const auto& entry : book.entries()) {
     if (const auto flag = entry.median("oversubscribed"); flag && *flag > 0.5) {
       ++count;
-      thread_counts.insert("threads:" + entry.field("threads"));
+      thread_counts.insert(entry.spec.threads);
     }
   }
   if (count == 0) return "none: every measured entry had a CPU per thread";
   std::string counts;
-  for (const auto& threads : thread_counts) counts += (counts.empty() ? "" : ", ") + threads;
+  for (const unsigned threads : thread_counts) counts += fmt::format("{}threads:{}", counts.empty() ? "" : ", ", threads);
   return fmt::format("{} entries ran oversubscribed (more threads than the {} CPUs of the affinity set: {})", count,
                      cpus, counts);
 }
@@ -221,7 +207,7 @@ void calibration_lines(std::string& out, const run_book& book, const std::string
                      skipped, book.not_applicable.size(), result_path);
   out += "\nIn-run calibration: ";
   out += book.c2c_one_way_ns() ? "core-to-core one-way " + format_ns(*book.c2c_one_way_ns()) : "c2c unavailable";
-  if (const captured_entry* c2c = book.find(entry_spec{entry_kind::c2c, {}, {}, platform::placement::compact, 2}.name());
+  if (const captured_entry* c2c = book.find(entry_spec::c2c_calibration().name());
       c2c != nullptr && book.c2c_one_way_ns()) {
     if (const auto range = c2c->range("one_way_ns"))
       out += fmt::format(" (repetitions {}..{})", format_ns(range->first), format_ns(range->second));
@@ -243,7 +229,7 @@ void best_stage_sync_lines(std::string& out, const std::vector<measured_entry>& 
   for (const char* ratio_name : {"vs_c2c_paired", "vs_c2c"}) {
     std::optional<std::pair<const captured_entry*, double>> best_c2c;
     for (const auto& step : steps) {
-      if (step.entry->field("threads") != "2" || step.entry->field("pin") != "compact") continue;
+      if (step.entry->spec.threads != 2 || step.entry->spec.pin != platform::placement::compact) continue;
       if (const auto ratio = step.entry->median(ratio_name); ratio && (!best_c2c || *ratio < best_c2c->second))
         best_c2c = {step.entry, *ratio};
     }
@@ -262,7 +248,7 @@ void best_stage_sync_lines(std::string& out, const std::vector<measured_entry>& 
 
 // Every RK4 entry ranked by its median step, then the best stage sync.
 void step_ranking(std::string& out, const run_book& book) {
-  std::vector<measured_entry> steps = measured_of(book, "rk4", "ns_per_step");
+  std::vector<measured_entry> steps = measured_of(book, entry_kind::rk4);
   std::sort(steps.begin(), steps.end(), [](const measured_entry& a, const measured_entry& b) { return a.median < b.median; });
   if (steps.empty()) return;
   out += "\nRK4 step, ranked by median step time (spread: half the min..max range over repetitions):\n";
@@ -282,20 +268,17 @@ void step_ranking(std::string& out, const run_book& book) {
 
 // The bare primitives' episodes, by thread count, placement and median.
 void episode_table(std::string& out, const run_book& book) {
-  std::vector<measured_entry> episodes = measured_of(book, "barrier", "ns_per_episode");
-  if (episodes.empty()) return;
-  std::sort(episodes.begin(), episodes.end(), [](const measured_entry& a, const measured_entry& b) {
-    return std::tuple(a.entry->field("threads"), a.entry->field("pin"), a.median) <
-           std::tuple(b.entry->field("threads"), b.entry->field("pin"), b.median);
-  });
+  const std::vector<ranked_group> groups = rank_groups(book, entry_kind::barrier);
+  if (groups.empty()) return;
   out += "\nBare primitives, median time per episode:\n";
-  for (const auto& episode : episodes)
-    out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n", format_ns(episode.median),
-                       spread_of(*episode.entry, "ns_per_episode"),
-                       // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
-                       optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
-                       optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
-                       entry_flags(*episode.entry));
+  for (const ranked_group& group : groups)
+    for (const measured_entry& episode : group.entries)
+      out += fmt::format("  {:>11} {:>8}  futex waits/episode {:>6}  timeouts {:>3}  {}{}\n",
+                         format_ns(episode.median), spread_of(*episode.entry, "ns_per_episode"),
+                         // absent: the primitive cannot count them (registry.hpp: counts_futex_waits)
+                         optional_number(*episode.entry, "futex_waits_per_episode", "{:.3f}", "unavailable"),
+                         optional_number(*episode.entry, "timeouts", "{:.0f}"), episode.entry->name,
+                         entry_flags(*episode.entry));
 }
 
 // Every ratio the summary prints, paired (paired_blocks.hpp).
@@ -323,15 +306,16 @@ void overhead_lines(std::string& out, const run_book& book) {
   std::optional<double> without_accounting;
   std::string overhead_name;
   for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != "overhead" || !entry.error.empty()) continue;
-    (entry.field("accounting") == "on" ? with_accounting : without_accounting) = entry.median("ns_per_step");
-    overhead_name = entry.name.substr(entry.name.find("/sync:") + 1);
+    if (entry.spec.kind != entry_kind::overhead || !entry.error.empty()) continue;
+    (entry.spec.accounting ? with_accounting : without_accounting) = entry.median_time();
+    overhead_name = fmt::format("sync:{}/layout:{}/pin:{}/threads:{}", entry.spec.sync, entry.spec.layout,
+                                platform::to_string(entry.spec.pin), entry.spec.threads);
   }
   // Paired in each repetition of the "on" side (rk4_entries.cpp): the
   // figure to read. The entries' own medians follow, for reference.
   bool paired_shown = false;
   for (const auto& entry : book.entries()) {
-    if (entry.field("kind") != "overhead" || entry.field("accounting") != "on" || !entry.error.empty()) continue;
+    if (entry.spec.kind != entry_kind::overhead || !entry.spec.accounting || !entry.error.empty()) continue;
     const auto paired = entry.median("overhead_ratio");
     const auto range = entry.range("overhead_ratio");
     if (!paired || !range) continue;

@@ -17,7 +17,7 @@ std::string format_ms(std::int64_t ns) { return fmt::format("{:.1f} ms", static_
 
 }  // namespace
 
-std::string stall_reason(const call_result& result, const char* unit, bool pure_spin, bool may_lose_wakeups,
+std::string stall_reason(const call_result& result, std::string_view unit, bool pure_spin, bool may_lose_wakeups,
                          const platform::placement_plan& plan, const run_settings& settings) {
   std::string why;
   if (result.batches.stalled) {
@@ -92,7 +92,8 @@ double ns_per_unit(const call_result& result) {
   return units > 0.0 ? static_cast<double>(total) / units : 0.0;
 }
 
-void set_accounting_counters(benchmark::State& state, const call_result& result, const std::string& unit) {
+void set_accounting_counters(benchmark::State& state, const call_result& result, entry_unit unit_kind) {
+  const std::string unit(to_string(unit_kind));
   if (!result.accounting || result.batches.units_run == 0) return;
   const platform::thread_counters& total = *result.accounting;
   const double per_k = 1000.0 / static_cast<double>(result.batches.units_run);
@@ -190,7 +191,8 @@ class entry_measurement {
   bool record_stop(const call_result& result) {
     const bool pure_spin = call_.primitive != nullptr && call_.primitive->pure_spin;
     const bool may_lose_wakeups = call_.primitive != nullptr && call_.primitive->may_lose_wakeups;
-    const std::string reason = stall_reason(result, call_.unit, pure_spin, may_lose_wakeups, call_.plan, settings_);
+    const std::string reason =
+        stall_reason(result, to_string(call_.unit), pure_spin, may_lose_wakeups, call_.plan, settings_);
     call_.harness.stalled[call_.name] = reason;
     if (measured_before_) return flag_measured_entry(result, reason);
     if (result.batches.stalled && call_.primitive != nullptr) ++call_.harness.stalls_of_sync[stall_key_];
@@ -313,7 +315,7 @@ void entry_measurement::report(const call_result& result) {
     state.SetIterationTime(static_cast<double>(result.batches.batch_ns[batch]) * 1e-9);
     ++batch;
   }
-  const std::string unit_name(call_.unit);
+  const std::string unit_name(to_string(call_.unit));
   state.counters[unit_name + "s_per_batch"] = units;
   const double units_timed = static_cast<double>(result.batches.batch_ns.size()) * units;
   if (result.lead_cpu_ns >= 0)

@@ -314,7 +314,7 @@ void set_pace_counters(benchmark::State& state, const harness_state& harness, lo
 // Why a call stopped early, in one line, from what the primitive is and what
 // it counted: "stalled: one step took 212 ms (bound 50 ms): pure-spin
 // primitive with 4 threads on 2 CPUs".
-std::string stall_reason(const call_result& result, const char* unit, bool pure_spin, bool may_lose_wakeups,
+std::string stall_reason(const call_result& result, std::string_view unit, bool pure_spin, bool may_lose_wakeups,
                          const platform::placement_plan& plan, const run_settings& settings);
 
 // The time per unit of the median batch (probe calls, and the timed call's
@@ -372,7 +372,7 @@ struct entry_call {
   const sync::primitive_info* primitive = nullptr;
   const platform::placement_plan& plan;
   bool accounting = true;     // the timed call's accounting and instrumentation
-  const char* unit = "step";  // "step" or "episode": the counters' names
+  entry_unit unit = entry_unit::step;  // the counters' names (the entry's spec says which)
   // Runs between the timed call's warm-up batch and its first timed batch,
   // with the units per timed batch (the team waiting: a baseline for what the
   // timed batches accumulate). May be empty.
@@ -427,6 +427,6 @@ block_runner_factory block_runner_of(const harness_state& harness, platform::pla
 // Sets the accounting counters on an entry: <prefix>_per_k<unit> for
 // voluntary / involuntary switches and migrations, and cross_core_csw_pct.
 // Migrations unavailable: those two counters are omitted, never 0.
-void set_accounting_counters(benchmark::State& state, const call_result& result, const std::string& unit);
+void set_accounting_counters(benchmark::State& state, const call_result& result, entry_unit unit);
 
 }  // namespace lockstep::bench

@@ -15,6 +15,7 @@
 #include "bench/run/run_book.hpp"
 #include "bench/run/rk4_entries.hpp"
 #include "bench/run/team_driver.hpp"
+#include "tests/support/run_file_entries.hpp"
 #include "platform/placement.hpp"
 #include "platform/topology.hpp"
 #include "tests/support/watchdog.hpp"
@@ -140,7 +141,7 @@ crossover_sweep two_series() {
   const auto series_of = [](const char* sync, bool leader, const std::vector<ratio_estimate>& speedups) {
     crossover_series series;
     series.threads = 2;
-    series.pin = "compact";
+    series.pin = platform::placement::compact;
     series.sync = sync;
     series.layout = "per_thread";
     series.leader = leader;
@@ -227,7 +228,7 @@ TEST(CrossoverJson, TheReadersNamesWithEveryPointAndTheModel) {
 // up to `largest` masses.
 crossover_sweep with_ceiling(std::size_t largest) {
   crossover_sweep sweep = two_series();
-  crossover_ceiling ceiling{2, "compact", {}};
+  crossover_ceiling ceiling{2, platform::placement::compact, {}};
   for (std::size_t masses = 2; masses <= largest; masses *= 2) {
     crossover_sweep_point point;
     point.masses = masses;
@@ -346,7 +347,7 @@ class CrossoverPlan : public ::testing::Test {
     add_step("std_barrier", "packed", 6100.0);
     add_step("std_barrier", "padded64", 5800.0);
     choice.threads = 2;
-    choice.pin = "compact";
+    choice.pin = platform::placement::compact;
     choice.entry = name_of("mailbox", "per_thread");
     choice.sync = "mailbox";
     choice.layout = "per_thread";
@@ -357,7 +358,7 @@ class CrossoverPlan : public ::testing::Test {
   void add_step(const std::string& sync, const std::string& layout, double ns_per_step) {
     captured_entry entry;
     entry.name = name_of(sync, layout);
-    entry.fields = {{"kind", "rk4"}, {"sync", sync}, {"layout", layout}, {"pin", "compact"}, {"threads", "2"}};
+    entry.spec = lockstep::testing::spec_from_old_name(entry.name);
     entry.repetitions.push_back({{"ns_per_step", ns_per_step}, {"sync_ns_per_stage", ns_per_step / 8.0}});
     book.record(std::move(entry));
   }

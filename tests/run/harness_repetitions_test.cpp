@@ -87,7 +87,8 @@ TEST(HarnessRepetitions, ACallStoppedWhileSizingTheFirstRepetitionStopsEveryLate
                                    for (std::uint64_t unit = 0; unit < units; ++unit)
                                      benchmark::DoNotOptimize(sink += unit);
                                  };
-                                 bench::entry_call call{state, harness, name, nullptr, plan, false, "unit", {}};
+                                 bench::entry_call call{state, harness, name,  nullptr,
+                                                        plan,  false,   bench::entry_unit::step, {}};
                                  (void)bench::measure_entry(
                                      call, bench::team_call_runner(team, slots, plan, harness.settings, work));
                                  harness.settings.call_budget_ns = normal_budget;

@@ -17,6 +17,7 @@
 #include "bench/run/headline.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/run/run_book.hpp"
+#include "tests/support/run_file_entries.hpp"
 
 namespace {
 
@@ -31,7 +32,7 @@ void add_step(bench::run_book& book, const std::string& sync, const std::string&
               unsigned threads, double ns_per_step, bool oversubscribed = false, double migrations = 0.0) {
   bench::captured_entry entry;
   entry.name = step_name(sync, layout, pin, threads);
-  entry.fields = {{"kind", "rk4"}, {"sync", sync}, {"layout", layout}, {"pin", pin}, {"threads", std::to_string(threads)}};
+  entry.spec = lockstep::testing::spec_from_old_name(entry.name);
   for (int repetition = 0; repetition < 3; ++repetition)
     entry.repetitions.push_back({{"ns_per_step", ns_per_step},
                                  {"oversubscribed", oversubscribed ? 1.0 : 0.0},
@@ -74,7 +75,7 @@ TEST(Collapse, AnOversubscribedEntryAHundredTimesTheBestIsCollapsedAndOutOfTheRa
   bench::run_book book = two_cpu_book();
   book.collapsed = bench::find_collapsed(book);
   EXPECT_EQ(book.collapsed, (std::set<std::string>{step_name("ck_centralized", "per_thread", "compact", 4)}));
-  for (const auto& step : bench::measured_of(book, "rk4", "ns_per_step"))
+  for (const auto& step : bench::measured_of(book, bench::entry_kind::rk4))
     EXPECT_EQ(book.collapsed.count(step.entry->name), 0u) << step.entry->name;
   for (const auto& what : bench::plan_comparisons(book)) {
     EXPECT_EQ(book.collapsed.count(what.a), 0u) << what.group;
@@ -205,7 +206,7 @@ bench::run_book book_in_modes(const std::vector<int>& modes) {
   bench::run_book book;
   bench::captured_entry entry;
   entry.name = step_name("mailbox", "per_thread", "compact", 2);
-  entry.fields = {{"kind", "rk4"}, {"sync", "mailbox"}, {"layout", "per_thread"}, {"pin", "compact"}, {"threads", "2"}};
+  entry.spec = lockstep::testing::spec_from_old_name(entry.name);
   for (const int mode : modes) {
     entry.repetitions.push_back({{"ns_per_step", mode == 0 ? 1000.0 : 3000.0}});
     if (mode != kNoMode) entry.repetitions.back()["pace_mode"] = mode;
@@ -409,8 +410,7 @@ void add_spread_step(bench::run_book& book, const std::string& pin, unsigned thr
                      const std::vector<double>& steps) {
   bench::captured_entry entry;
   entry.name = step_name("mailbox", "per_thread", pin, threads);
-  entry.fields = {{"kind", "rk4"}, {"sync", "mailbox"}, {"layout", "per_thread"}, {"pin", pin},
-                  {"threads", std::to_string(threads)}};
+  entry.spec = lockstep::testing::spec_from_old_name(entry.name);
   for (double step : steps)
     entry.repetitions.push_back({{"ns_per_step", step}, {"oversubscribed", threads > 2 ? 1.0 : 0.0}, {"vs_c2c", 1.0}});
   book.record(std::move(entry));
@@ -429,9 +429,9 @@ TEST(AnswerFirst, ChoicesTheRunDoesNotSeparateAreNamedAsATie) {
   add_spread_step(book, "compact", 4, {4900.0, 5000.0, 5100.0});
   const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
   ASSERT_TRUE(headline.answer.has_value());
-  EXPECT_EQ(headline.answer->pin, "compact");
+  EXPECT_EQ(headline.answer->pin, lockstep::platform::placement::compact);
   ASSERT_EQ(headline.answer->level.size(), 1u);
-  EXPECT_EQ(headline.answer->level[0].pin, "none");
+  EXPECT_EQ(headline.answer->level[0].pin, lockstep::platform::placement::none);
   EXPECT_EQ(headline.answer->level[0].threads, 2u);
   const auto first = std::find_if(headline.lines.begin(), headline.lines.end(),
                                   [](const std::string& line) { return line.rfind("Best here:", 0) == 0; });

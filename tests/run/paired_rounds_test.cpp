@@ -21,6 +21,7 @@
 #include "bench/run/reporters.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/team_driver.hpp"
+#include "tests/support/run_file_entries.hpp"
 
 namespace {
 
@@ -157,7 +158,7 @@ bench::captured_entry step_entry(const std::string& name, const std::vector<doub
                                  double migrations_per_kstep = 0.0) {
   bench::captured_entry entry;
   entry.name = name;
-  entry.fields = bench::parse_entry_name(name);
+  entry.spec = lockstep::testing::spec_from_old_name(name);
   for (const double value : ns_per_step)
     entry.repetitions.push_back({{"ns_per_step", value}, {"migrations_per_kstep", migrations_per_kstep}});
   return entry;

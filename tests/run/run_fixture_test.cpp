@@ -35,6 +35,7 @@
 #include "bench/run/reporters.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/summary.hpp"
+#include "tests/support/run_file_entries.hpp"
 #include "platform/statistics.hpp"
 
 namespace {
@@ -88,7 +89,7 @@ bench::run_book book_of(const nlohmann::json& file) {
     if (entries.empty() || entries.back().name != name) {
       bench::captured_entry entry;
       entry.name = name;
-      entry.fields = bench::parse_entry_name(name);
+      entry.spec = lockstep::testing::spec_of_row(row);
       entries.push_back(std::move(entry));
     }
     std::map<std::string, double> counters;
@@ -201,8 +202,8 @@ TEST(RunFixture, TheSummaryPrintsEachPairsFigureFromTheFile) {
       continue;
     }
     // "    std_barrier   13.6 us (packed)  vs futex_spin   1.24x [1.17, 1.33] penalty (6 pairs)"
-    const std::string sync_a = bench::parse_entry_name(a).at("sync");
-    const std::string sync_b = bench::parse_entry_name(b).at("sync");
+    const std::string sync_a = lockstep::testing::spec_from_old_name(a).sync;
+    const std::string sync_b = lockstep::testing::spec_from_old_name(b).sync;
     EXPECT_TRUE(printed({"    " + sync_a + " ", " vs " + sync_b + " ", figure(median, low, high, verdict)})) << summary;
     // The group's first pair is the runner-up's against the leader: the
     // leader's line is that pair inverted.
@@ -360,7 +361,8 @@ TEST(RunFixture, TheAnswerRecommendsWhatItsPairsSupportAndNamesTiesAsTies) {
       const std::string first = choice.sync + " + " + choice.layout;
       const std::string both = first + " or " + choice.runner_up->sync + " + " + choice.runner_up->layout + " (tied)";
       const auto line = std::find_if(book.headline.lines.begin(), book.headline.lines.end(), [&](const std::string& l) {
-        return l.find(fmt::format("threads:{} pin:{}", choice.threads, choice.pin)) != std::string::npos &&
+        return l.find(fmt::format("threads:{} pin:{}", choice.threads, lockstep::platform::to_string(choice.pin))) !=
+                   std::string::npos &&
                l.find(first) != std::string::npos;
       });
       ASSERT_NE(line, book.headline.lines.end()) << bench::headline_text(book.headline);

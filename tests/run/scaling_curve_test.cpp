@@ -12,6 +12,7 @@
 #include "bench/run/reporters.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/scaling.hpp"
+#include "tests/support/run_file_entries.hpp"
 
 namespace {
 
@@ -23,7 +24,7 @@ bench::captured_entry rk4_entry(const std::string& name, const std::vector<doubl
                                 bool oversubscribed = false) {
   bench::captured_entry entry;
   entry.name = name;
-  entry.fields = bench::parse_entry_name(name);
+  entry.spec = lockstep::testing::spec_from_old_name(name);
   for (const double value : sync_ns_per_stage)
     entry.repetitions.push_back({{"sync_ns_per_stage", value},
                                  {"ns_per_step", 10.0 * value},
