@@ -61,8 +61,8 @@ class atomic_result_file {
   atomic_result_file(const atomic_result_file&) = delete;  // owns the signal handlers' path and the descriptor
   atomic_result_file& operator=(const atomic_result_file&) = delete;
 
-  // The path through which a tool that writes the file itself (Google
-  // Benchmark's --benchmark_out) reaches the temporary file:
+  // The path through which a tool that writes the file itself reaches the
+  // temporary file:
   // /proc/self/fd/N, the open file itself whatever happens to its name
   // (the temporary file's name where /proc is not mounted).
   const std::string& temporary_path() const noexcept { return through_descriptor_; }

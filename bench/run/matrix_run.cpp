@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <regex>
@@ -181,6 +180,7 @@ struct prepared_matrix {
   std::vector<entry_spec> entries;  // as registered, in registration order
   registered_entries registered;    // the same by name, for the reporters
   std::vector<std::string> benchmark_arguments;  // what Google Benchmark was initialised with
+  result_json_reporter json;                     // Google Benchmark's JSON, written when the run is over
 };
 
 // The mode: how long each entry runs (run_book.hpp, run_settings), how many
@@ -222,10 +222,11 @@ void apply_mode(const matrix_request& request, prepared_matrix& run) {
 
 // Google Benchmark's flags: ours first, the user's after (the last wins).
 // Google Benchmark keeps pointers into them (its context's executable is
-// argv[0]): `arguments` must outlive the run.
-void initialize_benchmark(const matrix_request& request, int repetitions, const std::string& benchmark_out,
-                          std::vector<std::string>& arguments) {
-  arguments = {"lockstep run", "--benchmark_out=" + benchmark_out, "--benchmark_out_format=json",
+// argv[0]): `arguments` must outlive the run. --benchmark_out only because
+// Google Benchmark takes a file reporter on no other terms: the reporter
+// keeps its text (reporters.hpp), and /dev/null gets nothing.
+void initialize_benchmark(const matrix_request& request, int repetitions, std::vector<std::string>& arguments) {
+  arguments = {"lockstep run", "--benchmark_out=/dev/null", "--benchmark_out_format=json",
                fmt::format("--benchmark_repetitions={}", repetitions)};
   if (request.interleave) arguments.emplace_back("--benchmark_enable_random_interleaving=true");
   arguments.insert(arguments.end(), request.benchmark_flags.begin(), request.benchmark_flags.end());
@@ -254,12 +255,6 @@ void add_run_context(const matrix_request& request, const prepared_matrix& run) 
                                                     : "registration order (--no-interleave): every entry's "
                                                       "repetitions back to back");
   benchmark::AddCustomContext("noise_band", fmt::format("{:g}", request.noise));
-  // A run of a group (lockstep run --runs K): its index and the group's size,
-  // which lockstep compare reads to take the group's files as replicates.
-  if (request.runs > 0) {
-    benchmark::AddCustomContext("lockstep_run_index", std::to_string(request.run_index));
-    benchmark::AddCustomContext("lockstep_runs", std::to_string(request.runs));
-  }
   benchmark::AddCustomContext("clock_read_ns", fmt::format("{:.1f}", run.book.clock_read_ns));
   benchmark::AddCustomContext(
       "lockstep_timing",
@@ -269,15 +264,14 @@ void add_run_context(const matrix_request& request, const prepared_matrix& run) 
       "outside the timed region; medians over repetitions");
 }
 
-std::unique_ptr<prepared_matrix> prepare_matrix(const matrix_request& request, const platform::topology& machine,
-                                                const std::string& benchmark_out) {
+std::unique_ptr<prepared_matrix> prepare_matrix(const matrix_request& request, const platform::topology& machine) {
   check_benchmark_flags(request.benchmark_flags);
   auto run = std::make_unique<prepared_matrix>(machine);
   apply_mode(request, *run);
   // What one clock reading costs here, taken off every timed sync span
   // (bench/run/rk4_entries.cpp) and stated in the context.
   run->book.clock_read_ns = platform::clock_read_cost_ns();
-  initialize_benchmark(request, run->repetitions, benchmark_out, run->benchmark_arguments);
+  initialize_benchmark(request, run->repetitions, run->benchmark_arguments);
   add_run_context(request, *run);
   for (auto* register_entries : {&register_calibration_benchmarks, &register_overhead_pair,
                                  &register_barrier_benchmarks, &register_rk4_benchmarks})
@@ -296,14 +290,13 @@ void measure_entries(prepared_matrix& run, const std::string& destination) {
   const run_estimate planned = estimate_run(selected, planned_comparisons(run.entries), run.cost);
   progress_reporter progress(run.book, run.registered, selected, planned.matrix_s);
   run.harness.after_call = [&progress] { progress.tick(); };
-  result_json_reporter json;
   fmt::print(stderr,
              "lockstep run: {} entries, {} repetitions each, then the paired comparisons: about {} in all (the plan's "
              "estimate: {} and {}); JSON to {}\n",
              selected, run.repetitions, format_seconds(planned.total_s()), format_seconds(planned.matrix_s),
              format_seconds(planned.pairs_s), destination);
   std::fflush(stderr);
-  benchmark::RunSpecifiedBenchmarks(&progress, &json);
+  benchmark::RunSpecifiedBenchmarks(&progress, &run.json);
   benchmark::Shutdown();
   run.harness.after_call = nullptr;
   run.book.derive_ratios();
@@ -367,30 +360,21 @@ context_map in_run_context(const run_book& book, const pace_modes& modes, unsign
   return in_run;
 }
 
-// The result file: Google Benchmark's entries (the file its JSON reporter
-// wrote at the temporary path), with the derived ratios, the pace trace and
-// pairs, the headline, the scaling curve and the machine's context; then the
-// rename.
+// The result file, assembled once: Google Benchmark's context and entries
+// as lockstep completed them (reporters.hpp: result_json_reporter), the pace
+// trace and pairs, the derived sections, the answer, the scaling curve and
+// the machine's context; then the rename.
 // Seconds a run spent: measuring the matrix's repetitions, and in all.
 struct run_seconds {
   double matrix = 0.0;
   double wall = 0.0;
 };
 
-void write_result(const matrix_request& request, const platform::topology& machine, const prepared_matrix& run,
+void write_result(const matrix_request& request, const platform::topology& machine, prepared_matrix& run,
                   const pace_modes& modes, atomic_result_file& result_file, run_seconds seconds) {
-  nlohmann::json document;
-  {
-    std::ifstream written(result_file.temporary_path());
-    try {
-      document = nlohmann::json::parse(written);
-    } catch (const nlohmann::json::exception& error) {
-      throw std::runtime_error(std::string("Google Benchmark's result JSON does not parse: ") + error.what());
-    }
-  }
+  nlohmann::json document = run.json.run_document(run.book, run.registered, modes);
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
-  derive_ratios(document, run.book, run.registered);
   write_pace_and_pairs(document, run.book, &run.pace, modes);
   write_derived_sections(document, run.book);
   document["lockstep_headline"] = headline_json(run.book.headline);
@@ -401,6 +385,13 @@ void write_result(const matrix_request& request, const platform::topology& machi
   // in-run keys.
   merge_into_result(document, machine_context(machine));
   merge_into_result(document, in_run_context(run.book, modes, run.book.cpus));
+  // A run of a group (lockstep run --runs K): its index and the group's
+  // size, numbers, which lockstep compare reads to take the group's files as
+  // replicates in order.
+  if (request.runs > 0) {
+    document["context"]["lockstep_run_index"] = request.run_index;
+    document["context"]["lockstep_runs"] = request.runs;
+  }
   document["context"]["lockstep_matrix_s"] = fmt::format("{:.3f}", seconds.matrix);
   document["context"]["lockstep_wall_s"] = fmt::format("{:.3f}", seconds.wall);
   result_file.write(document.dump(2) + "\n");
@@ -410,7 +401,7 @@ void write_result(const matrix_request& request, const platform::topology& machi
 }  // namespace
 
 std::string plan_text(const matrix_request& request, const platform::topology& machine) {
-  const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine, "/dev/null");
+  const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine);
   return plan_of(machine, request, run->entries, run->book, run->cost);
 }
 
@@ -420,7 +411,7 @@ run_book run_matrix(const matrix_request& request, const platform::topology& mac
   // matrix's repetitions (lockstep_matrix_s) and the whole run from here
   // (lockstep_wall_s), whose difference is a run's fixed part.
   const auto started = std::chrono::steady_clock::now();
-  const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine, result_file.temporary_path());
+  const std::unique_ptr<prepared_matrix> run = prepare_matrix(request, machine);
   const auto matrix_started = std::chrono::steady_clock::now();
   measure_entries(*run, result_file.destination());
   const std::chrono::duration<double> matrix = std::chrono::steady_clock::now() - matrix_started;

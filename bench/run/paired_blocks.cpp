@@ -325,20 +325,6 @@ void assign_pace_modes(run_book& book, const pace_modes& modes) {
 
 void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pace_probe* probe,
                           const pace_modes& modes) {
-  for (auto& row : result["benchmarks"]) {
-    if (!row.is_object()) continue;
-    const bool iteration = row.value("run_type", std::string()) == "iteration";
-    const auto before = row.find(std::string(kPaceBeforeCounter));
-    const auto after = row.find(std::string(kPaceAfterCounter));
-    if (iteration && before != row.end() && after != row.end() && before->is_number() && after->is_number())
-      row["pace_mode"] = agreed_mode(modes, before->get<std::size_t>(), after->get<std::size_t>());
-    row.erase(std::string(kPaceBeforeCounter));
-    row.erase(std::string(kPaceAfterCounter));
-    // An aggregate of a mode index or of readings means nothing.
-    if (!iteration) {
-      row.erase("pace_mode");
-    }
-  }
   if (probe != nullptr) result["lockstep_pace"] = pace_json(*probe, modes);
   nlohmann::json pairs = nlohmann::json::array();
   for (const paired_result& pair : book.pairs) {

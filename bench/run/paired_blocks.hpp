@@ -108,9 +108,8 @@ void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, 
 // modes; the reading-index counters are removed.
 void assign_pace_modes(run_book& book, const pace_modes& modes);
 
-// The same on Google Benchmark's result JSON (iteration rows get pace_mode;
-// the reading indices leave every row), plus the top-level "lockstep_pace"
-// and "lockstep_pairs" (the contract with reports/).
+// The result file's "lockstep_pace" and "lockstep_pairs" (the contract with
+// reports/; its rows get their pace modes in reporters.cpp).
 void write_pace_and_pairs(nlohmann::json& result, const run_book& book, const pace_probe* probe,
                           const pace_modes& modes);
 

@@ -1,6 +1,6 @@
 #pragma once
 // Where a run's results go: the progress reporter (stderr) that also feeds the
-// run book, and the result file written atomically.
+// run book, and Google Benchmark's JSON of the result file.
 #include <benchmark/benchmark.h>
 
 #include <nlohmann/json.hpp>
@@ -8,9 +8,12 @@
 #include <chrono>
 #include <cstddef>
 #include <optional>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "bench/results/derived_figures.hpp"
+#include "bench/run/pace.hpp"
 #include "bench/run/run_book.hpp"
 
 namespace lockstep::bench {
@@ -59,32 +62,58 @@ inline constexpr std::chrono::seconds kProgressEvery{10};
 // the observed rate after; past the estimate, "a little past the estimate".
 std::string time_left(double elapsed_s, double planned_s, std::size_t done, std::size_t total);
 
-// Google Benchmark's JSON reporter, with entry names as lockstep agreed them:
-// Google Benchmark appends "/manual_time", "/real_time", "/iterations:N" and
-// "/repeats:N" to a name when an entry uses them; lockstep's names carry only key:value
-// segments (the timing is stated once, in the context's lockstep_timing).
-// Non-finite counter values (an all-zero counter's cv aggregate) are omitted:
-// Google Benchmark would write NaN, which no JSON parser accepts.
-// A row with a cpu_ns_per_step or cpu_ns_per_episode counter (the team entries
-// and rk4/serial: team_driver.hpp, before measure_entry) gets that counter as
-// its cpu_time: a repetition's own value, an aggregate row the counter's
-// aggregate (Google Benchmark computes both with the same statistic, so the
-// cpu_time aggregates are those of the repetitions' cpu_time).
+// Google Benchmark's JSON of the run, the "context" and "benchmarks" of the
+// result file, written once, when the run is over, from the runs Google
+// Benchmark reported and lockstep completed in their typed form:
+//   * Google Benchmark appends "/manual_time", "/real_time", "/iterations:N"
+//     and "/repeats:N" to a name when an entry uses them; lockstep's names
+//     carry only key:value segments (the timing is stated once, in the
+//     context's lockstep_timing);
+//   * a row with an ns_per_step or ns_per_episode counter (the team entries
+//     and rk4/serial: team_driver.hpp, before measure_entry) gets it as its
+//     real_time, and its cpu_ns_per_step or cpu_ns_per_episode as its
+//     cpu_time: a repetition's own value, an aggregate row the counter's
+//     aggregate (Google Benchmark computes both with the same statistic);
+//   * the composed step's rows get vs_serial and vs_c2c from the whole run's
+//     calibrations (derived_figures.hpp; either may be absent, and so then is
+//     its ratio). Dividing by a constant scales a mean, a median and a
+//     standard deviation alike; a coefficient of variation does not change,
+//     so a cv row's ratio is its counter's cv;
+//   * an iteration row gets its pace mode (pace.hpp: agreed_mode of the
+//     readings around it) in place of the readings' indices, which leave
+//     every row (an aggregate of a mode index or of readings means nothing);
+//   * non-finite counter values (an all-zero counter's cv aggregate) are
+//     omitted: Google Benchmark would write NaN, which no JSON parser accepts.
+// Google Benchmark's JSONReporter writes its own fields (the format its
+// tools/compare.py reads, as the installed version writes it); what a run
+// cannot hold, its entry's spec as values ("lockstep_entry", which
+// run_document adds to every row) and lockstep's sections, is added to the
+// document it gives.
+//
+// Google Benchmark accepts a file reporter only with --benchmark_out, whose
+// stream it opens and hands over before the run; this reporter keeps its own
+// text instead (matrix_run.cpp passes /dev/null), so the result file is
+// written whole, once, by atomic_result_file.
 class result_json_reporter : public benchmark::JSONReporter {
  public:
+  // Google Benchmark's context (its date is the run's start), kept as text.
+  bool ReportContext(const Context& context) override;
+  // Kept, to be completed and written by run_document.
   void ReportRuns(const std::vector<Run>& runs) override;
+  void Finalize() override {}
+
+  // The completed runs in Google Benchmark's JSON, each row with its
+  // "lockstep_entry"; no "benchmarks" when no run was reported
+  // (--benchmark_list_tests). Call once, when the run is over.
+  nlohmann::json run_document(const run_book& book, const registered_entries& registered,
+                              const pace_modes& modes);
+
+ private:
+  std::ostringstream text_;
+  std::vector<Run> runs_;
 };
 
 // The run's name without Google Benchmark's suffixes (see above).
 std::string plain_name(const benchmark::BenchmarkReporter::Run& run);
-
-// The same derivation as run_book::derive_ratios, on the result JSON Google
-// Benchmark wrote: every iteration and aggregate row of an rk4 or overhead
-// entry (its registered spec says which) gets vs_serial and vs_c2c from the
-// run's calibrations (either may be absent, and so then is its ratio).
-// Dividing by a constant scales a mean, a median and a standard deviation
-// alike; a coefficient of variation does not change, so a cv row's ratio is
-// its counter's cv.
-void derive_ratios(nlohmann::json& result, const run_book& book, const registered_entries& registered);
 
 }  // namespace lockstep::bench

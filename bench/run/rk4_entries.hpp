@@ -24,7 +24,7 @@
 // Both calibrations are registered first (Google Benchmark runs entries in
 // registration order unless told to interleave), but no entry reads them while
 // it runs: vs_serial and vs_c2c are derived after the run from the whole run's
-// medians (run_book::derive_ratios, derive_ratios in reporters.hpp).
+// medians (run_book::derive_ratios, and for the file result_json_reporter in reporters.hpp).
 #include <string>
 #include <utility>
 #include <vector>
