@@ -7,7 +7,7 @@ factor: a known change, to check what `lockstep compare` calls against it.
 INPUT is a result file or a directory of `lockstep run --runs K` (run-1.json ... run-K.json); OUTPUT the file or
 directory to write (a directory is made; it must not exist). Multiplied by FACTOR: real_time, cpu_time,
 ns_per_step and ns_per_episode of every rk4/ and barrier/ entry, each repetition and each aggregate but the
-percentages (cv). Nothing else changes (the calibrations, c2c, the pace trace, the pairs, the headline).
+percentages (cv). Nothing else changes (the calibrations, c2c, the pace trace, the pairs, the answer).
 Bad input: one line on stderr, exit 2, nothing written.
 """
 import json

@@ -76,7 +76,7 @@ using all_primitives = type_list<std_barrier, win_event_faithful, win_event, fut
                                  ck_dissemination, ck_tournament, ck_mcs, ck_combining>;
 
 // The baseline the others are set against where one primitive must be
-// (the run's headline, bench/run/headline.hpp: what synchronisation
+// (the run's answer, bench/run/answer.hpp: what synchronisation
 // costs here, the paper's question): the C++20 standard's own barrier.
 inline constexpr std::string_view kBaselinePrimitive = std_barrier::kName;
 

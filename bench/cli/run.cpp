@@ -301,8 +301,8 @@ int execute(const run_options& options) {
       fmt::print("{}", bench::plan_text(request, machine));
       return kExitOk;
     }
-    const bench::run_book book = bench::run_matrix(request, machine, *result_file);
-    fmt::print("{}", bench::render_summary(book, result_file->destination(), options.verbose));
+    const bench::run_result result = bench::run_matrix(request, machine, *result_file);
+    fmt::print("{}", bench::render_summary(result, result_file->destination(), options.verbose));
   } catch (const bench::matrix_request_error& error) {
     throw usage_error(error.what());
   }

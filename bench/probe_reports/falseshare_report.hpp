@@ -5,8 +5,8 @@
 // figure once (per access pattern, each stride's distribution and the paired
 // penalty of sharing a line against sharing nothing); falseshare_text and
 // falseshare_json only arrange them. falseshare_answer_of words the answer,
-// for this command's last line and for the run's headline
-// (bench/run/headline.cpp), so that both say the same thing the same way.
+// for this command's last line and for the run's answer
+// (bench/run/answer.cpp), so that both say the same thing the same way.
 #include <nlohmann/json.hpp>
 
 #include <cstddef>

@@ -90,7 +90,7 @@ struct crossover_series {
   std::string sync;
   std::string layout;
   // The run's choice at this thread count, or the rival its pair could not
-  // tell from it (headline_choice::tied); false: the baseline (std::barrier).
+  // tell from it (answer_choice::tied); false: the baseline (std::barrier).
   bool leader = true;
   // The stage sync the model takes: the run's sync_ns_per_stage (median) of
   // this primitive's entry at this thread count, placement and layout, and
@@ -145,7 +145,7 @@ std::optional<double> share_of_ceiling(const crossover_sweep& sweep, const cross
 // The points a finder reads: the measured ones of a series.
 std::vector<crossover_point> crossover_points(const crossover_series& series);
 
-// The headline's crossover lines: per thread count the crossover's ("Crossover at 2
+// The answer's crossover lines: per thread count the crossover's ("Crossover at 2
 // threads (pin:compact): mailbox pays off from about 1450 masses [1100, 1900]
 // (1450 equations a thread); std_barrier from about 2900 [...]; below that,
 // step serially"), then the ceiling's where one was measured ("Ceiling at 2

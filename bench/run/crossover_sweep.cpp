@@ -132,17 +132,17 @@ void add_batch(paired_result& into, const paired_result& more, double noise) {
   into.verdict = verdict_of(into.estimate, noise);
 }
 
-std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices) {
+std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<answer_choice>& choices) {
   const std::vector<ranked_group> ranked = rank_groups(book, entry_kind::rk4);
-  std::map<unsigned, std::vector<const headline_choice*>> by_threads;
+  std::map<unsigned, std::vector<const answer_choice*>> by_threads;
   for (const auto& choice : choices)
     if (choice.threads > 1) by_threads[choice.threads].push_back(&choice);
   std::vector<crossover_series> planned;
   for (const auto& [threads, here] : by_threads) {
-    const auto compact_choice = std::find_if(here.begin(), here.end(), [&](const headline_choice* choice) {
+    const auto compact_choice = std::find_if(here.begin(), here.end(), [&](const answer_choice* choice) {
       return choice->pin == platform::placement::compact;
     });
-    const headline_choice& chosen = compact_choice != here.end() ? **compact_choice : *here.front();
+    const answer_choice& chosen = compact_choice != here.end() ? **compact_choice : *here.front();
     const auto stage_sync_of = [&](crossover_series& series, const std::string& entry) {
       series.stage_sync_entry = entry;
       if (const captured_entry* found = book.find(entry)) series.stage_sync_ns = found->median("sync_ns_per_stage");
@@ -195,128 +195,170 @@ double estimate_crossover_s(std::size_t series, std::size_t ceilings, const cros
   return std::min(all_ns, static_cast<double>(settings.budget_ns)) / 1e9;
 }
 
-crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_series> series,
-                                 const crossover_settings& settings,
-                                 const std::function<void(std::size_t, double)>& progress) {
+namespace {
+
+// A sweep under way: where it measures, how, which series are still going,
+// how many points in a row each cleared 1, and since when.
+struct sweep_state {
+  harness_state& harness;
+  const crossover_settings& settings;
+  pairing_settings pairing;
+  std::size_t cpus = 0;
+  std::int64_t start_ns = 0;
+  std::vector<bool> going;
+  std::vector<unsigned> clear_in_a_row;
+
+  [[nodiscard]] bool over_budget() const { return platform::now_ns() - start_ns > settings.budget_ns; }
+  [[nodiscard]] double elapsed_s() const { return static_cast<double>(platform::now_ns() - start_ns) / 1e9; }
+};
+
+// The sweep as asked, its points empty: one ceiling per thread count, at its
+// series' placement (they share it).
+crossover_sweep empty_sweep(std::vector<crossover_series> series, const crossover_settings& settings) {
   crossover_sweep sweep;
   sweep.budget_ns = settings.budget_ns;
   sweep.max_masses = settings.max_masses;
   sweep.pairs = settings.pairs;
   sweep.block_ns = settings.block_ns;
   sweep.series = std::move(series);
-  // One ceiling per thread count, at its series' placement (they share it).
   for (const auto& one : sweep.series)
     if (std::none_of(sweep.ceilings.begin(), sweep.ceilings.end(),
                      [&](const crossover_ceiling& ceiling) { return ceiling.threads == one.threads; }))
       sweep.ceilings.push_back({one.threads, one.pin, {}});
+  return sweep;
+}
+
+// Whether the sweep measures `masses`: not when every series stopped, past
+// the largest size, or past the budget (each series still going then says so).
+bool sweep_goes_on(const sweep_state& state, crossover_sweep& sweep, std::size_t masses) {
+  if (std::find(state.going.begin(), state.going.end(), true) == state.going.end()) {
+    sweep.stop_reason = "every series stopped";
+    return false;
+  }
+  const char* reason = masses > state.settings.max_masses ? "largest_size" : state.over_budget() ? "budget" : nullptr;
+  if (reason == nullptr) return true;
+  for (std::size_t index = 0; index < state.going.size(); ++index)
+    if (state.going[index]) sweep.series[index].stop_reason = reason;
+  sweep.stop_reason = reason;
+  return false;
+}
+
+// The comparisons of every series still going at `masses` (its parallel
+// step against the chain's serial step), their sides built; returns the
+// series' indices, in the plan's order.
+std::vector<std::size_t> plan_series(sweep_state& state, const crossover_sweep& sweep, std::size_t masses,
+                                     const std::string& serial_name, std::vector<comparison>& plan) {
+  harness_state& harness = state.harness;
+  std::vector<std::size_t> which;
+  for (std::size_t index = 0; index < sweep.series.size(); ++index) {
+    if (!state.going[index]) continue;
+    const crossover_series& one = sweep.series[index];
+    const bool oversubscribed = one.threads > state.cpus;
+    block_runner_factory factory =
+        chain_step_runner(harness, one.sync, one.layout, one.pin, one.threads, masses, !oversubscribed);
+    if (!factory) continue;  // too few masses for the threads at this size: the next one
+    const std::string name =
+        entry_spec::parallel_step(one.sync, one.layout, one.pin, one.threads, kernels::model_choice{masses}).name();
+    harness.units_per_batch[name] = probe_units(factory, harness.settings);
+    harness.block_runners[name] = std::move(factory);
+    plan.push_back({comparison_kind::crossover,
+                    fmt::format("crossover sync:{} layout:{} pin:{} threads:{} masses:{}", one.sync, one.layout,
+                                platform::to_string(one.pin), one.threads, masses),
+                    serial_name, name});
+    which.push_back(index);
+  }
+  return which;
+}
+
+// The plan's pairs, added to the book's after `before`. A comparison whose
+// interval came out wide takes another batch of pairs, up to
+// kCrossoverMoreBatches, while the budget lasts: the rule reads the
+// interval's width, never its place, and the estimate is over every pair.
+void measure_size(const sweep_state& state, const std::vector<comparison>& plan, std::size_t before) {
+  std::vector<paired_result>& pairs = state.harness.book->pairs;
+  measure_pairs(state.harness, plan, state.pairing, {});
+  for (unsigned batch = 0; batch < kCrossoverMoreBatches && pairs.size() == before + plan.size(); ++batch) {
+    if (state.over_budget()) break;
+    std::vector<comparison> again;
+    std::vector<std::size_t> where;
+    for (std::size_t item = 0; item < plan.size(); ++item)
+      if (interval_too_wide(pairs[before + item])) {
+        again.push_back(plan[item]);
+        where.push_back(before + item);
+      }
+    if (again.empty()) break;
+    const std::size_t added = pairs.size();
+    measure_pairs(state.harness, again, state.pairing, {});
+    for (std::size_t item = 0; item < where.size() && added + item < pairs.size(); ++item)
+      if (pairs[added + item].failure.empty()) add_batch(pairs[where[item]], pairs[added + item], state.settings.noise);
+    pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(added), pairs.end());
+  }
+}
+
+// The points of one size, from the pairs after `before` (the series' first,
+// then the ceilings'): a series that failed or confirmed its crossover stops.
+void record_size(sweep_state& state, crossover_sweep& sweep, const std::vector<std::size_t>& which,
+                 const std::vector<std::size_t>& ceilings_here, std::size_t before, std::size_t masses) {
+  const std::vector<paired_result>& pairs = state.harness.book->pairs;
+  for (std::size_t item = 0; item < which.size() && before + item < pairs.size(); ++item) {
+    const std::size_t index = which[item];
+    crossover_series& one = sweep.series[index];
+    crossover_sweep_point point =
+        point_of(pairs[before + item], one.threads, masses, one.threads > state.cpus, one.stage_sync_ns);
+    if (!point.failure.empty() && point.pairs_set_aside == 0) {
+      one.stop_reason = "failed: " + point.failure;
+      state.going[index] = false;
+    }
+    unsigned& clear = state.clear_in_a_row[index];
+    clear = point.measured() && point.speedup.low > 1.0 ? clear + 1 : 0;
+    one.points.push_back(std::move(point));
+    if (state.going[index] && clear >= kCrossoverClearPoints && masses >= state.settings.through_masses) {
+      one.stop_reason = "confirmed";
+      state.going[index] = false;
+    }
+  }
+  for (std::size_t item = 0; item < ceilings_here.size() && before + which.size() + item < pairs.size(); ++item) {
+    crossover_ceiling& ceiling = sweep.ceilings[ceilings_here[item]];
+    ceiling.points.push_back(point_of(pairs[before + which.size() + item], ceiling.threads, masses,
+                                      ceiling.threads > state.cpus, std::nullopt));
+  }
+}
+
+}  // namespace
+
+crossover_sweep sweep_crossovers(harness_state& harness, std::vector<crossover_series> series,
+                                 const crossover_settings& settings,
+                                 const std::function<void(std::size_t, double)>& progress) {
+  crossover_sweep sweep = empty_sweep(std::move(series), settings);
+  sweep_state state{harness, settings, {}, harness.machine->affinity().size(), platform::now_ns(),
+                    std::vector<bool>(sweep.series.size(), true), std::vector<unsigned>(sweep.series.size(), 0)};
+  state.pairing.pairs = settings.pairs;
+  state.pairing.block_ns = settings.block_ns;
+  state.pairing.noise = settings.noise;
+  state.pairing.budget_ns = kComparisonBudgetNs;
   // The sweep's pairs take no pace readings: each pair's two blocks share the
   // pace, and the pace trace is the matrix's.
   pace_probe* const pace = harness.pace;
   harness.pace = nullptr;
-  pairing_settings pairing;
-  pairing.pairs = settings.pairs;
-  pairing.block_ns = settings.block_ns;
-  pairing.noise = settings.noise;
-  pairing.budget_ns = kComparisonBudgetNs;
-  const std::size_t cpus = harness.machine->affinity().size();
-  std::vector<bool> going(sweep.series.size(), true);
-  std::vector<unsigned> clear_in_a_row(sweep.series.size(), 0);
-  const std::int64_t start_ns = platform::now_ns();
-  const auto elapsed_s = [&] { return static_cast<double>(platform::now_ns() - start_ns) / 1e9; };
-  for (std::size_t masses = kCrossoverFirstMasses;; masses *= 2) {
-    const bool any = std::find(going.begin(), going.end(), true) != going.end();
-    if (!any) {
-      sweep.stop_reason = "every series stopped";
-      break;
-    }
-    const auto stop_going = [&](const char* reason) {
-      for (std::size_t index = 0; index < going.size(); ++index)
-        if (going[index]) sweep.series[index].stop_reason = reason;
-      sweep.stop_reason = reason;
-    };
-    if (masses > settings.max_masses) {
-      stop_going("largest_size");
-      break;
-    }
-    if (platform::now_ns() - start_ns > settings.budget_ns) {
-      stop_going("budget");
-      break;
-    }
+  for (std::size_t masses = kCrossoverFirstMasses; sweep_goes_on(state, sweep, masses); masses *= 2) {
     const std::string serial_name = entry_spec::serial_step(kernels::model_choice{masses}).name();
     std::vector<comparison> plan;
-    std::vector<std::size_t> which;
-    for (std::size_t index = 0; index < sweep.series.size(); ++index) {
-      if (!going[index]) continue;
-      const crossover_series& one = sweep.series[index];
-      const platform::placement pin = one.pin;
-      const bool oversubscribed = one.threads > cpus;
-      block_runner_factory factory =
-          chain_step_runner(harness, one.sync, one.layout, pin, one.threads, masses, !oversubscribed);
-      if (!factory) continue;  // too few masses for the threads at this size: the next one
-      const std::string name =
-          entry_spec::parallel_step(one.sync, one.layout, pin, one.threads, kernels::model_choice{masses}).name();
-      harness.units_per_batch[name] = probe_units(factory, harness.settings);
-      harness.block_runners[name] = std::move(factory);
-      plan.push_back({comparison_kind::crossover,
-                      fmt::format("crossover sync:{} layout:{} pin:{} threads:{} masses:{}", one.sync, one.layout,
-                                  platform::to_string(one.pin), one.threads, masses),
-                      serial_name, name});
-      which.push_back(index);
-    }
+    const std::vector<std::size_t> which = plan_series(state, sweep, masses, serial_name, plan);
     if (plan.empty()) continue;
     const std::vector<std::size_t> ceilings_here = plan_ceilings(harness, sweep, which, masses, serial_name, plan);
     harness.block_runners[serial_name] = chain_serial_runner(masses);
     harness.units_per_batch[serial_name] = probe_units(harness.block_runners[serial_name], harness.settings);
     std::vector<paired_result>& pairs = harness.book->pairs;
     const std::size_t before = pairs.size();
-    measure_pairs(harness, plan, pairing, {});
-    // A comparison whose interval came out wide takes another batch of pairs,
-    // up to kCrossoverMoreBatches, while the budget lasts: the rule reads the
-    // interval's width, never its place, and the estimate is over every pair.
-    for (unsigned batch = 0; batch < kCrossoverMoreBatches && pairs.size() == before + plan.size(); ++batch) {
-      if (platform::now_ns() - start_ns > settings.budget_ns) break;
-      std::vector<comparison> again;
-      std::vector<std::size_t> where;
-      for (std::size_t item = 0; item < plan.size(); ++item)
-        if (interval_too_wide(pairs[before + item])) {
-          again.push_back(plan[item]);
-          where.push_back(before + item);
-        }
-      if (again.empty()) break;
-      const std::size_t added = pairs.size();
-      measure_pairs(harness, again, pairing, {});
-      for (std::size_t item = 0; item < where.size() && added + item < pairs.size(); ++item)
-        if (pairs[added + item].failure.empty()) add_batch(pairs[where[item]], pairs[added + item], settings.noise);
-      pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(added), pairs.end());
-    }
-    for (std::size_t item = 0; item < which.size() && before + item < pairs.size(); ++item) {
-      const std::size_t index = which[item];
-      crossover_series& one = sweep.series[index];
-      crossover_sweep_point point =
-          point_of(pairs[before + item], one.threads, masses, one.threads > cpus, one.stage_sync_ns);
-      if (!point.failure.empty() && point.pairs_set_aside == 0) {
-        one.stop_reason = "failed: " + point.failure;
-        going[index] = false;
-      }
-      clear_in_a_row[index] = point.measured() && point.speedup.low > 1.0 ? clear_in_a_row[index] + 1 : 0;
-      one.points.push_back(std::move(point));
-      if (going[index] && clear_in_a_row[index] >= kCrossoverClearPoints && masses >= settings.through_masses) {
-        one.stop_reason = "confirmed";
-        going[index] = false;
-      }
-    }
-    for (std::size_t item = 0; item < ceilings_here.size() && before + which.size() + item < pairs.size(); ++item) {
-      crossover_ceiling& ceiling = sweep.ceilings[ceilings_here[item]];
-      ceiling.points.push_back(point_of(pairs[before + which.size() + item], ceiling.threads, masses,
-                                        ceiling.threads > cpus, std::nullopt));
-    }
+    measure_size(state, plan, before);
+    record_size(state, sweep, which, ceilings_here, before, masses);
     // The sweep's pairs are its own section, not the run's lockstep_pairs.
     pairs.erase(pairs.begin() + static_cast<std::ptrdiff_t>(before), pairs.end());
-    if (progress) progress(masses, elapsed_s());
+    if (progress) progress(masses, state.elapsed_s());
   }
   harness.pace = pace;
   for (auto& one : sweep.series) one.crossover = find_crossover(crossover_points(one));
-  sweep.spent_s = elapsed_s();
+  sweep.spent_s = state.elapsed_s();
   return sweep;
 }
 

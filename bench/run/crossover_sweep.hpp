@@ -4,8 +4,8 @@
 //
 // Which series: for each thread count above 1 the run measured, at
 // pin:compact (or the run's first placement there when compact was not
-// measured), the run's choice at that thread count (the headline's, on its
-// layout), the rival tied with it when the headline names a tie (both lead:
+// measured), the run's choice at that thread count (the answer's, on its
+// layout), the rival tied with it when the answer names a tie (both lead:
 // a tie at the matrix's size says nothing of other sizes), and std::barrier,
 // the C++20 baseline (sync::kBaselinePrimitive), on its best layout there
 // (the lowest median); the baseline once when it is the choice or the rival.
@@ -46,7 +46,7 @@
 #include <vector>
 
 #include "bench/run/crossover.hpp"
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/team_driver.hpp"
@@ -97,9 +97,9 @@ bool interval_too_wide(const paired_result& pair);
 // set aside) appended, the estimate and verdict made again over them all.
 void add_batch(paired_result& into, const paired_result& more, double noise);
 
-// The series (above) from the run book and its headline's choices; the
+// The series (above) from the run book and the answer's choices; the
 // points are empty.
-std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<headline_choice>& choices);
+std::vector<crossover_series> plan_crossover_series(const run_book& book, const std::vector<answer_choice>& choices);
 
 // For --plan: the series a run of these thread counts would sweep (up to three a
 // thread count above 1) and the ceilings beside them (one a thread count),

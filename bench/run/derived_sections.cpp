@@ -38,17 +38,11 @@ nlohmann::json planned_json(const run_book& book) {
 
 nlohmann::json entry_medians_json(const run_book& book) {
   nlohmann::json medians = nlohmann::json::array();
-  for (const mode_medians& entry : entries_in_several_modes(book)) {
+  for (const entry_in_modes& entry : entries_in_several_modes(book)) {
     nlohmann::json modes = nlohmann::json::array();
-    std::size_t straddling = 0;
-    for (const auto& [mode, values] : entry.by_mode) {
-      if (mode < 0) {
-        straddling = values.size();
-        continue;
-      }
-      modes.push_back({{"mode", mode}, {"median_ns", platform::median(values)}, {"repetitions", values.size()}});
-    }
-    medians.push_back({{"entry", entry.entry->name}, {"modes", modes}, {"straddling", straddling}});
+    for (const pace_mode_time& mode : entry.times.modes)
+      modes.push_back({{"mode", mode.mode}, {"median_ns", mode.median}, {"repetitions", mode.repetitions}});
+    medians.push_back({{"entry", entry.entry->name}, {"modes", modes}, {"straddling", entry.times.straddling}});
   }
   return medians;
 }
@@ -86,15 +80,13 @@ nlohmann::json model_json() {
 
 }  // namespace
 
-std::vector<mode_medians> entries_in_several_modes(const run_book& book) {
-  std::vector<mode_medians> several;
-  if (!book.pace || book.pace->modes.size() < 2) return several;
+std::vector<entry_in_modes> entries_in_several_modes(const run_book& book) {
+  std::vector<entry_in_modes> several;
   for (const auto& entry : book.entries()) {
     if (!entry.error.empty()) continue;
     if (entry.spec.kind != entry_kind::rk4 && entry.spec.kind != entry_kind::barrier) continue;
-    auto modes = entry.by_pace_mode(entry.spec.time_counter());
-    const auto moded = std::count_if(modes.begin(), modes.end(), [](const auto& mode) { return mode.first >= 0; });
-    if (moded >= 2) several.push_back({&entry, std::move(modes)});
+    pace_mode_times times = entry.pace_medians();
+    if (times.modes.size() >= 2) several.push_back({&entry, std::move(times)});
   }
   return several;
 }

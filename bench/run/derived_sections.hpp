@@ -24,12 +24,13 @@ namespace lockstep::bench {
 // there already, when the run has a pace trace).
 void write_derived_sections(nlohmann::json& document, const run_book& book);
 
-// One entry's medians per pace mode, as the summary prints them and the file
-// holds them: rk4 and barrier entries whose repetitions ran in two modes or more.
-struct mode_medians {
+// The rk4 and barrier entries whose repetitions ran in two pace modes or
+// more, with their medians per mode (captured_entry::pace_medians), as the
+// summary prints them and the file holds them.
+struct entry_in_modes {
   const captured_entry* entry = nullptr;
-  std::map<int, std::vector<double>> by_mode;  // mode -> the repetitions' times; -1: straddled a change
+  pace_mode_times times;
 };
-std::vector<mode_medians> entries_in_several_modes(const run_book& book);
+std::vector<entry_in_modes> entries_in_several_modes(const run_book& book);
 
 }  // namespace lockstep::bench

@@ -1,7 +1,7 @@
 #pragma once
-// The known answers a run sets its step's ratios beside (headline.hpp:
+// The known answers a run sets its step's ratios beside (answer.hpp:
 // known_answers), each a short run of a probe lockstep also has as a command.
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "platform/topology.hpp"
 
 namespace lockstep::bench {

@@ -21,7 +21,7 @@
 #include "bench/run/crossover_sweep.hpp"
 #include "bench/run/derived_sections.hpp"
 #include "bench/results/derived_figures.hpp"
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "bench/run/known_answers.hpp"
 #include "bench/results/machine_context.hpp"
 #include "bench/run/pace.hpp"
@@ -323,20 +323,18 @@ void measure_comparisons(prepared_matrix& run) {
   });
 }
 
-// --crossover: the series from the run's choices (the headline's, made here
-// from what the run measured so far), then the sweep (crossover_sweep.hpp).
-void measure_crossovers(prepared_matrix& run, const crossover_settings& settings, const known_answers& probes,
-                        const platform::topology& machine) {
-  const run_headline chosen =
-      make_headline(run.book, probes, static_cast<unsigned>(machine.affinity().size()), std::string());
-  std::vector<crossover_series> series = plan_crossover_series(run.book, chosen.choices);
+// --crossover: the series from the run's choices (the answer's, made once,
+// before the sweep), then the sweep (crossover_sweep.hpp).
+crossover_sweep measure_crossovers(prepared_matrix& run, const crossover_settings& settings,
+                                   const std::vector<answer_choice>& choices) {
+  std::vector<crossover_series> series = plan_crossover_series(run.book, choices);
   fmt::print(stderr,
              "lockstep run: crossover sweep, {} series, S = {} to {} masses doubling, {} pairs a point (up to {} "
              "more batches where its interval is wide), at most {}\n",
              series.size(), kCrossoverFirstMasses, settings.max_masses, settings.pairs, kCrossoverMoreBatches,
              format_seconds(static_cast<double>(settings.budget_ns) / 1e9));
   std::fflush(stderr);
-  run.book.crossover = sweep_crossovers(run.harness, std::move(series), settings, [](std::size_t masses, double elapsed) {
+  return sweep_crossovers(run.harness, std::move(series), settings, [](std::size_t masses, double elapsed) {
     fmt::print(stderr, "  crossover: {} masses done, {} elapsed\n", masses, format_seconds(elapsed));
     std::fflush(stderr);
   });
@@ -371,14 +369,15 @@ struct run_seconds {
 };
 
 void write_result(const matrix_request& request, const platform::topology& machine, prepared_matrix& run,
-                  const pace_modes& modes, atomic_result_file& result_file, run_seconds seconds) {
+                  const run_result& result, atomic_result_file& result_file, run_seconds seconds) {
+  const pace_modes& modes = *result.pace;
   nlohmann::json document = run.json.run_document(run.book, run.registered, modes);
   if (!document.contains("benchmarks"))
     throw std::runtime_error("Google Benchmark wrote no entries (was --benchmark_list_tests given?)");
   write_pace_and_pairs(document, run.book, &run.pace, modes);
   write_derived_sections(document, run.book);
-  document["lockstep_headline"] = headline_json(run.book.headline);
-  if (run.book.crossover) document["lockstep_crossover"] = crossover_json(*run.book.crossover);
+  document["lockstep_answer"] = answer_json(result.answer);
+  if (result.crossover) document["lockstep_crossover"] = crossover_json(*result.crossover);
   if (request.scaling) document["lockstep_scaling"] = scaling_json(scaling_of(run.book), run.book.c2c_one_way_ns());
   // The machine's fingerprint from the one producer (replacing Google
   // Benchmark's host_name and num_cpus with the same figures), then the
@@ -405,8 +404,8 @@ std::string plan_text(const matrix_request& request, const platform::topology& m
   return plan_of(machine, request, run->entries, run->book, run->cost);
 }
 
-run_book run_matrix(const matrix_request& request, const platform::topology& machine,
-                    atomic_result_file& result_file) {
+run_result run_matrix(const matrix_request& request, const platform::topology& machine,
+                      atomic_result_file& result_file) {
   // The run's costs, stated in the context for lockstep compare --plan: the
   // matrix's repetitions (lockstep_matrix_s) and the whole run from here
   // (lockstep_wall_s), whose difference is a run's fixed part.
@@ -417,15 +416,23 @@ run_book run_matrix(const matrix_request& request, const platform::topology& mac
   const std::chrono::duration<double> matrix = std::chrono::steady_clock::now() - matrix_started;
   measure_comparisons(*run);
   const known_answers probes = measure_known_answers(machine, request.quick);
-  if (request.crossover) measure_crossovers(*run, *request.crossover, probes, machine);
-  run->pace.take();  // the trace's last reading
-  const pace_modes modes = find_modes(run->pace.trace());
-  assign_pace_modes(run->book, modes);
+  // The trace's last reading, then its modes: the matrix's pace (the
+  // crossover sweep takes no readings: crossover_sweep.cpp).
+  run->pace.take();
+  run_result result;
+  result.pace = find_modes(run->pace.trace());
+  assign_pace_modes(run->book, *result.pace);
   run->book.cpus = static_cast<unsigned>(machine.affinity().size());
-  run->book.headline = make_headline(run->book, probes, run->book.cpus, result_file.destination());
+  // The choices, once: the crossover sweeps from them, the answer states them.
+  std::vector<answer_choice> choices = choose_combinations(run->book);
+  if (request.crossover) result.crossover = measure_crossovers(*run, *request.crossover, choices);
+  result.answer = make_answer(run->book, std::move(choices),
+                              {probes, run->book.cpus, result_file.destination(), &*result.pace,
+                               result.crossover ? &*result.crossover : nullptr});
   const std::chrono::duration<double> wall = std::chrono::steady_clock::now() - started;
-  write_result(request, machine, *run, modes, result_file, {matrix.count(), wall.count()});
-  return std::move(run->book);
+  write_result(request, machine, *run, result, result_file, {matrix.count(), wall.count()});
+  result.book = std::move(run->book);
+  return result;
 }
 
 }  // namespace lockstep::bench

@@ -3,7 +3,7 @@
 // Google Benchmark (its runner and lockstep's reporters), then the paired
 // comparisons and the pace trace, written into one result file. The command
 // (bench/cli/run.cpp) turns its options into a matrix_request and prints what
-// comes back (summary.hpp renders the run book); the policy of a mode (how
+// comes back (summary.hpp renders the run's result); the policy of a mode (how
 // long an entry runs, how many pairs, how long a comparison may take) lives
 // here, with the measured reasons for its numbers.
 #include <cstdint>
@@ -16,6 +16,7 @@
 #include "bench/run/crossover_sweep.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/run_plan.hpp"
+#include "bench/run/run_result.hpp"
 #include "platform/topology.hpp"
 
 namespace lockstep::bench {
@@ -68,11 +69,11 @@ struct matrix_request {
 // entries registered exactly as a run registers them; nothing is measured.
 std::string plan_text(const matrix_request& request, const platform::topology& machine);
 
-// Measures the matrix, the paired comparisons and the pace trace, writes the
-// result into `result_file` (committed) and returns the run book that the
-// summary renders. Throws matrix_request_error before measuring anything on
-// a request that cannot run.
-run_book run_matrix(const matrix_request& request, const platform::topology& machine,
-                    atomic_result_file& result_file);
+// Measures the matrix, the paired comparisons and the pace trace (and with
+// --crossover the sweep), makes the answer, writes the result into
+// `result_file` (committed) and returns what the summary renders. Throws
+// matrix_request_error before measuring anything on a request that cannot run.
+run_result run_matrix(const matrix_request& request, const platform::topology& machine,
+                      atomic_result_file& result_file);
 
 }  // namespace lockstep::bench

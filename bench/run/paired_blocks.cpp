@@ -306,7 +306,6 @@ void measure_pairs(harness_state& harness, const std::vector<comparison>& plan, 
 }
 
 void assign_pace_modes(run_book& book, const pace_modes& modes) {
-  book.pace = modes;
   book.for_each_repetition([&](std::map<std::string, double>& repetition) {
     const auto before = repetition.find(std::string(kPaceBeforeCounter));
     const auto after = repetition.find(std::string(kPaceAfterCounter));

@@ -38,6 +38,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/results/paired_ratio.hpp"
+#include "bench/run/pace.hpp"
 #include "bench/run/ranking.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/team_driver.hpp"

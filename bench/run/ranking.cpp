@@ -35,4 +35,14 @@ std::vector<ranked_group> rank_groups(const run_book& book, entry_kind kind) {
   return groups;
 }
 
+std::vector<const captured_entry*> collapsed_entries(const run_book& book) {
+  std::vector<const captured_entry*> collapsed;
+  for (const auto& entry : book.entries())
+    if (book.collapsed.count(entry.name) > 0) collapsed.push_back(&entry);
+  std::sort(collapsed.begin(), collapsed.end(), [](const captured_entry* a, const captured_entry* b) {
+    return std::tie(a->spec.threads, a->name) < std::tie(b->spec.threads, b->name);
+  });
+  return collapsed;
+}
+
 }  // namespace lockstep::bench

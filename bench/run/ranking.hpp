@@ -36,4 +36,7 @@ struct ranked_group {
 };
 std::vector<ranked_group> rank_groups(const run_book& book, entry_kind kind);
 
+// The entries that collapsed (book.collapsed), in numeric thread order, then by name.
+std::vector<const captured_entry*> collapsed_entries(const run_book& book);
+
 }  // namespace lockstep::bench

@@ -36,16 +36,23 @@ std::optional<std::pair<double, double>> captured_entry::range(std::string_view 
   return std::pair{*low, *high};
 }
 
-std::map<int, std::vector<double>> captured_entry::by_pace_mode(std::string_view counter) const {
-  std::map<int, std::vector<double>> modes;
-  const std::string key(counter);
+pace_mode_times captured_entry::pace_medians() const {
+  std::map<int, std::vector<double>> by_mode;
+  const std::string time(spec.time_counter());
   for (const auto& repetition : repetitions) {
     const auto mode = repetition.find("pace_mode");
-    const auto value = repetition.find(key);
+    const auto value = repetition.find(time);
     if (mode != repetition.end() && value != repetition.end())
-      modes[static_cast<int>(mode->second)].push_back(value->second);
+      by_mode[static_cast<int>(mode->second)].push_back(value->second);
   }
-  return modes;
+  pace_mode_times times;
+  for (const auto& [mode, values] : by_mode) {
+    if (mode < 0)
+      times.straddling += values.size();
+    else
+      times.modes.push_back({mode, platform::median(values), values.size()});
+  }
+  return times;
 }
 
 void run_book::record(captured_entry entry) {

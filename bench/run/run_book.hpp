@@ -1,8 +1,11 @@
 #pragma once
-// The measurement harness behind `lockstep run`: what one run selects, how an
-// entry is named, what the run has measured so far (the in-run calibrations
-// the entries divide by), and how one call of an entry drives a team of
-// participants through timed batches.
+// The measurement harness behind `lockstep run`, its lowest file: what one
+// run selects, what the run has measured so far (each entry as registered,
+// bench/results/entry_spec.hpp, with its repetitions; the in-run
+// calibrations the entries divide by; the pairs), and how one call of an
+// entry drives a team of participants through timed batches. What the run
+// derives from the book (the pace modes, the crossover, the answer) lives
+// above it (run_result.hpp).
 //
 // Timing model (every entry but c2c):
 //   * Google Benchmark runs each entry with manual time. One benchmark
@@ -45,9 +48,6 @@
 
 #include "bench/results/derived_figures.hpp"
 #include "bench/results/entry_spec.hpp"
-#include "bench/run/crossover.hpp"
-#include "bench/run/headline.hpp"
-#include "bench/run/pace.hpp"
 #include "bench/results/paired_ratio.hpp"
 #include "platform/clock.hpp"
 #include "platform/placement.hpp"
@@ -95,6 +95,17 @@ struct run_settings {
   std::int64_t call_budget_ns = 3'000'000'000;
 };
 
+// An entry's time per unit in the pace modes its repetitions ran in.
+struct pace_mode_time {
+  int mode = 0;  // an index into the run's pace modes (pace.hpp)
+  double median = 0.0;
+  std::size_t repetitions = 0;
+};
+struct pace_mode_times {
+  std::vector<pace_mode_time> modes;  // by mode
+  std::size_t straddling = 0;         // repetitions that straddled a change of pace
+};
+
 // One entry as the run saw it: its spec (as registered: bench/results/entry_spec.hpp),
 // its name, and the counters of each repetition (aggregates are recomputed
 // from these, never read back).
@@ -114,10 +125,12 @@ struct captured_entry {
   std::optional<std::pair<double, double>> range(std::string_view counter) const;
   // The median of the entry's time per unit (its spec's time_counter: a step, an episode, a transfer).
   std::optional<double> median_time() const { return median(spec.time_counter()); }
-  // The pace modes the repetitions ran in (their "pace_mode" counter, set
-  // once the run's trace is analysed; -1: the repetition straddles a change),
-  // each with its repetitions' values of `counter`; empty before the analysis.
-  std::map<int, std::vector<double>> by_pace_mode(std::string_view counter) const;
+  // The entry's time per unit in each pace mode its repetitions ran in
+  // (their "pace_mode" counter, set once the run's trace is analysed: -1, the
+  // repetition straddles a change): the one per-mode median, which the
+  // summary, the answer and the file's lockstep_pace.entry_medians read.
+  // Empty before the analysis.
+  pace_mode_times pace_medians() const;
 };
 
 // The entries a run registered, by name (the name Google Benchmark reports
@@ -171,17 +184,9 @@ class run_book {
   std::vector<comparison> planned;
   std::vector<paired_result> pairs;
   double noise = kDefaultNoise;    // the band their verdicts use
-  // The pace modes of the run (pace.hpp), once the trace is analysed; a
-  // repetition's "pace_mode" counter holds its index (-1: it straddles a change).
-  std::optional<pace_modes> pace;
   // Entries that collapsed (paired_blocks.hpp: find_collapsed): reported in a
   // line, kept out of rankings, paired comparisons and colour scales.
   std::set<std::string> collapsed;
-  // --crossover: the sweep after the matrix (crossover_sweep.hpp); the
-  // headline says its crossovers.
-  std::optional<crossover_sweep> crossover;
-  // The answer (headline.hpp), made when the run is over.
-  run_headline headline;
   unsigned cpus = 0;  // the affinity set the run measured on
 
  private:

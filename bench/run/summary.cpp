@@ -56,25 +56,24 @@ std::string cpus_busy(const captured_entry& entry) {
 std::string entry_flags(const captured_entry& entry) {
   std::string flags;
   if (entry.median("oversubscribed").value_or(0.0) > 0.5) flags += "  [oversubscribed]";
-  const auto modes = entry.by_pace_mode(entry.spec.time_counter());
-  if (modes.count(-1) > 0) flags += "  [straddles a pace change]";
+  if (entry.pace_medians().straddling > 0) flags += "  [straddles a pace change]";
   if (entry.median("short_batches").value_or(0.0) > 0.5) flags += "  [short batches: the harness barrier weighs in]";
   return flags;
 }
 
 // Entries whose repetitions ran in more than one pace mode: their median in each.
-void per_mode_medians(std::string& out, const run_book& book) {
-  const std::vector<mode_medians> several = entries_in_several_modes(book);
-  if (several.empty()) return;
+void per_mode_medians(std::string& out, const run_book& book, const std::optional<pace_modes>& run_pace) {
+  const std::vector<entry_in_modes> several = entries_in_several_modes(book);
+  if (several.empty() || !run_pace) return;
   std::string lines;
-  for (const mode_medians& entry : several) {
+  for (const entry_in_modes& entry : several) {
     std::string cells;
-    for (const auto& [mode, values] : entry.by_mode) {
-      if (mode < 0) continue;
-      const pace_mode& pace = book.pace->modes[static_cast<std::size_t>(mode)];
-      cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", book.pace->has_c2c ? "c2c" : "serial",
-                           format_ns(book.pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(platform::median(values)),
-                           values.size());
+    for (const pace_mode_time& mode : entry.times.modes) {
+      if (static_cast<std::size_t>(mode.mode) >= run_pace->modes.size()) continue;
+      const pace_mode& pace = run_pace->modes[static_cast<std::size_t>(mode.mode)];
+      cells += fmt::format("{}{} {}: {} (x{})", cells.empty() ? "" : ", ", run_pace->has_c2c ? "c2c" : "serial",
+                           format_ns(run_pace->has_c2c ? pace.c2c_ns : pace.serial_ns), format_ns(mode.median),
+                           mode.repetitions);
     }
     lines += fmt::format("  {:<62} {}\n", entry.entry->name, cells);
   }
@@ -197,7 +196,8 @@ std::string oversubscribed_note(const run_book& book, unsigned cpus) {
 namespace {
 
 // The first lines: what was measured, the in-run calibrations and the pace.
-void calibration_lines(std::string& out, const run_book& book, const std::string& result_path, std::size_t skipped) {
+void calibration_lines(std::string& out, const run_book& book, const std::optional<pace_modes>& pace,
+                       const std::string& result_path, std::size_t skipped) {
   std::size_t partly_stopped = 0;
   for (const auto& entry : book.entries()) partly_stopped += entry.stopped_repetitions > 0 ? 1 : 0;
   out += fmt::format("lockstep run: {} entries measured{}, {} skipped, {} not applicable; results in {}\n",
@@ -215,9 +215,9 @@ void calibration_lines(std::string& out, const run_book& book, const std::string
   out += book.serial_step_ns() ? ", serial RK4 step " + format_ns(*book.serial_step_ns()) : ", serial step unavailable";
   out += fmt::format(", clock reading {} (taken off each timed sync)", format_ns(book.clock_read_ns));
   out += "\n";
-  if (book.pace) {
-    out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n",
-                       book.pace->mode_of.size(), book.pace->summary());
+  if (pace) {
+    out += fmt::format("Pace of the machine ({} readings around the entries and pairs): {}\n", pace->mode_of.size(),
+                       pace->summary());
   }
 }
 
@@ -340,7 +340,8 @@ void left_out_lines(std::string& out, const run_book& book, std::size_t skipped)
     out += fmt::format("Collapsed ({}: oversubscribed and at least {:.0f}x the best of their kind and thread count; "
                        "out of the rankings and pairs above):\n",
                        book.collapsed.size(), kCollapseFactor);
-    for (const auto& name : book.collapsed) out += fmt::format("  {:<62} {}\n", name, median_of(book, name));
+    for (const captured_entry* entry : collapsed_entries(book))
+      out += fmt::format("  {:<62} {}\n", entry->name, median_of(book, entry->name));
   }
   if (!book.not_applicable.empty()) {
     std::map<std::string, std::vector<std::string>> by_reason;
@@ -366,16 +367,17 @@ void left_out_lines(std::string& out, const run_book& book, std::size_t skipped)
 
 }  // namespace
 
-std::string render_summary(const run_book& book, const std::string& result_path, bool verbose) {
+std::string render_summary(const run_result& result, const std::string& result_path, bool verbose) {
+  const run_book& book = result.book;
   std::string out;
   std::size_t skipped = 0;
   for (const auto& entry : book.entries()) skipped += entry.error.empty() ? 0 : 1;
-  calibration_lines(out, book, result_path, skipped);
+  calibration_lines(out, book, result.pace, result_path, skipped);
   if (!verbose) {
     if (book.scaling) out += render_scaling(scaling_of(book));  // the sweep's own answer
     short_ranking(out, book, kShortRankingPerGroup);
     out += '\n';
-    out += headline_text(book.headline);
+    out += answer_text(result.answer);
     return out;
   }
   step_ranking(out, book);
@@ -383,10 +385,10 @@ std::string render_summary(const run_book& book, const std::string& result_path,
   paired_ratio_tables(out, book);
   overhead_lines(out, book);
   if (book.scaling) out += render_scaling(scaling_of(book));
-  per_mode_medians(out, book);
+  per_mode_medians(out, book, result.pace);
   left_out_lines(out, book, skipped);
   out += '\n';
-  out += headline_text(book.headline);
+  out += answer_text(result.answer);
   return out;
 }
 

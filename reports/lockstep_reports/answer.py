@@ -5,7 +5,7 @@ nothing recomputed), the headline's other lines whole, the entries that errored,
 The headline's lines are the terminal's: the choices (a line per thread count and placement, its details
 indented under it), then the rest, each fact a line at column 0 with its details indented (false sharing,
 migration, pace, what was left out), then the terminal's pointers to the result file and the next commands
-(bench/run/headline.cpp, make_headline). The table replaces the choices' lines; the rest is shown whole,
+(bench/run/answer.cpp, make_headline). The table replaces the choices' lines; the rest is shown whole,
 wrapped by the page; the pointers are the terminal's, and the report's own "where the rest is" replaces them.
 A run with `--crossover` writes its crossover lines (lockstep_headline.crossover) between the answer first and
 the choices: they are shown as written, under the answer first, and kept out of the grouping of the others.
@@ -21,7 +21,7 @@ from .run_file import HeadlineAnswer, HeadlineRival, Recommendation, RunFile
 # The words of a rival's verdict (its step over the choice's, paired: statistics.VERDICTS): above the noise
 # band the rival is slower, below it faster.
 RIVAL_VERDICTS = {"penalty": "slower", "gain": "faster", "within noise": "within noise", "unsure": "unsure"}
-# The terminal's pointers among the headline's lines (bench/run/headline.cpp): where its result file is, and
+# The terminal's pointers among the headline's lines (bench/run/answer.cpp): where its result file is, and
 # the commands that make this report and a comparison.
 TERMINAL_POINTERS = ("Results: ", "Report: ")
 # How a lockstep run before whole lines marked a line it cut at its 120 characters.

@@ -7,7 +7,7 @@ series and points the report draws (report.crossover_section).
 Read leniently (a key not named here is ignored) but checked: what is read must hold what it says, else one line
 naming its JSON path, as the headline's other parts (run_reader.py). A file without a part reads without it:
 `lockstep_headline.false_sharing_patterns` (false sharing per access pattern) is written by `lockstep run` since
-the probe measures each pattern (headline_json in bench/run/headline.cpp; tests/fixtures/run/quick-pairs.headline.json
+the probe measures each pattern (headline_json in bench/run/answer.cpp; tests/fixtures/run/quick-pairs.headline.json
 is its output), the top-level `lockstep_crossover` by `lockstep run --crossover` (crossover_json in
 bench/run/crossover.cpp; reports/tests/fixtures/crossover_a.json is its output). A crossover in the shape this
 reader was written ahead of the writer for, {threads, pin, sync, masses, ci_low, ci_high}, still reads (its status,

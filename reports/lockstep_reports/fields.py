@@ -106,7 +106,7 @@ PER_REPETITION_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)
 PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
 PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
 SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, threads, points, best, c2c_one_way_ns}
-# top level: the run's answer (bench/run/headline.hpp): {lines, recommendations, collapsed, ...}; a file
+# top level: the run's answer (bench/run/answer.hpp): {lines, recommendations, collapsed, ...}; a file
 # written before it has none and reads as before.
 HEADLINE_KEY = "lockstep_headline"
 # How a recommendation was chosen (lockstep_headline.recommendations[].basis).

@@ -278,7 +278,7 @@ class RunFile:
 @dataclass(frozen=True)
 class Recommendation:
     """One of lockstep_headline's recommendations: the combination to use at one model, thread count and
-    placement, as lockstep run chose it (bench/run/headline.hpp)."""
+    placement, as lockstep run chose it (bench/run/answer.hpp)."""
 
     threads: int
     pin: str

@@ -236,7 +236,7 @@ class TheAnswersParts(Scratch):
         self.assertNotIn("crossover", compared(XEON, AMD_DEBUG_QUICK))  # absent from both: not a word
 
     def test_the_patterns_lockstep_run_writes_are_read_as_written(self):
-        """The writer and the reader agree: lockstep run's own headline (headline_json in bench/run/headline.cpp,
+        """The writer and the reader agree: lockstep run's own headline (headline_json in bench/run/answer.cpp,
         whose output tests/run/run_fixture_test.cpp pins as tests/fixtures/run/quick-pairs.headline.json) read
         through answer_reader gives each pattern's figures as the file holds them, named by the headline's words,
         and compare shows them."""

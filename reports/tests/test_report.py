@@ -584,7 +584,7 @@ class CpuPerStep(Scratch):
         points = matrix.cpu_points(run_file, "rk4", run_file.collapsed)
         self.assertEqual(len(points), 18)  # 3 primitives x (4 layouts, mailbox 1) x 2 placements, at 2 threads
         self.assertTrue(all(0.0 < point.cpus_busy < 2.1 for point in points))  # the team has the VM's 2 CPUs
-        # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/run/headline.hpp, the
+        # The same fact reads the same everywhere: the headline's "CPUs busy" (bench/run/answer.hpp, the
         # medians' ratio) is the point's, to the bit.
         by_key = {point.key: point for point in points}
         with open(fixture(REAL_SPLIT), encoding="utf-8") as stream:

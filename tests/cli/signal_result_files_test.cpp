@@ -178,7 +178,7 @@ pid_t start(const std::vector<std::string>& args, const std::string& out_file, c
 bool is_whole_result(const std::string& text, const command_row& row) {
   const auto document = nlohmann::json::parse(text, nullptr, false);
   if (document.is_discarded() || !document.is_object()) return false;
-  if (std::string(row.kind).empty()) return document.contains("benchmarks") && document.contains("lockstep_headline");
+  if (std::string(row.kind).empty()) return document.contains("benchmarks") && document.contains("lockstep_answer");
   return document.value("kind", "") == row.kind;
 }
 

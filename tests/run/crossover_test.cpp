@@ -11,7 +11,7 @@
 
 #include "bench/run/crossover.hpp"
 #include "bench/run/crossover_sweep.hpp"
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "bench/run/run_book.hpp"
 #include "bench/run/rk4_entries.hpp"
 #include "bench/run/team_driver.hpp"
@@ -364,7 +364,7 @@ class CrossoverPlan : public ::testing::Test {
   }
   void tie_with(const std::string& sync, const std::string& layout) {
     choice.tied = true;
-    choice.runner_up = headline_rival{name_of(sync, layout), sync, layout, {1.01, 0.98, 1.04}, ratio_verdict::unsure};
+    choice.runner_up = answer_rival{name_of(sync, layout), sync, layout, {1.01, 0.98, 1.04}, ratio_verdict::unsure};
   }
   static std::vector<std::string> names(const std::vector<crossover_series>& planned) {
     std::vector<std::string> found;
@@ -373,7 +373,7 @@ class CrossoverPlan : public ::testing::Test {
     return found;
   }
   run_book book;
-  headline_choice choice;
+  answer_choice choice;
 };
 
 TEST_F(CrossoverPlan, TheChoiceAndTheBaselineOnItsBestLayout) {

@@ -273,8 +273,6 @@ TEST(AssignPaceModes, ARepetitionGetsTheModeItsReadingsAgreeOnAndLosesTheIndices
     EXPECT_EQ(repetitions[index].count(before) + repetitions[index].count(after), 0u) << index;
   }
   EXPECT_EQ(repetitions[4].count("pace_mode"), 0u);
-  ASSERT_TRUE(book.pace.has_value());
-  EXPECT_EQ(book.pace->mode_of, six_readings_and_an_outlier().mode_of);
 }
 
 TEST(AssignPaceModes, EachPairGetsTheModeOfItsTwoReadings) {

@@ -15,6 +15,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <regex>
+#include <sstream>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -155,6 +158,8 @@ TEST(RunCli, UnknownSyncListsTheValidOnes) {
     EXPECT_NE(result.err.find(std::string(info.name)), std::string::npos) << info.name << " missing in: " << result.err;
 }
 
+void expect_typed_entries(const nlohmann::json& document);
+
 TEST(RunCli, TinyRunWritesAgreedJson) {
   watchdog guard(std::chrono::seconds(150 * lockstep::testing::kSlowdown), "a tiny lockstep run did not finish");
   scratch_directory scratch("lockstep-run-test");
@@ -279,6 +284,38 @@ TEST(RunCli, TinyRunWritesAgreedJson) {
       EXPECT_GT(entry["ns_per_step"].get<double>(), 0.0);
     }
   }
+  expect_typed_entries(document);
+}
+
+// Every row, repetitions and aggregates alike, carries its entry's spec as
+// values (bench/results/entry_spec.hpp), the same fields its name spells.
+void expect_typed_entries(const nlohmann::json& document) {
+  const nlohmann::json null;
+  // name -> kind, sync, layout, pin, threads, accounting, unit
+  const std::map<std::string, nlohmann::json> expected{
+      {"rk4/serial", {"serial", null, null, null, 1, true, "step"}},
+      {"c2c/pin:compact/threads:2", {"c2c", null, null, "compact", 2, true, "one_way"}},
+      {"barrier/sync:futex_spin/pin:compact/threads:2", {"barrier", "futex_spin", null, "compact", 2, true, "episode"}},
+      {"rk4/sync:seqlock/layout:per_thread/pin:compact/threads:2",
+       {"rk4", "seqlock", "per_thread", "compact", 2, true, "step"}},
+      {"overhead/accounting:off/sync:seqlock/layout:per_thread/pin:compact/threads:2",
+       {"overhead", "seqlock", "per_thread", "compact", 2, false, "step"}}};
+  std::set<std::string> seen;
+  for (const auto& row : document["benchmarks"]) {
+    const std::string name = row["run_name"];
+    ASSERT_TRUE(row.contains("lockstep_entry")) << row["name"];
+    const nlohmann::json& spec = row["lockstep_entry"];
+    EXPECT_EQ(spec["model"], "") << name;
+    EXPECT_EQ(spec["masses"], 0) << name;
+    const auto found = expected.find(name);
+    if (found == expected.end()) continue;
+    seen.insert(name);
+    const nlohmann::json& want = found->second;
+    std::size_t field = 0;
+    for (const char* key : {"kind", "sync", "layout", "pin", "threads", "accounting", "unit"})
+      EXPECT_EQ(spec[key], want[field++]) << name << ": " << key;
+  }
+  EXPECT_GE(seen.size(), expected.size() - 1) << "c2c needs two CPUs; every other entry was measured";
 }
 
 // Every thread count the options accept runs, one included: `--threads 1`
@@ -461,6 +498,57 @@ TEST(RunCli, InterruptLeavesNoResultFile) {
   ASSERT_TRUE(WIFEXITED(status)) << "the run died by a signal instead of handling it";
   EXPECT_EQ(WEXITSTATUS(status), 128 + SIGINT);
   EXPECT_TRUE(fs::is_empty(scratch.path())) << "an interrupted run left a file behind";
+}
+
+// The thread counts named on the lines of one section of the summary (from
+// the line that starts with `heading` to the next blank line), in order.
+std::vector<unsigned> threads_in_section(const std::string& text, const std::string& heading) {
+  const std::size_t start = text.find(heading);
+  if (start == std::string::npos) return {};
+  const std::size_t end = text.find("\n\n", start);
+  const std::string section = text.substr(start, end == std::string::npos ? std::string::npos : end - start);
+  std::vector<unsigned> found;
+  const std::regex threads(R"(threads:(\d+))");
+  for (auto match = std::sregex_iterator(section.begin(), section.end(), threads); match != std::sregex_iterator();
+       ++match)
+    found.push_back(static_cast<unsigned>(std::stoul((*match)[1])));
+  return found;
+}
+
+// A run at 2, 4, 8 and 16 threads (oversubscribed on a small machine) prints
+// every table in numeric thread order: the thread counts sorted as text put
+// "16" before "2" in the bare primitives' table. Its own figures are not read.
+TEST(RunCli, ARunOfTwoToSixteenThreadsPrintsEveryTableInThreadOrder) {
+  watchdog guard(std::chrono::seconds(240 * lockstep::testing::kSlowdown), "the 2..16-thread run did not finish");
+  scratch_directory scratch("lockstep-thread-order-test");
+  const fs::path out = scratch.path() / "order.json";
+  const auto result = run_command(run_args({"--quick", "--threads", "2,4,8,16", "--sync", "mailbox,std_barrier",
+                                            "--layout", "per_thread,packed", "--pin", "compact", "--min-time", "1ms",
+                                            "--repetitions", "1", "--pairs", "2", "--verbose", "--out",
+                                            out.string()}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  const std::vector<unsigned> all{2, 4, 8, 16};
+  std::vector<unsigned> episodes = threads_in_section(result.out, "Bare primitives, median time per episode:");
+  EXPECT_TRUE(std::is_sorted(episodes.begin(), episodes.end())) << result.out;
+  episodes.erase(std::unique(episodes.begin(), episodes.end()), episodes.end());
+  EXPECT_EQ(episodes, all) << result.out;
+  // Per section, the lines that name a group: each kind's groups in order.
+  for (const auto& [heading, prefix] : std::vector<std::pair<std::string, std::string>>{
+           {"Each primitive against the best other", "  RK4 step"},
+           {"Each primitive against the best other", "  bare episode"},
+           {"Collapsed (", "  "},
+           {"Ran oversubscribed", "Ran oversubscribed"},
+           {"The answer on this machine", "  threads:"},
+           {"The answer on this machine", "  model:"}}) {
+    std::vector<unsigned> threads;
+    const std::size_t start = result.out.find(heading);
+    if (start == std::string::npos) continue;  // no such section in this run (nothing collapsed, say)
+    std::istringstream lines(result.out.substr(start, result.out.find("\n\n", start) - start));
+    for (std::string line; std::getline(lines, line);)
+      if (line.rfind(prefix, 0) == 0)
+        for (const unsigned count : threads_in_section(line, prefix)) threads.push_back(count);
+    EXPECT_TRUE(std::is_sorted(threads.begin(), threads.end())) << heading << " / " << prefix << "\n" << result.out;
+  }
 }
 
 TEST(ListCli, NamesEverySyncAndPlacementOnALineEach) {

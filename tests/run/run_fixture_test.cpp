@@ -29,11 +29,12 @@
 #include <vector>
 
 #include "bench/probes/falseshare.hpp"
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/results/paired_ratio.hpp"
 #include "bench/run/reporters.hpp"
 #include "bench/run/run_book.hpp"
+#include "bench/run/run_result.hpp"
 #include "bench/run/summary.hpp"
 #include "tests/support/run_file_entries.hpp"
 #include "platform/statistics.hpp"
@@ -74,9 +75,21 @@ bench::paired_result recomputed(const nlohmann::json& pair) {
   return result;
 }
 
+// The file's answer: "lockstep_answer", or in files written before that
+// name (the fixture among them) "lockstep_headline".
+const nlohmann::json& answer_in(const nlohmann::json& file) {
+  return file.contains("lockstep_answer") ? file.at("lockstep_answer") : file.at("lockstep_headline");
+}
+
+// The answer as the run makes it, from the book's own choices.
+bench::run_answer answer_of(const bench::run_book& book, const bench::known_answers& probes, unsigned cpus,
+                            const std::string& result_path) {
+  return bench::make_answer(book, bench::choose_combinations(book), {probes, cpus, result_path, nullptr, nullptr});
+}
+
 // The run book the run kept: every entry's repetitions (the file's iteration
 // rows, their counters), the pairs recomputed, the noise band and the
-// collapsed entries. The headline is left empty: its lines are the file's
+// collapsed entries. The answer is not made here: its lines are the file's
 // (checked below against the pairs), and its probes are not in the book.
 bench::run_book book_of(const nlohmann::json& file) {
   // Google Benchmark's own fields of a row; every other number is a counter.
@@ -118,11 +131,11 @@ bench::run_book book_of(const nlohmann::json& file) {
     book.pairs.push_back(recomputed(pair));
     book.noise = pair.at("noise").get<double>();
   }
-  for (const auto& name : file.at("lockstep_headline").at("collapsed")) book.collapsed.insert(name.get<std::string>());
+  for (const auto& name : answer_in(file).at("collapsed")) book.collapsed.insert(name.get<std::string>());
   return book;
 }
 
-// "1.24x [1.17, 1.33] penalty": how the summary and the headline print a pair.
+// "1.24x [1.17, 1.33] penalty": how the summary and the answer print a pair.
 std::string figure(double median, double low, double high, std::string_view verdict) {
   return fmt::format("{:.2f}x [{:.2f}, {:.2f}] {}", median, low, high, verdict);
 }
@@ -172,8 +185,9 @@ TEST(RunFixture, TheBookRebuiltFromTheFilePlansTheFilesComparisons) {
 }
 
 TEST(RunFixture, TheSummaryPrintsEachPairsFigureFromTheFile) {
-  const bench::run_book book = book_of(fixture());
-  const std::string summary = bench::render_summary(book, "quick-pairs.json", /*verbose=*/true);
+  bench::run_result result;
+  result.book = book_of(fixture());
+  const std::string summary = bench::render_summary(result, "quick-pairs.json", /*verbose=*/true);
   std::vector<std::string> lines;
   std::istringstream stream(summary);
   for (std::string line; std::getline(stream, line);) lines.push_back(line);
@@ -220,11 +234,11 @@ TEST(RunFixture, TheSummaryPrintsEachPairsFigureFromTheFile) {
   }
 }
 
-// The headline (the summary's last lines, the report's first) prints paired
+// The answer (the summary's last lines, the report's first) prints paired
 // figures: each is a pair's, read either way round (the group's leader has
 // its pair with the runner-up inverted: paired_ratio.hpp, inverse), or the
 // false-sharing probe's, whose verdict is the rule's.
-TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
+TEST(RunFixture, EveryFigureOfTheAnswerIsAPairsOrTheProbes) {
   std::set<std::string> known;
   for (const auto& pair : fixture().at("lockstep_pairs")) {
     const bench::paired_result result = recomputed(pair);
@@ -234,12 +248,12 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
     known.insert(
         figure(inverted.median, inverted.low, inverted.high, bench::to_string(bench::inverse(result.verdict))));
   }
-  const auto& headline = fixture().at("lockstep_headline");
+  const auto& written = answer_in(fixture());
   // The probe's figures: the plain stores' (false_sharing_probe) and, in
   // files that have them, every pattern's.
   std::vector<nlohmann::json> probe_figures;
-  if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) probe_figures.push_back(probe);
-  for (const auto& probe : headline.value("false_sharing_patterns", nlohmann::json::array())) probe_figures.push_back(probe);
+  if (const auto& probe = written.at("false_sharing_probe"); !probe.is_null()) probe_figures.push_back(probe);
+  for (const auto& probe : written.value("false_sharing_patterns", nlohmann::json::array())) probe_figures.push_back(probe);
   for (const auto& probe : probe_figures) {
     const double low = probe.at("ci_low").get<double>();
     const double high = probe.at("ci_high").get<double>();
@@ -249,7 +263,7 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
   }
   const std::regex paired_figure(R"(\d+\.\d\dx \[\d+\.\d\d, \d+\.\d\d\] (penalty|gain|within noise|unsure))");
   std::size_t found = 0;
-  for (const auto& line_json : headline.at("lines")) {
+  for (const auto& line_json : written.at("lines")) {
     const std::string line = line_json.get<std::string>();
     for (auto match = std::sregex_iterator(line.begin(), line.end(), paired_figure); match != std::sregex_iterator();
          ++match) {
@@ -260,7 +274,7 @@ TEST(RunFixture, EveryFigureOfTheHeadlineIsAPairsOrTheProbes) {
   EXPECT_GT(found, 0u);
 }
 
-// The probes of the file's headline, as the run measured them: every access
+// The probes of the file's answer, as the run measured them: every access
 // pattern's false sharing where the file has them, else (a file from before
 // the patterns) the plain stores' figure, false_sharing_probe.
 bench::false_sharing_probe false_sharing_of(const nlohmann::json& probe, const std::string& pattern) {
@@ -278,18 +292,18 @@ bench::false_sharing_probe false_sharing_of(const nlohmann::json& probe, const s
 
 bench::known_answers probes_of(const nlohmann::json& file) {
   bench::known_answers probes;
-  const auto& headline = file.at("lockstep_headline");
-  if (headline.contains("false_sharing_patterns")) {
-    for (const auto& probe : headline.at("false_sharing_patterns")) {
+  const auto& written = answer_in(file);
+  if (written.contains("false_sharing_patterns")) {
+    for (const auto& probe : written.at("false_sharing_patterns")) {
       probes.false_sharing.push_back(false_sharing_of(probe, probe.at("pattern").get<std::string>()));
       probes.false_sharing_relation = probe.value("cpus_relation", std::string());
     }
-  } else if (const auto& probe = headline.at("false_sharing_probe"); !probe.is_null()) {
+  } else if (const auto& probe = written.at("false_sharing_probe"); !probe.is_null()) {
     for (const auto& info : lockstep::bench::probes::all_access_patterns)
       if (info.older_files_figure) probes.false_sharing.push_back(false_sharing_of(probe, std::string(info.name)));
   }
-  probes.false_sharing_unavailable = headline.value("false_sharing_probe_unavailable", std::string());
-  if (const auto& probe = headline.at("migration_probe"); !probe.is_null()) {
+  probes.false_sharing_unavailable = written.value("false_sharing_probe_unavailable", std::string());
+  if (const auto& probe = written.at("migration_probe"); !probe.is_null()) {
     bench::migration_probe migration;
     migration.cpus = probe.at("cpus").get<std::string>();
     migration.bytes = probe.at("bytes").get<std::size_t>();
@@ -319,12 +333,15 @@ void expect_golden(const std::string& name, const std::string& text) {
 // What the run prints and derives from the fixture's book, held to golden
 // files: a change of structure must not change a character of it; a change
 // of behaviour rewrites the golden files in the same commit.
-TEST(RunFixture, TheSummaryHeadlineAndTheirJsonMatchTheGoldenFiles) {
+TEST(RunFixture, TheSummaryAnswerAndTheirJsonMatchTheGoldenFiles) {
   bench::run_book book = book_of(fixture());
-  book.headline = bench::make_headline(book, probes_of(fixture()), /*cpus=*/2, "quick-pairs.json");
-  expect_golden("quick-pairs.summary.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/false));
-  expect_golden("quick-pairs.summary-verbose.txt", bench::render_summary(book, "quick-pairs.json", /*verbose=*/true));
-  expect_golden("quick-pairs.headline.json", bench::headline_json(book.headline).dump(2) + "\n");
+  bench::run_result result;
+  result.answer = answer_of(book, probes_of(fixture()), /*cpus=*/2, "quick-pairs.json");
+  result.book = std::move(book);
+  expect_golden("quick-pairs.summary.txt", bench::render_summary(result, "quick-pairs.json", /*verbose=*/false));
+  expect_golden("quick-pairs.summary-verbose.txt", bench::render_summary(result, "quick-pairs.json", /*verbose=*/true));
+  // The golden file keeps the name the key had when it was written.
+  expect_golden("quick-pairs.headline.json", bench::answer_json(result.answer).dump(2) + "\n");
 }
 
 // Real run files from two kinds of machine: the AMD guest's quick Debug run
@@ -349,9 +366,9 @@ TEST(RunFixture, TheAnswerRecommendsWhatItsPairsSupportAndNamesTiesAsTies) {
        {"tests/fixtures/run/quick-pairs.json", "reports/tests/fixtures/xeon_default_run_trimmed.json"}) {
     SCOPED_TRACE(relative);
     bench::run_book book = book_of(real_file(relative));
-    book.headline = bench::make_headline(book, {}, 2, "x.json");
+    const bench::run_answer answer = answer_of(book, {}, 2, "x.json");
     std::size_t paired = 0;
-    for (const bench::headline_choice& choice : book.headline.choices) {
+    for (const bench::answer_choice& choice : answer.choices) {
       SCOPED_TRACE(choice.entry);
       if (!choice.runner_up) continue;
       ++paired;
@@ -360,12 +377,12 @@ TEST(RunFixture, TheAnswerRecommendsWhatItsPairsSupportAndNamesTiesAsTies) {
       EXPECT_EQ(choice.tied, !clear);
       const std::string first = choice.sync + " + " + choice.layout;
       const std::string both = first + " or " + choice.runner_up->sync + " + " + choice.runner_up->layout + " (tied)";
-      const auto line = std::find_if(book.headline.lines.begin(), book.headline.lines.end(), [&](const std::string& l) {
+      const auto line = std::find_if(answer.lines.begin(), answer.lines.end(), [&](const std::string& l) {
         return l.find(fmt::format("threads:{} pin:{}", choice.threads, lockstep::platform::to_string(choice.pin))) !=
                    std::string::npos &&
                l.find(first) != std::string::npos;
       });
-      ASSERT_NE(line, book.headline.lines.end()) << bench::headline_text(book.headline);
+      ASSERT_NE(line, answer.lines.end()) << bench::answer_text(answer);
       EXPECT_EQ(line->find(both) != std::string::npos, choice.tied) << *line;
     }
     EXPECT_GT(paired, 0u);
@@ -379,13 +396,13 @@ TEST(RunFixture, NoAnswerLineIsCut) {
        {"tests/fixtures/run/quick-pairs.json", "reports/tests/fixtures/xeon_default_run_trimmed.json"}) {
     SCOPED_TRACE(relative);
     bench::run_book book = book_of(real_file(relative));
-    book.headline = bench::make_headline(book, probes_of(real_file(relative)), 2, "x.json");
+    const bench::run_answer answer = answer_of(book, probes_of(real_file(relative)), 2, "x.json");
     std::string joined_lines;
-    for (const auto& line : book.headline.lines) {
+    for (const auto& line : answer.lines) {
       EXPECT_FALSE(line.ends_with("...")) << line;
       joined_lines += line;
     }
-    std::string text = bench::headline_text(book.headline);
+    std::string text = bench::answer_text(answer);
     std::string rejoined;
     std::istringstream stream(text);
     for (std::string piece; std::getline(stream, piece);) {

@@ -1,12 +1,14 @@
 #pragma once
 // The answer of a run, first and short: what `lockstep run` prints last, what
 // the report prints first (reports/ reads it from the result file's
-// "lockstep_headline"), derived once, here, from the run book.
+// "lockstep_answer"), made once, here, when the run is over, from the run
+// book and the choices (choose_combinations: made once too, after the pairs;
+// --crossover plans its series from the same choices, crossover_sweep.hpp).
 //
-// What it says (at most kHeadlineLines lines, each whole: the terminal wraps
+// What it says (at most kAnswerLines lines, each whole: the terminal wraps
 // them at 120 columns, the result file and the report keep them as they are):
 //   * first, the best combination of the run and its step against the serial
-//     step of the same model (headline_answer);
+//     step of the same model (best_choice);
 //   * with --crossover, per thread count swept, from what model size the
 //     parallel step pays off (crossover.hpp: crossover_lines);
 //   * for each model, thread count and placement measured, the combination
@@ -37,7 +39,7 @@
 //
 // Before the per-group lines, one line answers first: the fastest choice of
 // the run (which thread count and placement) and its step against the serial
-// step of the same model (headline_answer). No pair compares choices across
+// step of the same model (best_choice). No pair compares choices across
 // thread counts or placements, so one whose repetitions overlap the fastest's
 // (its fastest repetition no slower than the fastest choice's slowest) is
 // named beside it as a tie.
@@ -56,12 +58,14 @@
 namespace lockstep::bench {
 
 class run_book;
+struct crossover_sweep;
+struct pace_modes;
 
-inline constexpr std::size_t kHeadlineLines = 25;
+inline constexpr std::size_t kAnswerLines = 25;
 
 // One other primitive set against the chosen one: the other's step over the
 // chosen one's, paired (above 1: the other is slower).
-struct headline_rival {
+struct answer_rival {
   std::string entry;
   std::string sync;
   std::string layout;
@@ -70,7 +74,7 @@ struct headline_rival {
 };
 
 // The combination to use at one model, thread count and placement.
-struct headline_choice {
+struct answer_choice {
   kernels::model_choice model;  // the entry's model
   unsigned threads = 0;
   platform::placement pin = platform::placement::compact;
@@ -102,8 +106,8 @@ struct headline_choice {
   // The pair with the runner-up could not tell the two apart (within noise
   // or unsure): both are named, the pair's side first.
   bool tied = false;
-  std::optional<headline_rival> runner_up;
-  std::optional<headline_rival> baseline;  // kBaselinePrimitive against the choice
+  std::optional<answer_rival> runner_up;
+  std::optional<answer_rival> baseline;  // kBaselinePrimitive against the choice
 };
 
 // The known answers measured beside the matrix (known_answers.cpp, briefly):
@@ -137,7 +141,7 @@ struct known_answers {
 // A choice of another thread count or placement that the run does not
 // separate from the best: no pair compares choices across groups, and their
 // repetitions' ranges (median +- spread) overlap.
-struct headline_level {
+struct tied_choice {
   unsigned threads = 0;
   platform::placement pin = platform::placement::compact;
   std::string entry;
@@ -148,7 +152,7 @@ struct headline_level {
 // the two entries; vs_serial is the one derived figure, derived_figures.hpp).
 // The best is the lowest median; the choices as good as far as the run can
 // tell are named beside it (`level`), so that a tie is said as a tie.
-struct headline_answer {
+struct best_choice {
   kernels::model_choice model;
   unsigned threads = 0;
   platform::placement pin = platform::placement::compact;
@@ -156,45 +160,61 @@ struct headline_answer {
   double ns_per_step = 0.0;
   std::optional<double> serial_ns_per_step;
   std::optional<double> vs_serial;  // the choice's step / the serial step
-  std::vector<headline_level> level;  // by median
+  std::vector<tied_choice> level;  // by median
 };
 
 // An entry that lost repetitions to a stop (a stall, a lost wake-up, the
 // call's budget): measured from the rest, named in the answer.
-struct headline_stopped {
+struct stopped_entry {
   std::string entry;
   std::size_t repetitions_stopped = 0;
   std::size_t repetitions = 0;  // measured and stopped
   std::string reason;
 };
 
-struct run_headline {
+struct run_answer {
   // The fastest choice of the run's first model (the paper's two-mass system when measured).
-  std::optional<headline_answer> answer;
-  std::vector<headline_choice> choices;
-  std::vector<headline_stopped> stopped;
+  std::optional<best_choice> best;
+  std::vector<answer_choice> choices;
+  std::vector<stopped_entry> stopped;
   std::vector<std::string> collapsed;  // entry names
   known_answers probes;
   // --crossover: per thread count swept the crossover's line and the ceiling's (crossover.hpp:
   // crossover_lines), also among `lines`, after the answer-first line.
   std::vector<std::string> crossover;
-  std::vector<std::string> lines;      // the text, at most kHeadlineLines lines
+  std::vector<std::string> lines;      // the text, at most kAnswerLines lines
 };
 
-// `cpus`: the affinity set's size; `result_path`: where the JSON went.
-run_headline make_headline(const run_book& book, const known_answers& probes, unsigned cpus,
-                           const std::string& result_path);
+// The combination to use per model, thread count and placement (the
+// ranking's groups, in its order: bench/run/ranking.hpp), from the run's
+// medians and pairs. Call once the pairs are measured and the pace modes
+// assigned (the choice's paces read each repetition's mode).
+std::vector<answer_choice> choose_combinations(const run_book& book);
+
+// What the answer is made from besides the book and the choices.
+struct answer_sources {
+  known_answers probes;
+  unsigned cpus = 0;             // the affinity set's size
+  std::string result_path;       // where the JSON went
+  const pace_modes* pace = nullptr;            // the run's pace modes, when the trace was analysed
+  const crossover_sweep* crossover = nullptr;  // --crossover's sweep
+};
+
+// The answer: the best choice, the choices, what was left out, in at most
+// kAnswerLines lines.
+run_answer make_answer(const run_book& book, std::vector<answer_choice> choices, const answer_sources& sources);
 
 // The lines for a terminal, each wrapped (below) at 120 columns; the result
 // file and the report keep every line whole.
-std::string headline_text(const run_headline& headline);
+std::string answer_text(const run_answer& answer);
 
 // A line wrapped at a word to `width` columns, ending in a newline;
 // continuation lines are indented 4 past the line's own indent, and a word
 // longer than the width stays whole (nothing is ever cut).
 std::string wrapped(const std::string& line, std::size_t width);
 
-// The result file's "lockstep_headline" (docs/schemas/run.schema.json).
-nlohmann::json headline_json(const run_headline& headline);
+// The result file's "lockstep_answer" (docs/schemas/run.schema.json; files
+// before it call it "lockstep_headline").
+nlohmann::json answer_json(const run_answer& answer);
 
 }  // namespace lockstep::bench

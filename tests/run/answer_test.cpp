@@ -1,7 +1,7 @@
-// The answer of a run (bench/run/headline.hpp) and the comparisons it
+// The answer of a run (bench/run/answer.hpp) and the comparisons it
 // rests on (bench/run/paired_blocks.hpp), on hand-made run books: which
 // entries collapse, that each unordered comparison is planned once and read
-// the same both ways, and that the combination the headline recommends is the
+// the same both ways, and that the combination the answer recommends is the
 // one the paired comparisons put first. No timing is measured or asserted.
 #include <fmt/core.h>
 #include <gtest/gtest.h>
@@ -14,7 +14,7 @@
 #include <utility>
 #include <vector>
 
-#include "bench/run/headline.hpp"
+#include "bench/run/answer.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/run/run_book.hpp"
 #include "tests/support/run_file_entries.hpp"
@@ -22,6 +22,12 @@
 namespace {
 
 namespace bench = lockstep::bench;
+
+// The answer as the run makes it, from the book's own choices.
+bench::run_answer answer_of(const bench::run_book& book, const bench::known_answers& probes, unsigned cpus,
+                            const std::string& result_path) {
+  return bench::make_answer(book, bench::choose_combinations(book), {probes, cpus, result_path, nullptr, nullptr});
+}
 
 std::string step_name(const std::string& sync, const std::string& layout, const std::string& pin, unsigned threads) {
   return "rk4/sync:" + sync + "/layout:" + layout + "/pin:" + pin + "/threads:" + std::to_string(threads);
@@ -138,13 +144,13 @@ TEST(AgainstBestOther, TheTwoDirectionsOfOnePairAgree) {
   EXPECT_EQ(views.front().verdict, bench::ratio_verdict::penalty);
 }
 
-TEST(Headline, RecommendsWhatThePairsPutFirstWhereTheyOverturnTheMedians) {
+TEST(Answer, RecommendsWhatThePairsPutFirstWhereTheyOverturnTheMedians) {
   bench::run_book book = two_cpu_book();
   book.collapsed = bench::find_collapsed(book);
   measure(book, [](const std::string& a, const std::string&) { return a.find("seqlock") != std::string::npos ? 0.9 : 5.8; });
-  const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
-  ASSERT_EQ(headline.choices.size(), 2u);
-  const bench::headline_choice& two = headline.choices[0];
+  const bench::run_answer answer = answer_of(book, {}, 2, "results/x.json");
+  ASSERT_EQ(answer.choices.size(), 2u);
+  const bench::answer_choice& two = answer.choices[0];
   EXPECT_EQ(two.threads, 2u);
   EXPECT_EQ(two.entry, step_name("seqlock", "per_thread", "compact", 2));
   EXPECT_EQ(two.median_leader, step_name("mailbox", "per_thread", "compact", 2));
@@ -152,19 +158,19 @@ TEST(Headline, RecommendsWhatThePairsPutFirstWhereTheyOverturnTheMedians) {
   ASSERT_TRUE(two.runner_up);
   EXPECT_EQ(two.runner_up->sync, "mailbox");
   EXPECT_EQ(two.runner_up->verdict, bench::ratio_verdict::penalty);
-  EXPECT_LE(headline.lines.size(), bench::kHeadlineLines);
+  EXPECT_LE(answer.lines.size(), bench::kAnswerLines);
 }
 
-TEST(Headline, KeepsTheMedianLeaderWhenThePairAgreesOrCannotTell) {
+TEST(Answer, KeepsTheMedianLeaderWhenThePairAgreesOrCannotTell) {
   for (const double seqlock_over_mailbox : {1.3, 1.01}) {
     bench::run_book book = two_cpu_book();
     book.collapsed = bench::find_collapsed(book);
     measure(book, [&](const std::string& a, const std::string&) {
       return a.find("seqlock") != std::string::npos ? seqlock_over_mailbox : 5.8;
     });
-    const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
-    ASSERT_FALSE(headline.choices.empty());
-    const bench::headline_choice& two = headline.choices[0];
+    const bench::run_answer answer = answer_of(book, {}, 2, "results/x.json");
+    ASSERT_FALSE(answer.choices.empty());
+    const bench::answer_choice& two = answer.choices[0];
     EXPECT_EQ(two.entry, step_name("mailbox", "per_thread", "compact", 2)) << seqlock_over_mailbox;
     ASSERT_TRUE(two.runner_up);
     EXPECT_EQ(two.runner_up->sync, "seqlock");
@@ -175,26 +181,26 @@ TEST(Headline, KeepsTheMedianLeaderWhenThePairAgreesOrCannotTell) {
   }
 }
 
-TEST(Headline, RanksByMediansAndSaysSoWithoutPairs) {
+TEST(Answer, RanksByMediansAndSaysSoWithoutPairs) {
   bench::run_book book = two_cpu_book();
   book.collapsed = bench::find_collapsed(book);
-  const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
-  ASSERT_FALSE(headline.choices.empty());
-  EXPECT_EQ(headline.choices[0].entry, step_name("mailbox", "per_thread", "compact", 2));
-  EXPECT_EQ(headline.choices[0].basis, "medians");
-  const std::string text = bench::headline_text(headline);
+  const bench::run_answer answer = answer_of(book, {}, 2, "results/x.json");
+  ASSERT_FALSE(answer.choices.empty());
+  EXPECT_EQ(answer.choices[0].entry, step_name("mailbox", "per_thread", "compact", 2));
+  EXPECT_EQ(answer.choices[0].basis, "medians");
+  const std::string text = bench::answer_text(answer);
   EXPECT_NE(text.find("ranked by medians only"), std::string::npos) << text;
   // The file's lines are whole (the terminal's text wraps them).
   std::string lines;
-  for (const auto& line : headline.lines) lines += line + "\n";
+  for (const auto& line : answer.lines) lines += line + "\n";
   EXPECT_NE(lines.find("Collapsed when threads outnumber CPUs (1 entries"), std::string::npos) << lines;
 }
 
-TEST(Headline, SaysMigrationWasNotMeasuredWhenNothingMigrated) {
+TEST(Answer, SaysMigrationWasNotMeasuredWhenNothingMigrated) {
   bench::run_book book;
   add_step(book, "mailbox", "per_thread", "compact", 2, 1000.0);
   add_step(book, "mailbox", "per_thread", "none", 2, 1010.0, false, 0.0);
-  const std::string text = bench::headline_text(bench::make_headline(book, {}, 2, "results/x.json"));
+  const std::string text = bench::answer_text(answer_of(book, {}, 2, "results/x.json"));
   EXPECT_NE(text.find("the OS migrated none of the 1 pin:none entries"), std::string::npos) << text;
 }
 
@@ -215,40 +221,40 @@ bench::run_book book_in_modes(const std::vector<int>& modes) {
   return book;
 }
 
-TEST(Headline, SaysWhenTheSpreadComesFromTheMachinesPace) {
+TEST(Answer, SaysWhenTheSpreadComesFromTheMachinesPace) {
   struct known {
     std::vector<int> modes;
     std::size_t paces;
     bool straddles;
     const char* words;  // after the spread; empty: nothing after it
   };
-  for (const known& answer : {known{{0, 0, 0, 0, 0}, 1, false, ""}, known{{0, 0, 1, 0, 0}, 2, false, " over 2 paces of the machine: uncertain"},
+  for (const known& expected : {known{{0, 0, 0, 0, 0}, 1, false, ""}, known{{0, 0, 1, 0, 0}, 2, false, " over 2 paces of the machine: uncertain"},
                               known{{0, -1, 0, 0, 0}, 1, true, ", straddles a pace change"},
                               known{{0, 1, 2, -1, 0}, 3, true, " over 3 paces of the machine: uncertain"},
                               known{{kNoMode, kNoMode, kNoMode}, 0, false, ""}}) {
-    const bench::run_book book = book_in_modes(answer.modes);
-    const bench::run_headline headline = bench::make_headline(book, {}, 2, "results/x.json");
-    ASSERT_EQ(headline.choices.size(), 1u);
-    const bench::headline_choice& choice = headline.choices.front();
-    EXPECT_EQ(choice.paces, answer.paces);
-    EXPECT_EQ(choice.straddles_pace_change, answer.straddles);
-    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct(), answer.words);
-    EXPECT_NE(bench::headline_text(headline).find(spread), std::string::npos) << spread << "\n"
-                                                                              << bench::headline_text(headline);
-    const nlohmann::json json = bench::headline_json(headline);
-    EXPECT_EQ(json["recommendations"][0]["paces"], answer.paces);
-    EXPECT_EQ(json["recommendations"][0]["straddles_pace_change"], answer.straddles);
+    const bench::run_book book = book_in_modes(expected.modes);
+    const bench::run_answer answer = answer_of(book, {}, 2, "results/x.json");
+    ASSERT_EQ(answer.choices.size(), 1u);
+    const bench::answer_choice& choice = answer.choices.front();
+    EXPECT_EQ(choice.paces, expected.paces);
+    EXPECT_EQ(choice.straddles_pace_change, expected.straddles);
+    const std::string spread = fmt::format("a step (+-{:.1f} %{})", choice.spread_pct(), expected.words);
+    EXPECT_NE(bench::answer_text(answer).find(spread), std::string::npos) << spread << "\n"
+                                                                            << bench::answer_text(answer);
+    const nlohmann::json json = bench::answer_json(answer);
+    EXPECT_EQ(json["recommendations"][0]["paces"], expected.paces);
+    EXPECT_EQ(json["recommendations"][0]["straddles_pace_change"], expected.straddles);
   }
 }
 
-TEST(Headline, StaysWithinItsLinesForAManyThreadMatrix) {
+TEST(Answer, StaysWithinItsLinesForAManyThreadMatrix) {
   bench::run_book book;
   for (unsigned threads = 2; threads <= 64; threads += 2)
     for (const char* pin : {"compact", "none"}) add_step(book, "mailbox", "per_thread", pin, threads, 1000.0 * threads);
-  const bench::run_headline headline = bench::make_headline(book, {}, 64, "results/x.json");
-  EXPECT_EQ(headline.lines.size(), bench::kHeadlineLines);
-  EXPECT_NE(bench::headline_text(headline).find("more lines of choices"), std::string::npos);
-  EXPECT_EQ(headline.choices.size(), 64u);
+  const bench::run_answer answer = answer_of(book, {}, 64, "results/x.json");
+  EXPECT_EQ(answer.lines.size(), bench::kAnswerLines);
+  EXPECT_NE(bench::answer_text(answer).find("more lines of choices"), std::string::npos);
+  EXPECT_EQ(answer.choices.size(), 64u);
 }
 
 // The known answers of a run whose probe measured each access pattern:
@@ -275,10 +281,10 @@ bench::run_book false_sharing_book(double packed_over_padded) {
   return book;
 }
 
-std::vector<std::string> lines_from(const std::string& first_words, const bench::run_headline& headline) {
+std::vector<std::string> lines_from(const std::string& first_words, const bench::run_answer& answer) {
   std::vector<std::string> lines;
   bool in = false;
-  for (const auto& line : headline.lines) {
+  for (const auto& line : answer.lines) {
     if (line.rfind(first_words, 0) == 0) in = true;
     else if (in && line.rfind("  ", 0) != 0) break;
     if (in) lines.push_back(line);
@@ -297,16 +303,16 @@ std::string as_text(const std::vector<std::string>& lines) {
   return text;
 }
 
-TEST(Headline, StatesFalseSharingPerPatternAndWhichTheStepsLayoutsExercise) {
+TEST(Answer, StatesFalseSharingPerPatternAndWhichTheStepsLayoutsExercise) {
   const bench::run_book book = false_sharing_book(1.0);
-  const bench::run_headline headline = bench::make_headline(
+  const bench::run_answer answer = answer_of(
       book,
       false_sharing_answers({{"plain_store", 1.01, 0.97, 1.04},
                              {"atomic_rmw", 4.61, 4.12, 4.90},
                              {"seq_cst_store", 4.43, 4.10, 4.71},
                              {"writer_beside_reader", 1.02, 0.98, 1.04}}),
       2, "results/x.json");
-  const std::vector<std::string> lines = lines_from("False sharing", headline);
+  const std::vector<std::string> lines = lines_from("False sharing", answer);
   std::string joined;
   for (const auto& line : lines) {
     EXPECT_FALSE(line.ends_with("...")) << line;
@@ -353,7 +359,7 @@ TEST(Headline, StatesFalseSharingPerPatternAndWhichTheStepsLayoutsExercise) {
       << text;
   EXPECT_NE(text.find("(words 8 B against 128 B apart, per access; CPUs 0,1, shared L3, 9 pairs):"), std::string::npos) << text;
   // The file: every pattern, and the plain stores' figure where older files had the only one.
-  const nlohmann::json json = bench::headline_json(headline);
+  const nlohmann::json json = bench::answer_json(answer);
   ASSERT_EQ(json["false_sharing_patterns"].size(), 4u);
   EXPECT_EQ(json["false_sharing_probe"]["median"], 1.01);
   EXPECT_EQ(json["false_sharing_probe"]["verdict"], "within noise");
@@ -364,41 +370,41 @@ TEST(Headline, StatesFalseSharingPerPatternAndWhichTheStepsLayoutsExercise) {
   EXPECT_EQ(json["false_sharing_patterns"][1]["cpus_relation"], "shared L3");
 }
 
-TEST(Headline, WhenNoPatternPaysItSaysWhatThatMeansWithTheEvidence) {
+TEST(Answer, WhenNoPatternPaysItSaysWhatThatMeansWithTheEvidence) {
   bench::run_book book = false_sharing_book(1.0);
-  const bench::run_headline headline = bench::make_headline(
+  const bench::run_answer answer = answer_of(
       book,
       false_sharing_answers({{"plain_store", 1.0, 0.98, 1.02},
                              {"atomic_rmw", 1.01, 0.99, 1.03},
                              {"seq_cst_store", 0.99, 0.97, 1.02},
                              {"writer_beside_reader", 1.0, 0.97, 1.03}}),
       2, "results/x.json");
-  const std::string text = as_text(lines_from("False sharing", headline));
+  const std::string text = as_text(lines_from("False sharing", answer));
   EXPECT_NE(text.find("no pattern pays: the two CPUs act as if they shared one core's cache"), std::string::npos)
       << text;
   EXPECT_NE(text.find("hwloc calls CPUs 0,1 shared L3"), std::string::npos) << text;
 }
 
-TEST(Headline, NamesThePatternsAFileDidNotMeasure) {
+TEST(Answer, NamesThePatternsAFileDidNotMeasure) {
   // A file from before the patterns: the plain stores' figure only.
-  const bench::run_headline headline = bench::make_headline(
+  const bench::run_answer answer = answer_of(
       false_sharing_book(1.0), false_sharing_answers({{"plain_store", 3.24, 1.25, 3.61}}, ""), 2, "results/x.json");
-  const std::string text = as_text(lines_from("False sharing", headline));
+  const std::string text = as_text(lines_from("False sharing", answer));
   EXPECT_NE(text.find("plain stores 3.24x [1.25, 3.61] penalty: every pattern measured pays; not measured: atomic "
                       "read-modify-writes, seq_cst stores and a writer beside a reader"),
             std::string::npos)
       << text;
 }
 
-TEST(Headline, SaysWhyFalseSharingWasNotMeasured) {
+TEST(Answer, SaysWhyFalseSharingWasNotMeasured) {
   bench::known_answers answers;
   answers.false_sharing_unavailable = "fewer than two CPUs to pin two threads on";
-  const bench::run_headline headline = bench::make_headline(false_sharing_book(1.0), answers, 2, "results/x.json");
-  EXPECT_NE(bench::headline_text(headline).find(
+  const bench::run_answer answer = answer_of(false_sharing_book(1.0), answers, 2, "results/x.json");
+  EXPECT_NE(bench::answer_text(answer).find(
                 "False sharing: probe unavailable (fewer than two CPUs to pin two threads on)"),
             std::string::npos);
-  EXPECT_TRUE(bench::headline_json(headline)["false_sharing_probe"].is_null());
-  EXPECT_TRUE(bench::headline_json(headline)["false_sharing_patterns"].empty());
+  EXPECT_TRUE(bench::answer_json(answer)["false_sharing_probe"].is_null());
+  EXPECT_TRUE(bench::answer_json(answer)["false_sharing_patterns"].empty());
 }
 
 }  // namespace
@@ -427,20 +433,20 @@ TEST(AnswerFirst, ChoicesTheRunDoesNotSeparateAreNamedAsATie) {
   add_spread_step(book, "compact", 2, {900.0, 1000.0, 1100.0});
   add_spread_step(book, "none", 2, {950.0, 1050.0, 1150.0});
   add_spread_step(book, "compact", 4, {4900.0, 5000.0, 5100.0});
-  const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
-  ASSERT_TRUE(headline.answer.has_value());
-  EXPECT_EQ(headline.answer->pin, lockstep::platform::placement::compact);
-  ASSERT_EQ(headline.answer->level.size(), 1u);
-  EXPECT_EQ(headline.answer->level[0].pin, lockstep::platform::placement::none);
-  EXPECT_EQ(headline.answer->level[0].threads, 2u);
-  const auto first = std::find_if(headline.lines.begin(), headline.lines.end(),
+  const bench::run_answer answer = answer_of(book, bench::known_answers{}, 2, "results/x.json");
+  ASSERT_TRUE(answer.best.has_value());
+  EXPECT_EQ(answer.best->pin, lockstep::platform::placement::compact);
+  ASSERT_EQ(answer.best->level.size(), 1u);
+  EXPECT_EQ(answer.best->level[0].pin, lockstep::platform::placement::none);
+  EXPECT_EQ(answer.best->level[0].threads, 2u);
+  const auto first = std::find_if(answer.lines.begin(), answer.lines.end(),
                                   [](const std::string& line) { return line.rfind("Best here:", 0) == 0; });
-  ASSERT_NE(first, headline.lines.end());
+  ASSERT_NE(first, answer.lines.end());
   EXPECT_NE(first->find("tied with threads:2 pin:none (1.05 us): their repetitions overlap and no pair compared them"),
             std::string::npos)
       << *first;
   EXPECT_EQ(first->find("threads:4"), std::string::npos) << *first;
-  const nlohmann::json json = bench::headline_json(headline);
+  const nlohmann::json json = bench::answer_json(answer);
   ASSERT_EQ(json["answer"]["level"].size(), 1u);
   EXPECT_EQ(json["answer"]["level"][0]["pin"], "none");
 }
@@ -449,10 +455,10 @@ TEST(AnswerFirst, AChoiceWhoseRepetitionsLieApartIsNoTie) {
   bench::run_book book;
   add_spread_step(book, "compact", 2, {900.0, 1000.0, 1100.0});
   add_spread_step(book, "none", 2, {1500.0, 1600.0, 1700.0});
-  const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
-  ASSERT_TRUE(headline.answer.has_value());
-  EXPECT_TRUE(headline.answer->level.empty());
-  EXPECT_EQ(bench::headline_json(headline)["answer"]["level"], nlohmann::json::array());
+  const bench::run_answer answer = answer_of(book, bench::known_answers{}, 2, "results/x.json");
+  ASSERT_TRUE(answer.best.has_value());
+  EXPECT_TRUE(answer.best->level.empty());
+  EXPECT_EQ(bench::answer_json(answer)["answer"]["level"], nlohmann::json::array());
 }
 
 // The overlap is of the repetitions themselves: a choice with one slow
@@ -464,8 +470,8 @@ TEST(AnswerFirst, OneSlowRepetitionDoesNotTieAChoiceWithAFasterOne) {
   bench::run_book book;
   add_spread_step(book, "compact", 2, {301.0, 695.0, 922.0, 957.0, 1032.0});
   add_spread_step(book, "compact", 4, {5529.0, 5541.0, 5770.0, 6293.0, 15760.0});
-  const bench::run_headline headline = bench::make_headline(book, bench::known_answers{}, 2, "results/x.json");
-  ASSERT_TRUE(headline.answer.has_value());
-  EXPECT_EQ(headline.answer->threads, 2u);
-  EXPECT_TRUE(headline.answer->level.empty());
+  const bench::run_answer answer = answer_of(book, bench::known_answers{}, 2, "results/x.json");
+  ASSERT_TRUE(answer.best.has_value());
+  EXPECT_EQ(answer.best->threads, 2u);
+  EXPECT_TRUE(answer.best->level.empty());
 }

@@ -1,5 +1,5 @@
-// The answer of a run (headline.hpp).
-#include "bench/run/headline.hpp"
+// The answer of a run (answer.hpp).
+#include "bench/run/answer.hpp"
 
 #include <fmt/core.h>
 #include <fmt/format.h>
@@ -13,6 +13,8 @@
 
 #include "bench/probe_reports/falseshare_report.hpp"
 #include "bench/probes/falseshare.hpp"
+#include "bench/run/crossover.hpp"
+#include "bench/run/pace.hpp"
 #include "bench/run/paired_blocks.hpp"
 #include "bench/run/ranking.hpp"
 #include "bench/run/run_book.hpp"
@@ -32,7 +34,7 @@ std::string short_list(const std::vector<std::string>& names, std::size_t shown 
   return text;
 }
 
-// The terminal's width for the answer: headline_text wraps longer lines at
+// The terminal's width for the answer: answer_text wraps longer lines at
 // a word (a line in the result file and the report stays whole).
 constexpr std::size_t kLineWidth = 120;
 
@@ -50,7 +52,7 @@ std::string rival_verdict_words(ratio_verdict verdict) {
 // A rival against the choice, saying what the ratio divides: "seqlock: its
 // step is 1.17x this one [1.07, 1.25], slower" (`spelled_out`), or, after
 // one that was, "std_barrier: 11.45x [5.98, 25.34], slower".
-std::string rival_text(const headline_rival& rival, bool spelled_out) {
+std::string rival_text(const answer_rival& rival, bool spelled_out) {
   return fmt::format("{}: {}{:.2f}x {}[{:.2f}, {:.2f}], {}", rival.sync, spelled_out ? "its step is " : "",
                      rival.estimate.median, spelled_out ? "this one " : "", rival.estimate.low, rival.estimate.high,
                      rival_verdict_words(rival.verdict));
@@ -60,17 +62,19 @@ std::string model_words(const kernels::model_choice& model) {
   return model.is_chain() ? "model:" + model.name() + " " : std::string();
 }
 
-std::optional<headline_rival> rival_from(const best_other_view& view, const run_book& book) {
+std::optional<answer_rival> rival_from(const best_other_view& view, const run_book& book) {
   const captured_entry* other = book.find(view.entry);
   if (other == nullptr) return std::nullopt;
-  return headline_rival{view.entry, other->spec.sync, other->spec.layout, view.estimate, view.verdict};
+  return answer_rival{view.entry, other->spec.sync, other->spec.layout, view.estimate, view.verdict};
 }
 
-std::vector<headline_choice> choose(const run_book& book) {
-  std::vector<headline_choice> choices;
+}  // namespace
+
+std::vector<answer_choice> choose_combinations(const run_book& book) {
+  std::vector<answer_choice> choices;
   for (const ranked_group& group : rank_groups(book, entry_kind::rk4)) {
     const captured_entry* chosen = group.entries.front().entry;
-    headline_choice choice;
+    answer_choice choice;
     choice.model = group.model;
     choice.threads = group.threads;
     choice.pin = group.pin;
@@ -94,11 +98,11 @@ std::vector<headline_choice> choose(const run_book& book) {
       if (leader_view->estimate.low > 1.0 && other != nullptr) {
         chosen = other;
         const captured_entry* leader = book.find(leader_view->entry);
-        choice.runner_up = headline_rival{leader_view->entry, leader->spec.sync, leader->spec.layout,
-                                          leader_view->estimate, leader_view->verdict};
+        choice.runner_up = answer_rival{leader_view->entry, leader->spec.sync, leader->spec.layout,
+                                        leader_view->estimate, leader_view->verdict};
       } else if (other != nullptr) {
-        choice.runner_up = headline_rival{leader_view->other, other->spec.sync, other->spec.layout,
-                                          inverse(leader_view->estimate), inverse(leader_view->verdict)};
+        choice.runner_up = answer_rival{leader_view->other, other->spec.sync, other->spec.layout,
+                                        inverse(leader_view->estimate), inverse(leader_view->verdict)};
       }
       // Only a rival slower beyond the noise band leaves one winner; within
       // noise or unsure, the pair cannot tell them apart.
@@ -113,10 +117,9 @@ std::vector<headline_choice> choose(const run_book& book) {
       choice.fastest_ns = range->first;
       choice.slowest_ns = range->second;
     }
-    for (const auto& [mode, values] : chosen->by_pace_mode("ns_per_step")) {
-      if (mode < 0) choice.straddles_pace_change = true;
-      else ++choice.paces;
-    }
+    const pace_mode_times times = chosen->pace_medians();
+    choice.paces = times.modes.size();
+    choice.straddles_pace_change = times.straddling > 0;
     choice.vs_c2c = chosen->median("vs_c2c");
     if (const auto cpu = chosen->median("team_cpu_ns_per_step"); cpu && choice.ns_per_step > 0.0)
       choice.cpus_busy = *cpu / choice.ns_per_step;
@@ -133,17 +136,19 @@ std::vector<headline_choice> choose(const run_book& book) {
   return choices;  // in the ranking's order: threads, model, placement
 }
 
+namespace {
+
 // "+-4.2 %", and where the spread comes from when the machine changed pace
 // under the repetitions (lockstep run --verbose splits them: "Median per pace
 // mode"): then the figure itself is uncertain, and the line says so.
-std::string spread_words(const headline_choice& choice) {
+std::string spread_words(const answer_choice& choice) {
   std::string words = fmt::format("+-{:.1f} %", choice.spread_pct());
   if (choice.paces >= 2) return words + fmt::format(" over {} paces of the machine: uncertain", choice.paces);
   if (choice.straddles_pace_change) return words + ", straddles a pace change";
   return words;
 }
 
-void choice_lines(std::vector<std::string>& lines, const headline_choice& choice, unsigned cpus) {
+void choice_lines(std::vector<std::string>& lines, const answer_choice& choice, unsigned cpus) {
   const std::string chosen = choice.sync + " + " + choice.layout;
   std::string named = chosen;
   if (choice.tied && choice.runner_up) {
@@ -173,42 +178,42 @@ void choice_lines(std::vector<std::string>& lines, const headline_choice& choice
 
 // The answer first: the run's fastest choice, and the parallel step against
 // the serial step of the same model.
-std::optional<headline_answer> answer_of(const run_book& book, const std::vector<headline_choice>& choices) {
-  const headline_choice* best = nullptr;
+std::optional<best_choice> best_of(const run_book& book, const std::vector<answer_choice>& choices) {
+  const answer_choice* best = nullptr;
   for (const auto& choice : choices) {
     if (best != nullptr && choice.model != best->model) continue;  // the first model (the paper's sorts first)
     if (best == nullptr || choice.ns_per_step < best->ns_per_step) best = &choice;
   }
   if (best == nullptr) return std::nullopt;
-  headline_answer answer{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}, {}};
+  best_choice found{best->model, best->threads, best->pin, best->entry, best->ns_per_step, {}, {}, {}};
   // The repetitions themselves, not the median -+ half their range: the
   // range of a choice with one slow repetition lies mostly above its median.
   for (const auto& choice : choices) {
     if (&choice == best || choice.model != best->model) continue;
     if (choice.fastest_ns <= best->slowest_ns)
-      answer.level.push_back({choice.threads, choice.pin, choice.entry, choice.ns_per_step});
+      found.level.push_back({choice.threads, choice.pin, choice.entry, choice.ns_per_step});
   }
-  std::sort(answer.level.begin(), answer.level.end(),
-            [](const headline_level& a, const headline_level& b) { return a.ns_per_step < b.ns_per_step; });
-  answer.serial_ns_per_step = book.serial_step_ns(best->model);
-  if (const captured_entry* entry = book.find(best->entry)) answer.vs_serial = entry->median("vs_serial");
-  return answer;
+  std::sort(found.level.begin(), found.level.end(),
+            [](const tied_choice& a, const tied_choice& b) { return a.ns_per_step < b.ns_per_step; });
+  found.serial_ns_per_step = book.serial_step_ns(best->model);
+  if (const captured_entry* entry = book.find(best->entry)) found.vs_serial = entry->median("vs_serial");
+  return found;
 }
 
-std::string answer_line(const headline_answer& answer) {
-  std::string line = fmt::format("Best here: {}threads:{} pin:{}, {} a step", model_words(answer.model),
-                                 answer.threads, platform::to_string(answer.pin), format_ns(answer.ns_per_step));
-  if (!answer.level.empty()) {
+std::string best_line(const best_choice& best) {
+  std::string line = fmt::format("Best here: {}threads:{} pin:{}, {} a step", model_words(best.model), best.threads,
+                                 platform::to_string(best.pin), format_ns(best.ns_per_step));
+  if (!best.level.empty()) {
     std::vector<std::string> others;
-    for (const auto& other : answer.level)
+    for (const auto& other : best.level)
       others.push_back(fmt::format("threads:{} pin:{} ({})", other.threads, platform::to_string(other.pin),
                                    format_ns(other.ns_per_step)));
     line += fmt::format(", tied with {}: their repetitions overlap and no pair compared them",
                         fmt::join(others, " and "));
   }
-  if (!answer.serial_ns_per_step || !answer.vs_serial) return line + "; the serial step was not measured";
-  line += fmt::format("; the serial step of the same model takes {}", format_ns(*answer.serial_ns_per_step));
-  const double ratio = *answer.vs_serial;
+  if (!best.serial_ns_per_step || !best.vs_serial) return line + "; the serial step was not measured";
+  line += fmt::format("; the serial step of the same model takes {}", format_ns(*best.serial_ns_per_step));
+  const double ratio = *best.vs_serial;
   if (ratio >= 1.0)
     return line + fmt::format(": the parallel step costs {:.1f}x the serial one (medians), so synchronisation "
                               "dominates this model here: step it serially",
@@ -219,7 +224,7 @@ std::string answer_line(const headline_answer& answer) {
 // What false sharing costs here, per access pattern (the probe beside the
 // matrix, worded as lockstep falseshare words it: falseshare_answer_of), which
 // patterns the step's layouts exercise, and what the step's own groups showed.
-// Each line whole: headline_text wraps it for the terminal.
+// Each line whole: answer_text wraps it for the terminal.
 void false_sharing_lines(std::vector<std::string>& lines, const run_book& book, const known_answers& answers) {
   std::vector<pattern_figure> figures;
   std::vector<std::string> unmeasured;
@@ -336,8 +341,8 @@ void migration_lines(std::vector<std::string>& lines, const run_book& book, cons
   }
 }
 
-std::vector<headline_stopped> stopped_entries(const run_book& book) {
-  std::vector<headline_stopped> stopped;
+std::vector<stopped_entry> stopped_entries(const run_book& book) {
+  std::vector<stopped_entry> stopped;
   for (const auto& entry : book.entries())
     if (entry.stopped_repetitions > 0)
       stopped.push_back({entry.name, entry.stopped_repetitions, entry.stopped_repetitions + entry.repetitions.size(),
@@ -351,9 +356,7 @@ void left_out_lines(std::vector<std::string>& lines, const run_book& book) {
     std::set<unsigned> threads;
     double fastest = 0.0;
     double slowest = 0.0;
-    for (const std::string& name : book.collapsed) {
-      const captured_entry* entry = book.find(name);
-      if (entry == nullptr) continue;
+    for (const captured_entry* entry : collapsed_entries(book)) {
       if (std::find(syncs.begin(), syncs.end(), entry->spec.sync) == syncs.end()) syncs.push_back(entry->spec.sync);
       threads.insert(entry->spec.threads);
       const auto time = entry->median_time();
@@ -408,72 +411,81 @@ std::string wrapped(const std::string& line, std::size_t width) {
   return text.append(prefix).append(line, start).append("\n");
 }
 
-run_headline make_headline(const run_book& book, const known_answers& probes, unsigned cpus,
-                           const std::string& result_path) {
-  run_headline headline;
-  headline.choices = choose(book);
-  headline.answer = answer_of(book, headline.choices);
-  headline.stopped = stopped_entries(book);
-  headline.collapsed.assign(book.collapsed.begin(), book.collapsed.end());
-  headline.probes = probes;
-  if (book.crossover) headline.crossover = crossover_lines(*book.crossover);
-  std::vector<std::string> choices;
-  if (headline.choices.empty()) choices.push_back("  no RK4 step was measured without error: nothing to recommend");
-  for (const auto& choice : headline.choices) choice_lines(choices, choice, cpus);
+run_answer make_answer(const run_book& book, std::vector<answer_choice> choices, const answer_sources& sources) {
+  run_answer answer;
+  answer.choices = std::move(choices);
+  answer.best = best_of(book, answer.choices);
+  answer.stopped = stopped_entries(book);
+  for (const captured_entry* entry : collapsed_entries(book)) answer.collapsed.push_back(entry->name);
+  answer.probes = sources.probes;
+  if (sources.crossover != nullptr) answer.crossover = crossover_lines(*sources.crossover);
+  std::vector<std::string> choice_text;
+  if (answer.choices.empty())
+    choice_text.push_back("  no RK4 step was measured without error: nothing to recommend");
+  for (const auto& choice : answer.choices) choice_lines(choice_text, choice, sources.cpus);
   std::vector<std::string> rest;
-  false_sharing_lines(rest, book, probes);
-  migration_lines(rest, book, probes);
-  if (book.pace) rest.push_back("Pace: " + book.pace->summary());
+  false_sharing_lines(rest, book, sources.probes);
+  migration_lines(rest, book, sources.probes);
+  if (sources.pace != nullptr) rest.push_back("Pace: " + sources.pace->summary());
   left_out_lines(rest, book);
+  const std::string& result_path = sources.result_path;
   rest.push_back(fmt::format("Results: {} (every table: lockstep run --verbose, or the report)", result_path));
   const std::string stem =
       result_path.size() > 5 && result_path.ends_with(".json") ? result_path.substr(0, result_path.size() - 5) : result_path;
   rest.push_back(fmt::format("Report: lockstep report {} --out {}-report; compare: lockstep compare {} OTHER.json",
                              result_path, stem, result_path));
   // A matrix of many thread counts keeps its first choices within the
-  // headline's lines and leaves the others to the report.
-  const std::size_t room =
-      kHeadlineLines - 2 - std::min(rest.size() + headline.crossover.size(), kHeadlineLines - 4);
-  if (choices.size() > room) {
-    const std::size_t left = choices.size() - (room - 1);
-    choices.resize(room - 1);
-    choices.push_back(fmt::format("  ({} more lines of choices: lockstep run --verbose, or the report)", left));
+  // answer's lines and leaves the others to the report.
+  const std::size_t room = kAnswerLines - 2 - std::min(rest.size() + answer.crossover.size(), kAnswerLines - 4);
+  if (choice_text.size() > room) {
+    const std::size_t left = choice_text.size() - (room - 1);
+    choice_text.resize(room - 1);
+    choice_text.push_back(fmt::format("  ({} more lines of choices: lockstep run --verbose, or the report)", left));
   }
-  std::vector<std::string>& lines = headline.lines;
+  std::vector<std::string>& lines = answer.lines;
   lines.push_back(fmt::format("The answer on this machine (ratios paired side by side: median [95 % interval], "
                               "noise band {:.0f} %):",
                               100.0 * book.noise));
-  if (headline.answer) lines.push_back(answer_line(*headline.answer));
-  lines.insert(lines.end(), headline.crossover.begin(), headline.crossover.end());
-  lines.insert(lines.end(), choices.begin(), choices.end());
+  if (answer.best) lines.push_back(best_line(*answer.best));
+  lines.insert(lines.end(), answer.crossover.begin(), answer.crossover.end());
+  lines.insert(lines.end(), choice_text.begin(), choice_text.end());
   lines.insert(lines.end(), rest.begin(), rest.end());
-  if (lines.size() > kHeadlineLines) lines.resize(kHeadlineLines);
-  return headline;
+  if (lines.size() > kAnswerLines) lines.resize(kAnswerLines);
+  return answer;
 }
 
-std::string headline_text(const run_headline& headline) {
+std::string answer_text(const run_answer& answer) {
   std::string text;
-  for (const auto& line : headline.lines) text += wrapped(line, kLineWidth);
+  for (const auto& line : answer.lines) text += wrapped(line, kLineWidth);
   return text;
 }
 
-nlohmann::json headline_json(const run_headline& headline) {
-  const auto estimate_json = [](const ratio_estimate& estimate, ratio_verdict verdict) {
-    return nlohmann::json{{"median", estimate.median},
-                          {"ci_low", estimate.low},
-                          {"ci_high", estimate.high},
-                          {"verdict", to_string(verdict)}};
-  };
-  const auto rival_json = [&](const std::optional<headline_rival>& rival) -> nlohmann::json {
-    if (!rival) return nullptr;
-    nlohmann::json json = estimate_json(rival->estimate, rival->verdict);
-    json["entry"] = rival->entry;
-    json["sync"] = rival->sync;
-    json["layout"] = rival->layout;
-    return json;
-  };
+namespace {
+
+nlohmann::json estimate_json(const ratio_estimate& estimate, ratio_verdict verdict) {
+  return nlohmann::json{{"median", estimate.median},
+                        {"ci_low", estimate.low},
+                        {"ci_high", estimate.high},
+                        {"verdict", to_string(verdict)}};
+}
+
+nlohmann::json optional_json(const std::optional<double>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
+}
+
+nlohmann::json rival_json(const std::optional<answer_rival>& rival) {
+  if (!rival) return nullptr;
+  nlohmann::json json = estimate_json(rival->estimate, rival->verdict);
+  json["entry"] = rival->entry;
+  json["sync"] = rival->sync;
+  json["layout"] = rival->layout;
+  return json;
+}
+
+// The choices, as "recommendations".
+nlohmann::json choices_json(const std::vector<answer_choice>& choices) {
   nlohmann::json recommendations = nlohmann::json::array();
-  for (const auto& choice : headline.choices) {
+  for (const auto& choice : choices) {
     recommendations.push_back({{"model", choice.model.name()},
                                {"threads", choice.threads},
                                {"pin", platform::to_string(choice.pin)},
@@ -484,8 +496,8 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"spread_pct", choice.spread_pct()},
                                {"paces", choice.paces},
                                {"straddles_pace_change", choice.straddles_pace_change},
-                               {"vs_c2c", choice.vs_c2c ? nlohmann::json(*choice.vs_c2c) : nlohmann::json(nullptr)},
-                               {"cpus_busy", choice.cpus_busy ? nlohmann::json(*choice.cpus_busy) : nlohmann::json(nullptr)},
+                               {"vs_c2c", optional_json(choice.vs_c2c)},
+                               {"cpus_busy", optional_json(choice.cpus_busy)},
                                {"oversubscribed", choice.oversubscribed},
                                {"basis", choice.basis},
                                {"median_leader", choice.median_leader},
@@ -493,11 +505,16 @@ nlohmann::json headline_json(const run_headline& headline) {
                                {"runner_up", rival_json(choice.runner_up)},
                                {"baseline", rival_json(choice.baseline)}});
   }
-  // Per pattern; and, as files before the patterns had it, the one pattern
-  // the probe measured then (kOlderFilesFigure: plain stores).
+  return recommendations;
+}
+
+// The known-answer probes' keys: false sharing per pattern, and, as files
+// before the patterns had it, the one pattern the probe measured then
+// (kOlderFilesFigure: plain stores); the migration probe.
+void add_probes_json(nlohmann::json& json, const known_answers& probes) {
   nlohmann::json false_sharing = nullptr;
   nlohmann::json false_sharing_patterns = nlohmann::json::array();
-  for (const false_sharing_probe& probe : headline.probes.false_sharing) {
+  for (const false_sharing_probe& probe : probes.false_sharing) {
     nlohmann::json figure = estimate_json(probe.estimate, probe.verdict);
     figure["cpus"] = probe.cpus;
     figure["sharing_stride_bytes"] = probe.sharing_stride;
@@ -510,54 +527,57 @@ nlohmann::json headline_json(const run_headline& headline) {
       figure["words"] = probes::all_access_patterns[*pattern].words;
       figure["in_step_layouts"] = probes::all_access_patterns[*pattern].in_step_layouts;
     }
-    figure["cpus_relation"] = headline.probes.false_sharing_relation;
+    figure["cpus_relation"] = probes.false_sharing_relation;
     false_sharing_patterns.push_back(std::move(figure));
   }
   nlohmann::json migration = nullptr;
-  if (const auto& probe = headline.probes.migration) {
+  if (const auto& probe = probes.migration) {
     migration = {{"cpus", probe->cpus},
                  {"bytes", probe->bytes},
                  {"moves", probe->move.count},
                  {"move_p50_ns", probe->move.p50},
                  {"refill_p50_ns", probe->refill.p50}};
   }
-  const auto optional_json = [](const std::optional<double>& value) {
-    return value ? nlohmann::json(*value) : nlohmann::json(nullptr);
-  };
-  const auto level_json = [](const std::vector<headline_level>& level) {
-    nlohmann::json json = nlohmann::json::array();
-    for (const auto& other : level)
-      json.push_back({{"threads", other.threads}, {"pin", platform::to_string(other.pin)}, {"entry", other.entry},
-                      {"ns_per_step", other.ns_per_step}});
-    return json;
-  };
-  nlohmann::json answer = nullptr;
-  if (const auto& best = headline.answer)
-    answer = {{"model", best->model.name()},
-              {"threads", best->threads},
-              {"pin", platform::to_string(best->pin)},
-              {"entry", best->entry},
-              {"ns_per_step", best->ns_per_step},
-              {"serial_ns_per_step", optional_json(best->serial_ns_per_step)},
-              {"vs_serial", optional_json(best->vs_serial)},
-              {"level", level_json(best->level)}};
+  json["false_sharing_probe"] = false_sharing;
+  json["false_sharing_patterns"] = false_sharing_patterns;
+  json["false_sharing_probe_unavailable"] = probes.false_sharing_unavailable;
+  json["migration_probe"] = migration;
+  json["migration_probe_unavailable"] = probes.migration_unavailable;
+}
+
+nlohmann::json best_json(const std::optional<best_choice>& best) {
+  if (!best) return nullptr;
+  nlohmann::json level = nlohmann::json::array();
+  for (const auto& other : best->level)
+    level.push_back({{"threads", other.threads}, {"pin", platform::to_string(other.pin)}, {"entry", other.entry},
+                     {"ns_per_step", other.ns_per_step}});
+  return {{"model", best->model.name()},
+          {"threads", best->threads},
+          {"pin", platform::to_string(best->pin)},
+          {"entry", best->entry},
+          {"ns_per_step", best->ns_per_step},
+          {"serial_ns_per_step", optional_json(best->serial_ns_per_step)},
+          {"vs_serial", optional_json(best->vs_serial)},
+          {"level", level}};
+}
+
+}  // namespace
+
+nlohmann::json answer_json(const run_answer& answer) {
   nlohmann::json stopped = nlohmann::json::array();
-  for (const auto& entry : headline.stopped)
+  for (const auto& entry : answer.stopped)
     stopped.push_back({{"entry", entry.entry},
                        {"repetitions_stopped", entry.repetitions_stopped},
                        {"repetitions", entry.repetitions},
                        {"reason", entry.reason}});
-  return {{"lines", headline.lines},
-          {"answer", answer},
-          {"crossover", headline.crossover},
-          {"stopped", stopped},
-          {"recommendations", recommendations},
-          {"collapsed", headline.collapsed},
-          {"false_sharing_probe", false_sharing},
-          {"false_sharing_patterns", false_sharing_patterns},
-          {"false_sharing_probe_unavailable", headline.probes.false_sharing_unavailable},
-          {"migration_probe", migration},
-          {"migration_probe_unavailable", headline.probes.migration_unavailable}};
+  nlohmann::json json{{"lines", answer.lines},
+                      {"answer", best_json(answer.best)},
+                      {"crossover", answer.crossover},
+                      {"stopped", stopped},
+                      {"recommendations", choices_json(answer.choices)},
+                      {"collapsed", answer.collapsed}};
+  add_probes_json(json, answer.probes);
+  return json;
 }
 
 }  // namespace lockstep::bench
