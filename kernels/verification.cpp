@@ -186,71 +186,83 @@ void check_uniform_chain_roots(const chain_params& params, const normal_mode_sol
       "w_k = 2 sqrt(C/m) sin((2k - 1) pi / (2 (2s + 1))) against Eigen's eigenvalues of the same K, M"));
 }
 
-// RK4 against the analytic solution over the ladder, the observed order, the
-// energy drift, and dopri5 (on `chain`, the same system as a chain) against
-// both: every check after the roots, for either model.
+// The largest |x_j - y_j| over the first `positions` positions: x_j from a
+// state in the numbering of `numbering` (a model: its position_equation(j)),
+// y_j the first `positions` values of `reference` (the analytic state,
+// positions first, or a trajectory's positions).
+template <class Numbering>
+double position_error(std::size_t positions, const Numbering& numbering, std::span<const double> state,
+                      std::span<const double> reference) {
+  double largest = 0.0;
+  for (std::size_t position = 0; position < positions; ++position)
+    largest = std::max(largest, std::abs(state[numbering.position_equation(position)] - reference[position]));
+  return largest;
+}
+
+template <class Numbering>
+std::vector<double> positions_of(std::size_t positions, const Numbering& numbering, std::span<const double> state) {
+  std::vector<double> result(positions);
+  for (std::size_t position = 0; position < positions; ++position)
+    result[position] = state[numbering.position_equation(position)];
+  return result;
+}
+
+// The positions of an analytic state (positions first, then velocities).
+std::vector<double> analytic_positions(std::size_t positions, std::span<const double> state) {
+  return std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(positions));
+}
+
+// One rung of the ladder: RK4 at `refinement` times the given step's
+// resolution against the analytic solution. The given step's rung (the
+// first) also records the trajectory and the energy drift.
 template <oscillator_model Model>
-void check_integration(const Model& model, const chain_model& chain, const normal_mode_solution& analytic,
-                       const verify_settings& settings, const verify_progress& progress, verify_report& report) {
+ladder_rung run_rung(const Model& model, const normal_mode_solution& analytic, const verify_settings& settings,
+                     unsigned rung_index, const verify_progress& progress, verify_report& report) {
   const std::uint64_t steps = settings.steps();
   const std::size_t positions = analytic.masses_count();
-  // The largest |x_j - y_j| over the positions: x_j from a state in the
-  // numbering of `numbering` (a model: its position_equation(j)), y_j the
-  // first `positions` values of `reference` (the analytic state, positions
-  // first, or a trajectory's positions).
-  const auto position_error = [positions](const auto& numbering, std::span<const double> state,
-                                          std::span<const double> reference) {
-    double largest = 0.0;
-    for (std::size_t position = 0; position < positions; ++position)
-      largest = std::max(largest, std::abs(state[numbering.position_equation(position)] - reference[position]));
-    return largest;
-  };
-  const auto positions_of = [positions](const auto& numbering, std::span<const double> state) {
-    std::vector<double> result(positions);
-    for (std::size_t position = 0; position < positions; ++position)
-      result[position] = state[numbering.position_equation(position)];
-    return result;
-  };
-  // The positions of an analytic state (positions first, then velocities).
-  const auto analytic_positions = [positions](std::span<const double> state) {
-    return std::vector<double>(state.begin(), state.begin() + static_cast<std::ptrdiff_t>(positions));
-  };
-
-  // --- The ladder: RK4 against the analytic solution at h, h/2, h/4, h/8.
-  const double scale = amplitude_scale(analytic);
+  const std::uint64_t refinement = std::uint64_t{1} << rung_index;
+  ladder_rung rung;
+  rung.step = settings.step / static_cast<double>(refinement);
+  rung.steps = steps * refinement;
+  if (progress) {
+    progress(fmt::format("RK4 rung {} of {}: h = {:.6g} s, {} steps", rung_index + 1, kLadderRungs, rung.step,
+                         rung.steps));
+  }
   std::vector<double> exact(model.equations());
-  for (unsigned rung_index = 0; rung_index < kLadderRungs; ++rung_index) {
-    const std::uint64_t refinement = std::uint64_t{1} << rung_index;
-    ladder_rung rung;
-    rung.step = settings.step / static_cast<double>(refinement);
-    rung.steps = steps * refinement;
-    if (progress) {
-      progress(fmt::format("RK4 rung {} of {}: h = {:.6g} s, {} steps", rung_index + 1, kLadderRungs, rung.step,
-                           rung.steps));
-    }
-    staged_rk4 integrator(model, rung.step);
-    const bool given_step = rung_index == 0;
+  staged_rk4 integrator(model, rung.step);
+  const bool given_step = rung_index == 0;
+  if (given_step) {
+    report.energy.initial = model.energy(integrator.state());
+    report.trajectory.reserve(steps + 1);
+    analytic.state_at(0.0, exact);
+    report.trajectory.push_back(
+        {0.0, positions_of(positions, model, integrator.state()), analytic_positions(positions, exact)});
+  }
+  for (std::uint64_t step = 1; step <= rung.steps; ++step) {
+    integrator.step();
+    const double time = integrator.time();
+    const auto state = integrator.state();
+    analytic.state_at(time, exact);
+    rung.max_error = std::max(rung.max_error, position_error(positions, model, state, exact));
     if (given_step) {
-      report.energy.initial = model.energy(integrator.state());
-      report.trajectory.reserve(steps + 1);
-      analytic.state_at(0.0, exact);
-      report.trajectory.push_back({0.0, positions_of(model, integrator.state()), analytic_positions(exact)});
+      report.trajectory.push_back({time, positions_of(positions, model, state), analytic_positions(positions, exact)});
+      const double energy = model.energy(state);
+      const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
+                                                       : energy;
+      report.energy.max_relative_drift = std::max(report.energy.max_relative_drift, std::abs(drift));
+      report.energy.final_relative_drift = drift;
     }
-    for (std::uint64_t step = 1; step <= rung.steps; ++step) {
-      integrator.step();
-      const double time = integrator.time();
-      const auto state = integrator.state();
-      analytic.state_at(time, exact);
-      rung.max_error = std::max(rung.max_error, position_error(model, state, exact));
-      if (given_step) {
-        report.trajectory.push_back({time, positions_of(model, state), analytic_positions(exact)});
-        const double energy = model.energy(state);
-        const double drift = report.energy.initial > 0.0 ? (energy - report.energy.initial) / report.energy.initial
-                                                         : energy;
-        report.energy.max_relative_drift = std::max(report.energy.max_relative_drift, std::abs(drift));
-        report.energy.final_relative_drift = drift;
-      }
-    }
+  }
+  return rung;
+}
+
+// --- The ladder: RK4 against the analytic solution at h, h/2, h/4, h/8.
+template <oscillator_model Model>
+void check_ladder(const Model& model, const normal_mode_solution& analytic, const verify_settings& settings,
+                  const verify_progress& progress, verify_report& report) {
+  const double scale = amplitude_scale(analytic);
+  for (unsigned rung_index = 0; rung_index < kLadderRungs; ++rung_index) {
+    ladder_rung rung = run_rung(model, analytic, settings, rung_index, progress, report);
     rung.truncation_bound = rk4_truncation_bound(analytic, rung.step, rung.steps);
     rung.error_bound = rung.truncation_bound + rk4_rounding_allowance(analytic, rung.steps);
     rung.order_from_previous = report.ladder.empty()
@@ -263,8 +275,10 @@ void check_integration(const Model& model, const chain_model& chain, const norma
         "proved from h: sum_k A_k n tail(w_k h) + 16 n eps A (see kernels/verification.hpp)"));
     report.ladder.push_back(rung);
   }
+}
 
-  // --- Observed order: least-squares slope over the rungs above rounding.
+// --- Observed order: least-squares slope over the rungs above rounding.
+void check_order(verify_report& report) {
   double sum_x = 0.0, sum_y = 0.0, sum_xx = 0.0, sum_xy = 0.0;
   for (const ladder_rung& rung : report.ladder) {
     if (!rung.in_order_fit) continue;
@@ -287,26 +301,26 @@ void check_integration(const Model& model, const chain_model& chain, const norma
           : std::string("not measurable: the errors are at rounding level (use a larger --dt)"));
   order_check.checked = report.order_fit_rungs >= 2;
   report.checks.push_back(order_check);
+}
 
-  // --- Energy drift at the given step.
-  report.energy.bound = rk4_energy_drift_bound(analytic, settings.step, steps);
-  report.checks.push_back(make_check("energy drift max |E - E0| / E0", report.energy.max_relative_drift, 0.0,
-                                     report.energy.bound,
-                                     "each mode's energy scales by |R(i w h)|^2 = 1 - (wh)^6/72 + (wh)^8/576 per step"));
-
-  // --- dopri5 against the analytic solution and against RK4 at the given step.
+// --- dopri5 against the analytic solution and against RK4 at the given step.
+void check_dopri5(const chain_model& chain, const normal_mode_solution& analytic, const verify_settings& settings,
+                  const verify_progress& progress, verify_report& report) {
+  const std::uint64_t steps = settings.steps();
+  const std::size_t positions = analytic.masses_count();
   std::vector<double> times(steps + 1);
   for (std::uint64_t index = 0; index <= steps; ++index) times[index] = report.trajectory[index].time;
   dopri5_report& dopri5 = report.dopri5;
   if (progress) progress(fmt::format("dopri5 over {} output times", times.size()));
-  std::vector<double> exact_at(model.equations());
+  std::vector<double> exact_at(chain.equations());
   const dopri5_run run = dopri5_solve(
       chain, times,
       [&](std::size_t index, std::span<const double> state) {
         analytic.state_at(times[index], exact_at);
-        dopri5.max_error_vs_analytic = std::max(dopri5.max_error_vs_analytic, position_error(chain, state, exact_at));
-        dopri5.max_difference_vs_rk4 =
-            std::max(dopri5.max_difference_vs_rk4, position_error(chain, state, report.trajectory[index].positions));
+        dopri5.max_error_vs_analytic =
+            std::max(dopri5.max_error_vs_analytic, position_error(positions, chain, state, exact_at));
+        dopri5.max_difference_vs_rk4 = std::max(
+            dopri5.max_difference_vs_rk4, position_error(positions, chain, state, report.trajectory[index].positions));
       },
       settings.dopri5_tolerance);
   dopri5.steps = run.steps;
@@ -319,6 +333,22 @@ void check_integration(const Model& model, const chain_model& chain, const norma
   report.checks.push_back(make_check(fmt::format("RK4 (h = {:.6g} s) max |difference| vs dopri5", settings.step),
                                      dopri5.max_difference_vs_rk4, 0.0, dopri5.difference_bound,
                                      "the RK4 bound plus the dopri5 bound"));
+}
+
+// RK4 against the analytic solution over the ladder, the observed order, the
+// energy drift, and dopri5 (on `chain`, the same system as a chain) against
+// both: every check after the roots, for either model.
+template <oscillator_model Model>
+void check_integration(const Model& model, const chain_model& chain, const normal_mode_solution& analytic,
+                       const verify_settings& settings, const verify_progress& progress, verify_report& report) {
+  check_ladder(model, analytic, settings, progress, report);
+  check_order(report);
+  // --- Energy drift at the given step.
+  report.energy.bound = rk4_energy_drift_bound(analytic, settings.step, settings.steps());
+  report.checks.push_back(make_check("energy drift max |E - E0| / E0", report.energy.max_relative_drift, 0.0,
+                                     report.energy.bound,
+                                     "each mode's energy scales by |R(i w h)|^2 = 1 - (wh)^6/72 + (wh)^8/576 per step"));
+  check_dopri5(chain, analytic, settings, progress, report);
 }
 
 }  // namespace

@@ -16,6 +16,8 @@
 #                             spin: the Promela models in tests/spin, compiled with gcc;
 #                             iproute2: `ip netns`, two hosts for tests/mpi/netns-hosts.sh;
 #                             the emulated machines': CTest emulated.two_socket_16 boots one;
+#                             universal-ctags: where each function ends, for the CTest test
+#                             function_length, scripts/longest-functions.sh;
 #                             the tests cross-build aarch64, so --cross's too)
 #
 # Idempotent: when everything is present it checks and returns in well under a
@@ -33,7 +35,7 @@ build_packages=(
   dpkg-dev  # scripts/sysroot.sh: dpkg-source unpacks the sources of the static libraries
 )
 cross_packages=(g++-aarch64-linux-gnu qemu-user-static)
-test_packages=(rt-tests chromium libbenchmark-tools spin iproute2)
+test_packages=(rt-tests chromium libbenchmark-tools spin iproute2 universal-ctags)
 emulated_packages=(qemu-system-x86 qemu-system-arm busybox-static)
 
 packages=("${build_packages[@]}")

@@ -237,109 +237,126 @@ inline void responder_round(std::atomic<std::uint64_t>& word, method how, std::u
   }
 }
 
-}  // namespace detail
-
-// Measures one ordered pair of CPUs; returns `samples` one-way latencies in
-// nanoseconds, in the order they were taken (sort a copy for percentiles).
-inline std::vector<double> measure_pair(const pair_request& request) {
+inline void check_pair_request(const pair_request& request) {
   if (request.cpu_a < 0 || request.cpu_b < 0)
     throw std::invalid_argument("core_to_core: CPU numbers must be non-negative");
   if (request.cpu_a == request.cpu_b)
     throw std::invalid_argument("core_to_core: a pair needs two different CPUs");
   if (request.samples <= 0 || request.rounds_per_sample <= 0 || request.warmup_rounds < 0)
     throw std::invalid_argument("core_to_core: samples and rounds must be positive");
+}
 
+// What the two threads of one measure_pair share: the hand-over of the page
+// from A to B, and of errors from either thread. `stage`: 0 = A is
+// preparing, 1 = page ready, 2 = B pinned and has the page, -1 = A failed,
+// -2 = B failed.
+struct pair_handover {
+  std::atomic<int> stage{0};
+  std::atomic<std::atomic<std::uint64_t>*> shared_word{nullptr};
+  std::atomic<fresh_page*> shared_page{nullptr};  // method::stage's words
+  std::exception_ptr error_a;
+  std::exception_ptr error_b;
+};
+
+// Thread B: pins itself, waits for A's page, answers every round.
+inline void respond(const pair_request& request, pair_handover& handover, std::uint64_t total_rounds) {
+  try {
+    pin_this_thread(request.cpu_b);
+  } catch (...) {
+    handover.error_b = std::current_exception();
+    // release: publishes error_b to the initiator's acquire loads of stage.
+    handover.stage.exchange(-2, std::memory_order_acq_rel);
+    return;
+  }
+  patient_spin spin;
+  int seen = 0;
+  // acquire: pairs with the initiator's release store of 1 or -1 (initiate)
+  // (makes shared_word / error_a visible).
+  while ((seen = handover.stage.load(std::memory_order_acquire)) == 0) spin();
+  if (seen != 1) return;
+  // relaxed: ordered after the initiator's store by the acquire load of
+  // stage above (which pairs with the release half of its CAS to 1).
+  std::atomic<std::uint64_t>& word = *handover.shared_word.load(std::memory_order_relaxed);
+  // relaxed: as word, ordered by the acquire load of stage above.
+  fresh_page& page = *handover.shared_page.load(std::memory_order_relaxed);
+  handover.stage.store(2, std::memory_order_release);  // release: pairs with the initiator's acquire wait for 2
+  for (std::uint64_t k = 0; k < total_rounds; ++k) {
+    if (request.how == method::stage)
+      stage_round(page, 1, k);
+    else
+      responder_round(word, request.how, k);
+  }
+  if (request.how == method::stage) stage_finish_responder(page, total_rounds);
+}
+
+// Thread A's rounds once B has the page: the warm-up, then each sample's
+// rounds timed; one_way_ns gets one latency per sample.
+inline void time_rounds(const pair_request& request, fresh_page& page, std::uint64_t total_rounds,
+                        std::vector<double>& one_way_ns) {
+  std::atomic<std::uint64_t>& word = page.word();
+  auto round = [&](std::uint64_t k) {
+    if (request.how == method::stage)
+      stage_round(page, 0, k);
+    else
+      initiator_round(word, request.how, k);
+  };
+  std::uint64_t k = 0;
+  for (; k < static_cast<std::uint64_t>(request.warmup_rounds); ++k) round(k);
+  for (std::size_t s = 0; s < one_way_ns.size(); ++s) {
+    const auto start = std::chrono::steady_clock::now();
+    for (int r = 0; r < request.rounds_per_sample; ++r, ++k) round(k);
+    const auto elapsed = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start);
+    one_way_ns[s] = elapsed.count() / request.rounds_per_sample / transfers_per_round(request.how);
+  }
+  if (request.how == method::cas) initiator_finish(word, total_rounds);
+  if (request.how == method::stage) stage_finish_initiator(page, total_rounds);
+}
+
+// Thread A: pins itself, prepares the page, hands it to B, times the samples.
+inline void initiate(const pair_request& request, pair_handover& handover, std::uint64_t total_rounds,
+                     std::vector<double>& one_way_ns) {
+  try {
+    pin_this_thread(request.cpu_a);
+    fresh_page page;
+    // relaxed, both: published by the release half of the CAS of stage to 1
+    // below, which the responder's acquire load of stage pairs with.
+    handover.shared_word.store(&page.word(), std::memory_order_relaxed);
+    handover.shared_page.store(&page, std::memory_order_relaxed);
+    int expected = 0;
+    // release: publishes the page (and shared_word) to the responder's acquire load.
+    if (!handover.stage.compare_exchange_strong(expected, 1, std::memory_order_acq_rel, std::memory_order_acquire))
+      return;  // the responder failed to pin (-2)
+    patient_spin spin;
+    int seen = 1;
+    // acquire: pairs with the responder's release store of 2 (or -2).
+    while ((seen = handover.stage.load(std::memory_order_acquire)) == 1) spin();
+    if (seen != 2) return;  // the responder failed to pin after the page was ready
+    time_rounds(request, page, total_rounds, one_way_ns);
+  } catch (...) {
+    handover.error_a = std::current_exception();
+    int expected = 0;
+    // release: publishes error_a; the responder sees -1 and returns.
+    handover.stage.compare_exchange_strong(expected, -1, std::memory_order_acq_rel, std::memory_order_acquire);
+  }
+}
+
+}  // namespace detail
+
+// Measures one ordered pair of CPUs; returns `samples` one-way latencies in
+// nanoseconds, in the order they were taken (sort a copy for percentiles).
+inline std::vector<double> measure_pair(const pair_request& request) {
+  detail::check_pair_request(request);
   std::vector<double> one_way_ns(static_cast<std::size_t>(request.samples));
   const std::uint64_t total_rounds =
       static_cast<std::uint64_t>(request.warmup_rounds) +
       static_cast<std::uint64_t>(request.samples) * static_cast<std::uint64_t>(request.rounds_per_sample);
-
-  // Hand-over of the page from A to B, and of errors from either thread.
-  // `stage`: 0 = A is preparing, 1 = page ready, 2 = B pinned and has the
-  // page, -1 = A failed, -2 = B failed.
-  std::atomic<int> stage{0};
-  std::atomic<std::atomic<std::uint64_t>*> shared_word{nullptr};
-  std::atomic<detail::fresh_page*> shared_page{nullptr};  // method::stage's words
-  std::exception_ptr error_a;
-  std::exception_ptr error_b;
-
-  std::thread responder([&] {
-    try {
-      detail::pin_this_thread(request.cpu_b);
-    } catch (...) {
-      error_b = std::current_exception();
-      // release: publishes error_b to the initiator's acquire loads of stage.
-      stage.exchange(-2, std::memory_order_acq_rel);
-      return;
-    }
-    detail::patient_spin spin;
-    int seen = 0;
-    // acquire: pairs with the initiator's release store of 1 or -1 below
-    // (makes shared_word / error_a visible).
-    while ((seen = stage.load(std::memory_order_acquire)) == 0) spin();
-    if (seen != 1) return;
-    // relaxed: ordered after the initiator's store by the acquire load of
-    // stage above (which pairs with the release half of its CAS to 1).
-    std::atomic<std::uint64_t>& word = *shared_word.load(std::memory_order_relaxed);
-    // relaxed: as word, ordered by the acquire load of stage above.
-    detail::fresh_page& page = *shared_page.load(std::memory_order_relaxed);
-    stage.store(2, std::memory_order_release);  // release: pairs with the initiator's acquire wait for 2
-    for (std::uint64_t k = 0; k < total_rounds; ++k) {
-      if (request.how == method::stage)
-        detail::stage_round(page, 1, k);
-      else
-        detail::responder_round(word, request.how, k);
-    }
-    if (request.how == method::stage) detail::stage_finish_responder(page, total_rounds);
-  });
-
-  std::thread initiator([&] {
-    try {
-      detail::pin_this_thread(request.cpu_a);
-      detail::fresh_page page;
-      // relaxed, both: published by the release half of the CAS of stage to 1
-      // below, which the responder's acquire load of stage pairs with.
-      shared_word.store(&page.word(), std::memory_order_relaxed);
-      shared_page.store(&page, std::memory_order_relaxed);
-      int expected = 0;
-      // release: publishes the page (and shared_word) to the responder's acquire load.
-      if (!stage.compare_exchange_strong(expected, 1, std::memory_order_acq_rel, std::memory_order_acquire))
-        return;  // the responder failed to pin (-2)
-      detail::patient_spin spin;
-      int seen = 1;
-      // acquire: pairs with the responder's release store of 2 (or -2).
-      while ((seen = stage.load(std::memory_order_acquire)) == 1) spin();
-      if (seen != 2) return;  // the responder failed to pin after the page was ready
-
-      std::atomic<std::uint64_t>& word = page.word();
-      auto round = [&](std::uint64_t k) {
-        if (request.how == method::stage)
-          detail::stage_round(page, 0, k);
-        else
-          detail::initiator_round(word, request.how, k);
-      };
-      std::uint64_t k = 0;
-      for (; k < static_cast<std::uint64_t>(request.warmup_rounds); ++k) round(k);
-      for (std::size_t s = 0; s < one_way_ns.size(); ++s) {
-        const auto start = std::chrono::steady_clock::now();
-        for (int r = 0; r < request.rounds_per_sample; ++r, ++k) round(k);
-        const auto elapsed = std::chrono::duration<double, std::nano>(std::chrono::steady_clock::now() - start);
-        one_way_ns[s] = elapsed.count() / request.rounds_per_sample / transfers_per_round(request.how);
-      }
-      if (request.how == method::cas) detail::initiator_finish(word, total_rounds);
-      if (request.how == method::stage) detail::stage_finish_initiator(page, total_rounds);
-    } catch (...) {
-      error_a = std::current_exception();
-      int expected = 0;
-      // release: publishes error_a; the responder sees -1 and returns.
-      stage.compare_exchange_strong(expected, -1, std::memory_order_acq_rel, std::memory_order_acquire);
-    }
-  });
-
+  detail::pair_handover handover;
+  std::thread responder([&] { detail::respond(request, handover, total_rounds); });
+  std::thread initiator([&] { detail::initiate(request, handover, total_rounds, one_way_ns); });
   initiator.join();
   responder.join();
-  if (error_a) std::rethrow_exception(error_a);
-  if (error_b) std::rethrow_exception(error_b);
+  if (handover.error_a) std::rethrow_exception(handover.error_a);
+  if (handover.error_b) std::rethrow_exception(handover.error_b);
   return one_way_ns;
 }
 
