@@ -7,7 +7,9 @@
 // stdout (bench/run/summary.hpp). Progress goes to stderr. With --runs K it
 // measures nothing itself: it runs this binary K times, one fresh process
 // after another (run_group), each writing run-I.json into one directory,
-// the replicates lockstep compare takes as one side.
+// the replicates lockstep compare takes as one side. Each run gets the
+// group's command line unchanged and its place in the group as data, in its
+// environment (group_member).
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
@@ -16,16 +18,17 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 #include <string>
-#include <tuple>
+#include <string_view>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -69,8 +72,21 @@ struct run_options {
   double noise_pct = 100.0 * bench::kDefaultNoise;
   std::vector<std::string> benchmark_flags;
   std::optional<int> runs;  // --runs K: the matrix in K fresh processes, one file each, in one directory
-  std::string replicate;    // --replicate I/K (hidden): this process is run I of such a group
 };
+
+// A run of a group (--runs K): what the group's parent hands each run it
+// starts, beside the group's own command line, which the run gets unchanged:
+// its index 1..K, K, and the file it writes. The parent sets them in the
+// run's environment from its own numbers (run_group); a run reads them once,
+// checked, before anything else is read or measured.
+struct group_member {
+  int index = 0;
+  int runs = 0;
+  std::string out;
+};
+inline constexpr const char* kRunIndexVariable = "LOCKSTEP_RUN_INDEX";
+inline constexpr const char* kRunsVariable = "LOCKSTEP_RUNS";
+inline constexpr const char* kRunOutVariable = "LOCKSTEP_RUN_OUT";
 
 // The thread counts (run_plan.hpp says which by default and for --scaling),
 // each a count its model can split (kernels/model_choice.hpp: only a chain
@@ -113,19 +129,8 @@ platform::topology machine_for(bool plan) {
   return machine;
 }
 
-// --replicate I/K, which a group's parent hands each run: its index and the
-// group's size, stated in the file's context (lockstep_run_index, lockstep_runs).
-std::pair<int, int> parse_replicate(const std::string& text) {
-  int index = 0;
-  int runs = 0;
-  char slash = '\0';
-  std::istringstream in(text);
-  if (!(in >> index >> slash >> runs) || slash != '/' || !in.eof() || runs < 1 || index < 1 || index > runs)
-    throw usage_error(fmt::format("--replicate: '{}' is not I/K with 1 <= I <= K", text));
-  return {index, runs};
-}
-
-// The words this process was started with, its own name apart (/proc/self/cmdline).
+// The words this process was started with, its own name apart
+// (/proc/self/cmdline): a group's runs get them as they are.
 std::vector<std::string> own_arguments() {
   std::ifstream in("/proc/self/cmdline", std::ios::binary);
   std::vector<std::string> words;
@@ -134,26 +139,45 @@ std::vector<std::string> own_arguments() {
   return words;
 }
 
-// One run of a group: this command line without --runs and --out (before
-// any --, where Google Benchmark's flags begin), with the run's own --out
-// and its --replicate I/K.
-std::vector<std::string> run_arguments(const std::vector<std::string>& own, const std::string& out, int index,
-                                       int runs) {
-  std::vector<std::string> words;
-  std::size_t i = 0;
-  for (; i < own.size() && own[i] != "--"; ++i) {
-    if (own[i] == "--runs" || own[i] == "--out") {
-      ++i;  // and its value
-      continue;
-    }
-    if (own[i].rfind("--runs=", 0) == 0 || own[i].rfind("--out=", 0) == 0) continue;
-    words.push_back(own[i]);
+// The number in `variable`, whole, or nothing when it is not set.
+std::optional<int> number_in_environment(const char* variable) {
+  const char* text = std::getenv(variable);
+  if (text == nullptr) return std::nullopt;
+  const std::string_view value(text);
+  int number = 0;
+  const auto [end, error] = std::from_chars(value.data(), value.data() + value.size(), number);
+  if (error != std::errc{} || end != value.data() + value.size())
+    throw usage_error(fmt::format("{}: '{}' is not a number (lockstep run --runs sets it for each run)", variable,
+                                  value));
+  return number;
+}
+
+// This process's place in a group, when it is a run that a group's parent
+// started (--runs K on its command line, and the parent's three variables).
+std::optional<group_member> group_member_of(const run_options& options) {
+  const std::optional<int> index = number_in_environment(kRunIndexVariable);
+  if (!options.runs || !index) return std::nullopt;
+  const std::optional<int> runs = number_in_environment(kRunsVariable);
+  const char* out = std::getenv(kRunOutVariable);
+  if (!runs || *runs != *options.runs || *index < 1 || *index > *runs || out == nullptr || *out == '\0')
+    throw usage_error(fmt::format("{}, {} and {} do not describe a run of this group of {} (lockstep run --runs "
+                                  "sets them for each run)",
+                                  kRunIndexVariable, kRunsVariable, kRunOutVariable, *options.runs));
+  return group_member{*index, *runs, out};
+}
+
+// The environment of a group's run: this process's, with the run's place.
+std::vector<std::string> member_environment(const group_member& member) {
+  std::vector<std::string> variables;
+  for (char** variable = environ; *variable != nullptr; ++variable) {
+    const std::string_view text(*variable);
+    const std::string_view name = text.substr(0, text.find('='));
+    if (name != kRunIndexVariable && name != kRunsVariable && name != kRunOutVariable) variables.emplace_back(text);
   }
-  for (const std::string& word : {std::string("--out"), out, std::string("--replicate"),
-                                  fmt::format("{}/{}", index, runs)})
-    words.push_back(word);
-  words.insert(words.end(), own.begin() + static_cast<std::ptrdiff_t>(i), own.end());
-  return words;
+  variables.push_back(fmt::format("{}={}", kRunIndexVariable, member.index));
+  variables.push_back(fmt::format("{}={}", kRunsVariable, member.runs));
+  variables.push_back(fmt::format("{}={}", kRunOutVariable, member.out));
+  return variables;
 }
 
 // The directory of a group's run files: --out, or results/<host>-<timestamp>/.
@@ -190,27 +214,31 @@ std::filesystem::path group_directory(const std::string& out, bool& made) {
 }
 
 // --runs K: the matrix measured in K fresh processes one after another (this
-// binary again, /proc/self/exe), each writing run-I.json into the group's
-// directory. A run that fails ends the group with its exit status; a
-// directory this call made and no run wrote into is removed again.
+// binary again, /proc/self/exe, with this command line), each writing
+// run-I.json into the group's directory. A run that fails ends the group
+// with its exit status; a directory this call made and no run wrote into is
+// removed again.
 int run_group(const run_options& options) {
   bool made = false;
   const std::filesystem::path directory = group_directory(options.out, made);
-  const std::vector<std::string> own = own_arguments();
+  std::vector<std::string> words{"lockstep"};
+  for (auto& word : own_arguments()) words.push_back(std::move(word));
+  std::vector<char*> argv;
+  for (auto& word : words) argv.push_back(word.data());
+  argv.push_back(nullptr);
   const int runs = *options.runs;
   for (int index = 1; index <= runs; ++index) {
-    const std::string out = (directory / fmt::format("run-{}.json", index)).string();
-    std::vector<std::string> words{"lockstep"};
-    for (auto& word : run_arguments(own, out, index, runs)) words.push_back(std::move(word));
-    std::vector<char*> argv;
-    for (auto& word : words) argv.push_back(word.data());
-    argv.push_back(nullptr);
-    fmt::print(stderr, "lockstep run: run {} of {} (a fresh process) into {}\n", index, runs, out);
+    const group_member member{index, runs, (directory / fmt::format("run-{}.json", index)).string()};
+    std::vector<std::string> environment = member_environment(member);
+    std::vector<char*> envp;
+    for (auto& variable : environment) envp.push_back(variable.data());
+    envp.push_back(nullptr);
+    fmt::print(stderr, "lockstep run: run {} of {} (a fresh process) into {}\n", index, runs, member.out);
     std::fflush(stdout);
     std::fflush(stderr);
     pid_t child = 0;
     int status = 0;
-    if (::posix_spawn(&child, "/proc/self/exe", nullptr, nullptr, argv.data(), environ) != 0 ||
+    if (::posix_spawn(&child, "/proc/self/exe", nullptr, nullptr, argv.data(), envp.data()) != 0 ||
         ::waitpid(child, &status, 0) != child || !WIFEXITED(status) || WEXITSTATUS(status) != kExitOk) {
       std::error_code error;
       if (made && std::filesystem::is_empty(directory, error)) std::filesystem::remove(directory, error);
@@ -271,14 +299,18 @@ int execute(const run_options& options) {
     crossover.noise = request.noise;
     request.crossover = crossover;
   }
-  if (!options.replicate.empty()) std::tie(request.run_index, request.runs) = parse_replicate(options.replicate);
+  const std::optional<group_member> member = group_member_of(options);
+  if (member) {
+    request.run_index = member->index;
+    request.runs = member->runs;
+  }
   if (options.runs && options.plan) {
     fmt::print("{}", bench::plan_text(request, machine));
     fmt::print("runs: {} (--runs), each a fresh process measuring the plan above, one after another: {} times "
                "its estimated time\n", *options.runs, *options.runs);
     return kExitOk;
   }
-  if (options.runs) return run_group(options);
+  if (options.runs && !member) return run_group(options);
 
   // Every option is read; now the result file, before anything is measured:
   // a destination that cannot be written fails here, in a millisecond. A
@@ -288,7 +320,9 @@ int execute(const run_options& options) {
   std::optional<bench::atomic_result_file> result_file;
   if (!options.plan) {
     try {
-      if (options.out.empty())
+      if (member)
+        result_file.emplace(member->out);
+      else if (options.out.empty())
         result_file.emplace(bench::default_result_path(), bench::make_directory::when_missing);
       else
         result_file.emplace(options.out);
@@ -393,7 +427,6 @@ void add_run(CLI::App& app, int& result) {
                   "index; lockstep compare takes the directory as one side, its runs as replicates")
       ->check(CLI::Range(1, 100))
       ->option_text("K");
-  run->add_option("--replicate", options->replicate, "Run I of K (set by --runs for each run)")->group("");
   run->add_option("benchmark_flags", options->benchmark_flags, "Google Benchmark's flags, after --");
   run->callback([options, &result] { result = execute(*options); });
 }

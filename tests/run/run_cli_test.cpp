@@ -551,6 +551,33 @@ TEST(RunCli, ARunOfTwoToSixteenThreadsPrintsEveryTableInThreadOrder) {
   }
 }
 
+// --runs K: K fresh processes, run-1.json .. run-K.json, each stating its
+// place in the group as numbers (lockstep_run_index, lockstep_runs).
+TEST(RunCli, RunsOfAGroupStateTheirIndexAndCountAsNumbers) {
+  watchdog guard(std::chrono::seconds(240 * lockstep::testing::kSlowdown), "lockstep run --runs 2 did not finish");
+  scratch_directory scratch("lockstep-runs-test");
+  const fs::path group = scratch.path() / "group";
+  const auto result = run_command(run_args({"--runs", "2", "--quick", "--threads", "2", "--sync", "mailbox",
+                                            "--layout", "per_thread", "--pin", "compact", "--min-time", "1ms",
+                                            "--repetitions", "1", "--pairs", "0", "--out", group.string()}));
+  ASSERT_EQ(result.exit_status, 0) << result.err;
+  for (const int index : {1, 2}) {
+    std::ifstream file(group / ("run-" + std::to_string(index) + ".json"));
+    ASSERT_TRUE(file) << "run-" << index << ".json missing: " << result.err;
+    const nlohmann::json document = nlohmann::json::parse(file);
+    EXPECT_EQ(document["context"]["lockstep_run_index"], index);
+    EXPECT_TRUE(document["context"]["lockstep_run_index"].is_number_integer());
+    EXPECT_EQ(document["context"]["lockstep_runs"], 2);
+  }
+  // A run's place in its group is the parent's data: set by hand, a wrong one is refused.
+  const auto refused = run_command({"/usr/bin/env", "LOCKSTEP_RUN_INDEX=3", "LOCKSTEP_RUNS=2",
+                                    "LOCKSTEP_RUN_OUT=" + (scratch.path() / "x.json").string(), LOCKSTEP_BINARY,
+                                    "run", "--runs", "2", "--out", group.string()});
+  EXPECT_EQ(refused.exit_status, 2) << refused.err;
+  EXPECT_EQ(count_lines(refused.err), 1) << refused.err;
+  EXPECT_FALSE(fs::exists(scratch.path() / "x.json"));
+}
+
 TEST(ListCli, NamesEverySyncAndPlacementOnALineEach) {
   watchdog guard(std::chrono::seconds(30 * lockstep::testing::kSlowdown));
   const auto result = run_command({LOCKSTEP_BINARY, "list"});
