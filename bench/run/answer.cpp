@@ -62,10 +62,8 @@ std::string model_words(const kernels::model_choice& model) {
   return model.is_chain() ? "model:" + model.name() + " " : std::string();
 }
 
-std::optional<answer_rival> rival_from(const best_other_view& view, const run_book& book) {
-  const captured_entry* other = book.find(view.entry);
-  if (other == nullptr) return std::nullopt;
-  return answer_rival{view.entry, other->spec.sync, other->spec.layout, view.estimate, view.verdict};
+answer_rival rival_from(const best_other_view& view) {
+  return answer_rival{view.entry->name, view.entry->spec.sync, view.entry->spec.layout, view.estimate, view.verdict};
 }
 
 }  // namespace
@@ -86,7 +84,7 @@ std::vector<answer_choice> choose_combinations(const run_book& book) {
         against_best_other_views(book, against_best_other_group(entry_kind::rk4, group.pin, group.threads));
     const best_other_view* leader_view = nullptr;
     for (const auto& view : views)
-      if (view.entry == chosen->name) leader_view = &view;
+      if (view.entry == chosen) leader_view = &view;
     if (leader_view != nullptr) {
       choice.basis = "paired";
       // leader_view->estimate is the median leader's step over the
@@ -94,14 +92,12 @@ std::vector<answer_choice> choose_combinations(const run_book& book) {
       // when the whole interval lies above 1 (it was faster in the pairs,
       // however the medians fell), else the leader. The other is the rival,
       // its ratio its step over the choice's.
-      const captured_entry* other = book.find(leader_view->other);
-      if (leader_view->estimate.low > 1.0 && other != nullptr) {
+      const captured_entry* other = leader_view->other;
+      if (leader_view->estimate.low > 1.0) {
         chosen = other;
-        const captured_entry* leader = book.find(leader_view->entry);
-        choice.runner_up = answer_rival{leader_view->entry, leader->spec.sync, leader->spec.layout,
-                                        leader_view->estimate, leader_view->verdict};
-      } else if (other != nullptr) {
-        choice.runner_up = answer_rival{leader_view->other, other->spec.sync, other->spec.layout,
+        choice.runner_up = rival_from(*leader_view);
+      } else {
+        choice.runner_up = answer_rival{other->name, other->spec.sync, other->spec.layout,
                                         inverse(leader_view->estimate), inverse(leader_view->verdict)};
       }
       // Only a rival slower beyond the noise band leaves one winner; within
@@ -127,9 +123,8 @@ std::vector<answer_choice> choose_combinations(const run_book& book) {
     // std::barrier, the C++20 baseline, against the choice: its own pair
     // is against the median leader, which is the choice unless overturned.
     for (const auto& view : views) {
-      const captured_entry* entry = book.find(view.entry);
-      if (entry == nullptr || entry->spec.sync != sync::kBaselinePrimitive || view.entry == choice.entry) continue;
-      if (view.other == choice.entry) choice.baseline = rival_from(view, book);
+      if (view.entry->spec.sync != sync::kBaselinePrimitive || view.entry == chosen) continue;
+      if (view.other == chosen) choice.baseline = rival_from(view);
     }
     choices.push_back(std::move(choice));
   }

@@ -255,11 +255,14 @@ std::vector<best_other_view> against_best_other_views(const run_book& book, cons
   for (const paired_result& pair : book.pairs) {
     if (pair.what.kind != comparison_kind::against_best_other || pair.what.group != group) continue;
     if (!pair.failure.empty() || pair.ratios.empty()) continue;
-    views.push_back({pair.what.a, pair.what.b, &pair, false, pair.estimate, pair.verdict});
+    const captured_entry* a = book.find(pair.what.a);
+    const captured_entry* b = book.find(pair.what.b);
+    if (a == nullptr || b == nullptr) continue;
+    views.push_back({a, b, &pair, false, pair.estimate, pair.verdict});
     if (runner_up == nullptr) runner_up = &pair;  // the plan's order: the runner-up's pair first
   }
   if (runner_up != nullptr)
-    views.insert(views.begin(), best_other_view{runner_up->what.b, runner_up->what.a, runner_up, true,
+    views.insert(views.begin(), best_other_view{views.front().other, views.front().entry, runner_up, true,
                                                 inverse(runner_up->estimate), inverse(runner_up->verdict)});
   return views;
 }

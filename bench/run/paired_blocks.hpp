@@ -81,8 +81,8 @@ std::vector<comparison> plan_comparisons(const run_book& book);
 // as measured for every primitive but the leader, the inverse of the pair
 // with the runner-up for the leader (inverted: true).
 struct best_other_view {
-  std::string entry;  // this primitive's entry (the numerator)
-  std::string other;  // the best other primitive's entry
+  const captured_entry* entry = nullptr;  // this primitive's entry (the numerator)
+  const captured_entry* other = nullptr;  // the best other primitive's entry
   const paired_result* pair = nullptr;  // the measured pair (numerator: `entry`, or `other` when inverted)
   bool inverted = false;
   ratio_estimate estimate;  // entry / other

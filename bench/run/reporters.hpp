@@ -85,10 +85,12 @@ std::string time_left(double elapsed_s, double planned_s, std::size_t done, std:
 //   * non-finite counter values (an all-zero counter's cv aggregate) are
 //     omitted: Google Benchmark would write NaN, which no JSON parser accepts.
 // Google Benchmark's JSONReporter writes its own fields (the format its
-// tools/compare.py reads, as the installed version writes it); what a run
-// cannot hold, its entry's spec as values ("lockstep_entry", which
-// run_document adds to every row) and lockstep's sections, is added to the
-// document it gives.
+// tools/compare.py reads, as the installed version writes it; writing them
+// again here would make a second writer of Google Benchmark's format); what
+// a run cannot hold as the file states it, its entry's spec as values
+// ("lockstep_entry") and its pace mode as an integer, run_document adds to
+// the rows of that text, parsed once in memory; matrix_run.cpp adds
+// lockstep's sections.
 //
 // Google Benchmark accepts a file reporter only with --benchmark_out, whose
 // stream it opens and hands over before the run; this reporter keeps its own

@@ -138,11 +138,10 @@ void comparisons_of(std::string& out, const run_book& book, const std::vector<co
         // One measurement per unordered pair: the leader's line is its pair
         // with the runner-up read the other way round.
         for (const best_other_view& view : against_best_other_views(book, what.group)) {
-          const captured_entry* entry = book.find(view.entry);
-          const captured_entry* other = book.find(view.other);
-          if (entry == nullptr || other == nullptr) continue;
+          const captured_entry* entry = view.entry;
+          const captured_entry* other = view.other;
           out += fmt::format("    {:<20} {:>11} {:<13} vs {:<20} {:.2f}x [{:.2f}, {:.2f}] {:<12} ({} pairs{}{})\n",
-                             entry->spec.sync, median_of(book, view.entry),
+                             entry->spec.sync, median_of(book, entry->name),
                              entry->spec.layout.empty() ? std::string() : fmt::format("({})", entry->spec.layout),
                              other->spec.sync, view.estimate.median, view.estimate.low, view.estimate.high,
                              to_string(view.verdict), view.pair->ratios.size(),

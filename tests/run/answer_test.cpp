@@ -126,20 +126,20 @@ TEST(AgainstBestOther, TheTwoDirectionsOfOnePairAgree) {
   const auto views = bench::against_best_other_views(book, "RK4 step pin:compact threads:2");
   ASSERT_EQ(views.size(), 3u);
   std::map<std::pair<std::string, std::string>, const bench::best_other_view*> by_direction;
-  for (const auto& view : views) by_direction[{view.entry, view.other}] = &view;
+  for (const auto& view : views) by_direction[{view.entry->name, view.other->name}] = &view;
   unsigned read_both_ways = 0;  // views whose reverse is listed too: the checks below ran on them
   for (const auto& view : views) {
-    const auto back = by_direction.find({view.other, view.entry});
+    const auto back = by_direction.find({view.other->name, view.entry->name});
     if (back == by_direction.end()) continue;
     ++read_both_ways;
     EXPECT_DOUBLE_EQ(view.estimate.median * back->second->estimate.median, 1.0);
     EXPECT_DOUBLE_EQ(view.estimate.low * back->second->estimate.high, 1.0);
-    EXPECT_EQ(view.verdict, bench::inverse(back->second->verdict)) << view.entry << " against " << view.other;
+    EXPECT_EQ(view.verdict, bench::inverse(back->second->verdict)) << view.entry->name << " against " << view.other->name;
     EXPECT_NE(view.inverted, back->second->inverted);
   }
   // mailbox against seqlock and seqlock against mailbox: without them the loop checks nothing.
   EXPECT_EQ(read_both_ways, 2u);
-  EXPECT_EQ(views.front().entry, step_name("mailbox", "per_thread", "compact", 2));
+  EXPECT_EQ(views.front().entry->name, step_name("mailbox", "per_thread", "compact", 2));
   EXPECT_TRUE(views.front().inverted);
   EXPECT_EQ(views.front().verdict, bench::ratio_verdict::penalty);
 }
