@@ -224,11 +224,11 @@ def _warnings(baseline: RunFile, contender: RunFile, time_kind: str, rows: list[
 
 
 def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05,
-                 noise_percent: float = DEFAULT_NOISE_PERCENT, halves: bool = True) -> Comparison:
+                 noise_percent: float = DEFAULT_NOISE_PERCENT) -> Comparison:
     """B (contender) against A (baseline): every matched entry's row, the combinations and the calibrations
     apart, each family Benjamini-Hochberg adjusted on its own; the entries only one file has; the warnings.
-    Sides of two or more runs each (replicated.merged_side) get their intervals from the runs
-    (replicated.apply_replicates; halves: also each side's halves against each other)."""
+    Each side as one file: replicated.compare_sides gives sides of two or more runs their intervals from the
+    runs."""
     keys_a, keys_b = set(baseline.runs), set(contender.runs)
     pace = _Pace.of(baseline, contender, time_kind)
     collapsed = baseline.collapsed | contender.collapsed
@@ -254,7 +254,4 @@ def compare_pair(baseline: RunFile, contender: RunFile, time_kind: str = "real",
                             time_kind=time_kind, alpha=alpha, noise_percent=noise_percent,
                             calibrations=calibration_rows,
                             different_modes=pace.different_modes, drift=drift, pooled_entries=pooled_entries)
-    if len(baseline.replicates) >= 2 and len(contender.replicates) >= 2:
-        from .replicated import apply_replicates
-        apply_replicates(comparison, time_kind, halves)
     return comparison

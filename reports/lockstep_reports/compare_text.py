@@ -8,8 +8,8 @@ import math
 
 from . import statistics
 from .comparability import build_difference, findings, unoptimised, withheld_text
-from .comparison import (COLLAPSED, DEFAULT_NOISE_PERCENT, MIN_AGGREGATE_ENTRIES, NOISE_RATIONALE, VERDICTS,
-                         Aggregate, Comparison, PaceAware, Row)
+from .comparison import (ALTERNATE, COLLAPSED, DEFAULT_NOISE_PERCENT, DRIFT_SHOWN_ABOVE, IN_TIME_ORDER,
+                         MIN_AGGREGATE_ENTRIES, NOISE_RATIONALE, VERDICTS, Aggregate, Comparison, PaceAware, Row)
 from .fields import C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS, UNAVAILABLE
 from .formatting import format_ns, format_number
 from .mpi_context import mpi_difference_lines
@@ -18,7 +18,7 @@ from .machine_answers import answer_lines, crossover_lines, difference_lines
 from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
-from .replicated import ALTERNATE, BETWEEN_RUNS, DRIFT_SHOWN_ABOVE, IN_TIME_ORDER, one_run_power
+from .replicated import BETWEEN_RUNS, one_run_power
 from .run_analysis import sharing_layout
 from .run_file import RunFile
 from .text_layout import WIDTH, table, wrapped

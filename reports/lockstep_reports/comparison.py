@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 from . import statistics
 from .comparability import unoptimised
@@ -13,9 +12,6 @@ from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .names import BenchmarkKey
 from .run_analysis import calibration, median_ratio
 from .run_file import RunFile
-
-if TYPE_CHECKING:
-    from .replicated import Replicated
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
 DEFAULT_NOISE_PERCENT = 5.0
@@ -177,6 +173,47 @@ def aggregate_groups(rows: list) -> dict[str, list]:
     return groups
 
 
+# The two ways a side's runs are split for A against A.
+ALTERNATE, IN_TIME_ORDER = "alternate runs", "in time order"
+# The share of entries the time-order split calls changed above which compare says the machine drifted: the rate
+# a comparison's false positives are held to (alternate runs stay under it on a machine that keeps its pace).
+DRIFT_SHOWN_ABOVE = 0.05
+
+
+@dataclass(frozen=True)
+class AgainstItself:
+    """One side's A against A: the entries called changed (slower or faster) when its runs, split one way
+    (ALTERNATE or IN_TIME_ORDER), are compared half against half."""
+
+    split: str
+    changed: int
+    compared: int
+    runs: tuple[int, int]  # the runs in each half
+
+
+@dataclass
+class Replicated:
+    """What the runs of both sides give a comparison."""
+
+    runs_a: int
+    runs_b: int
+    aggregates: list[Aggregate]
+    # The smallest uniform change (percent) of which POWER of the entries would be called slower, and the one the
+    # "all" aggregate would be called slower on at POWER.
+    entries_power: float | None = None
+    aggregate_power: float | None = None
+    against_itself: list[AgainstItself] = field(default_factory=list)  # per side and split
+
+    def split(self, split: str) -> list[AgainstItself]:
+        """Each side's A against A of one split (A's, then B's)."""
+        return [check for check in self.against_itself if check.split == split]
+
+    def total(self, split: str) -> tuple[int, int]:
+        """(changed, compared) of one split over both sides."""
+        checks = self.split(split)
+        return sum(c.changed for c in checks), sum(c.compared for c in checks)
+
+
 @dataclass
 class Comparison:
     baseline: RunFile
@@ -196,7 +233,7 @@ class Comparison:
     pooled_entries: int = 0
     # Both sides of several runs (replicated.apply_replicates): the intervals and aggregates from the variance
     # between runs, the power, the built-in A/A check; None: one run on a side, the calibrated drift kept.
-    replicated: "Replicated | None" = None
+    replicated: Replicated | None = None
 
     @property
     def combinations(self) -> list[Row]:

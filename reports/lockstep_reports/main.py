@@ -11,10 +11,13 @@ import math
 import os
 import sys
 
+from . import compare_text, planner
 from .comparability import withheld_text
+from .comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
 from .inputs import InputError, load_for_compare, side_paths, unique_labels
-from .run_file import RunFile
 from .output import OutputError, check_directory_target, check_file_target, write_file
+from .replicated import compare_sides, merged_side
+from .run_file import RunFile
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
 
@@ -157,8 +160,6 @@ def tool_parser(tool: str, description: str, files_metavar: str, files_help: str
 
 
 def compare_parser() -> argparse.ArgumentParser:
-    from .comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
-
     parser = tool_parser(
         "compare",
         "Compare the results of `lockstep run` (or of `lockstep mpi --out`) across runs and machines.\n\n"
@@ -250,8 +251,6 @@ def report_parser() -> argparse.ArgumentParser:
 
 
 def run_compare(argv: list[str]) -> int:
-    from . import compare, compare_text
-
     options = compare_parser().parse_args(argv)
     if options.detect is not None and not options.plan:
         raise UsageError("--detect goes with --plan (the change a plan should see)")
@@ -277,7 +276,7 @@ def run_compare(argv: list[str]) -> int:
     if identical and not options.json:
         sys.stdout.write(identical)
         return EXIT_OK
-    comparisons = [compare.compare_pair(run_files[0], other, options.time, options.alpha, options.noise)
+    comparisons = [compare_sides(run_files[0], other, options.time, options.alpha, options.noise)
                    for other in run_files[1:]]
     if options.json:
         write_file(options.json, comparison_json(comparisons))
@@ -313,8 +312,6 @@ def run_compare(argv: list[str]) -> int:
 def load_sides(arguments: list[str]) -> list:
     """Each argument one side: a file (load_for_compare), or several runs (a directory of `lockstep run --runs K`,
     or files joined by commas) merged into one side (replicated.merged_side)."""
-    from .replicated import merged_side
-
     sides = []
     for argument, label in zip(arguments, unique_labels([os.path.normpath(a) for a in arguments])):
         paths = side_paths(argument)
@@ -330,8 +327,6 @@ def load_sides(arguments: list[str]) -> list:
 
 def run_planner(options) -> int:
     """--plan: the pilot's components, what its plan sees, and with --detect the cheapest plan that sees it."""
-    from . import planner
-
     runs = []
     for argument in options.files:
         for path in side_paths(argument):
@@ -387,7 +382,7 @@ def row_json(comparison, row) -> dict:
 
 
 def replicates_json(replicated) -> dict | None:
-    """What the runs of both sides gave (replicated.Replicated): the runs a side, the power, A against A per split;
+    """What the runs of both sides gave (comparison.Replicated): the runs a side, the power, A against A per split;
     None with one run a side."""
     if replicated is None:
         return None

@@ -16,10 +16,11 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import Counter
-from dataclasses import dataclass
 
 from . import statistics
-from .comparison import Aggregate, Comparison, PaceAware, aggregate_groups, clustered, verdict_of
+from .compare import compare_pair
+from .comparison import (ALTERNATE, DEFAULT_NOISE_PERCENT, IN_TIME_ORDER, AgainstItself, Aggregate, Comparison,
+                         PaceAware, Replicated, aggregate_groups, clustered, verdict_of)
 from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
                          t_quantile, two_sided_p)
@@ -29,47 +30,6 @@ from .run_file import Run, RunFile
 BETWEEN_RUNS = "between runs"
 # Runs a side from which compare also compares each side's halves (A against A).
 MIN_HALVES_RUNS = 4
-
-
-# The two ways a side's runs are split for A against A.
-ALTERNATE, IN_TIME_ORDER = "alternate runs", "in time order"
-# The share of entries the time-order split calls changed above which compare says the machine drifted: the rate
-# a comparison's false positives are held to (alternate runs stay under it on a machine that keeps its pace).
-DRIFT_SHOWN_ABOVE = 0.05
-
-
-@dataclass(frozen=True)
-class AgainstItself:
-    """One side's A against A: the entries called changed (slower or faster) when its runs, split one way
-    (ALTERNATE or IN_TIME_ORDER), are compared half against half."""
-
-    split: str
-    changed: int
-    compared: int
-    runs: tuple[int, int]  # the runs in each half
-
-
-@dataclass
-class Replicated:
-    """What the runs of both sides give a comparison."""
-
-    runs_a: int
-    runs_b: int
-    aggregates: list[Aggregate]
-    # The smallest uniform change (percent) of which POWER of the entries would be called slower, and the one the
-    # "all" aggregate would be called slower on at POWER.
-    entries_power: float | None = None
-    aggregate_power: float | None = None
-    against_itself: list[AgainstItself] = dataclasses.field(default_factory=list)  # per side and split
-
-    def split(self, split: str) -> list[AgainstItself]:
-        """Each side's A against A of one split (A's, then B's)."""
-        return [check for check in self.against_itself if check.split == split]
-
-    def total(self, split: str) -> tuple[int, int]:
-        """(changed, compared) of one split over both sides."""
-        checks = self.split(split)
-        return sum(c.changed for c in checks), sum(c.compared for c in checks)
 
 
 def _merged_run(key, runs: list[Run]) -> Run:
@@ -188,6 +148,16 @@ def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate]
     return result, error
 
 
+def compare_sides(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05,
+                  noise_percent: float = DEFAULT_NOISE_PERCENT, halves: bool = True) -> Comparison:
+    """B against A (compare.compare_pair), and where both sides hold two or more runs (merged_side), the intervals
+    from the runs (apply_replicates; halves: also each side's halves against each other)."""
+    comparison = compare_pair(baseline, contender, time_kind, alpha, noise_percent)
+    if len(baseline.replicates) >= 2 and len(contender.replicates) >= 2:
+        apply_replicates(comparison, time_kind, halves)
+    return comparison
+
+
 def apply_replicates(comparison: Comparison, time_kind: str, halves: bool = True) -> None:
     """Turn a comparison of two merged sides (merged_side, two or more runs each) into one of runs: intervals,
     p and q, aggregates and power from the runs (Replicated); with MIN_HALVES_RUNS runs a side, the halves too."""
@@ -212,8 +182,6 @@ def apply_replicates(comparison: Comparison, time_kind: str, halves: bool = True
 def against_itself(side: RunFile, split: str, time_kind: str, comparison: Comparison) -> AgainstItself:
     """One side's runs split in two (alternate runs, or in time order), half against half, with the comparison's
     statistics and band."""
-    from .compare import compare_pair
-
     runs = list(side.replicates)
     numbers = list(range(1, len(runs) + 1))
     if split == ALTERNATE:
@@ -223,7 +191,7 @@ def against_itself(side: RunFile, split: str, time_kind: str, comparison: Compar
         parts = [(runs[:half], numbers[:half]), (runs[half:], numbers[half:])]
     first, second = (merged_side(part, f"{side.label} runs {','.join(map(str, which))}", side.path)
                      for part, which in parts)
-    halves = compare_pair(first, second, time_kind, comparison.alpha, comparison.noise_percent, halves=False)
+    halves = compare_sides(first, second, time_kind, comparison.alpha, comparison.noise_percent, halves=False)
     called = [row for row in halves.combinations if halves.beyond_pace(row) in ("slower", "faster")]
     return AgainstItself(split, len(called), len(halves.combinations), (len(parts[0][0]), len(parts[1][0])))
 
