@@ -1,6 +1,6 @@
 #pragma once
 // The statistics lockstep states its figures with, each defined once, here.
-// reports/lockstep_reports/statistics.py is the Python twin; the golden file
+// reports/lockstep_reports/common/statistics.py is the Python twin; the golden file
 // tests/fixtures/statistics/golden.json holds both to the same answers
 // (tests/platform/statistics_golden_test.cpp and
 // reports/tests/test_statistics.py read it).
@@ -34,7 +34,7 @@
 // r's index i is output number r n + i. std::uniform_int_distribution is not
 // used: its mapping is each standard library's own.
 //
-// Agreement with reports/lockstep_reports/statistics.py: the draws are
+// Agreement with reports/lockstep_reports/common/statistics.py: the draws are
 // integers and identical; the medians and quantiles are the same IEEE
 // expressions in the same order, so on this build the two agree to the last
 // bit (the golden file's seeded cases agree exactly on x86-64, and so do a
@@ -127,7 +127,7 @@ median_estimate bootstrap_median(std::span<const double> values, double confiden
 enum class verdict { penalty, gain, within_noise, unsure };
 
 // "penalty", "gain", "within noise", "unsure": the words of result files and
-// of reports/lockstep_reports/statistics.py.
+// of reports/lockstep_reports/common/statistics.py.
 std::string_view to_string(verdict outcome) noexcept;
 
 // The rule of the contract above.

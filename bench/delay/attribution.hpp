@@ -91,7 +91,7 @@ using cause_split = std::array<double, kDelayCauses>;  // ns per cause, indexed 
 
 // What each cause is called, in delay_cause's order: the one table that the
 // text, the result file's keys and its list of causes (cause_kinds, which
-// the report's figure reads: reports/lockstep_reports/delay_reader.py, read_causes) take
+// the report's figure reads: reports/lockstep_reports/read/delay_reader.py, read_causes) take
 // their names from.
 struct cause_naming {
   delay_cause cause;

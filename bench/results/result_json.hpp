@@ -1,7 +1,7 @@
 #pragma once
 // The shapes every result JSON shares (c2c, delay, falseshare, migrate, mpi): a
 // distribution and a histogram, written the same way by every command and
-// read by reports/lockstep_reports/inputs.py.
+// read by reports/lockstep_reports/read/inputs.py.
 #include <nlohmann/json.hpp>
 
 #include <cstddef>

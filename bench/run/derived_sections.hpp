@@ -1,6 +1,6 @@
 #pragma once
 // What `lockstep run` derived, written into its file for compare and report
-// to read rather than derive again (reports/lockstep_reports/derived_reader.py
+// to read rather than derive again (reports/lockstep_reports/read/derived_reader.py
 // reads each; docs/schemas/run.schema.json holds their shapes):
 //
 //   lockstep_layouts          every layout of the registry, in its order, with

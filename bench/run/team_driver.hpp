@@ -334,7 +334,7 @@ double median_unit_ns(const batch_record& record);
 //   counter, the time per unit over its timed batches;
 // - Google Benchmark's median aggregate of real_time is then the median of
 //   the repetitions' ns_per_<unit>, the figure `lockstep compare` builds each
-//   side of its ratio from (reports/lockstep_reports/compare.py); so the two
+//   side of its ratio from (reports/lockstep_reports/compare/compare.py); so the two
 //   tools' ratios of the medians agree by construction;
 // - cpu_time is participant 0's thread CPU time per unit over the timed
 //   batches (call_result::lead_cpu_ns), written as the counter

@@ -11,13 +11,13 @@ import math
 import os
 import sys
 
-from . import compare_text, planner
-from .comparability import withheld_text
-from .comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
-from .inputs import InputError, load_for_compare, side_paths, unique_labels
-from .output import OutputError, check_directory_target, check_file_target, write_file
-from .replicated import compare_sides, merged_side
-from .run_file import RunFile
+from .common.output import OutputError, check_directory_target, check_file_target, write_file
+from .compare import compare_text, planner
+from .compare.comparability import withheld_text
+from .compare.comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
+from .compare.replicated import compare_sides, merged_side
+from .read.inputs import InputError, load_for_compare, side_paths, unique_labels
+from .read.run_file import RunFile
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
 
@@ -436,7 +436,7 @@ def comparison_json(comparisons) -> str:
 def run_report(argv: list[str]) -> int:
     options = report_parser().parse_args(argv)
     check_directory_target(options.out)
-    from . import report  # matplotlib and jinja2: a second or more, so only once the output can be written
+    from .report import report  # matplotlib and jinja2: a second or more, so only once the output can be written
 
     written = report.write_report(options.files, options.out, options.title)
     for path in written:

@@ -11,13 +11,14 @@ import unittest
 import synthetic_runs
 from support import HEADLINE, REPORTS_DIR, Scratch, fixture, headline_document, logical_line, run_tool
 
-from lockstep_reports import compare_text, pace_statistics, statistics
-from lockstep_reports.compare import compare_pair
-from lockstep_reports.comparison import PaceAware, verdict_of
-from lockstep_reports.normalisation import layout_effects, normalised, rank_tables
-from lockstep_reports.inputs import load_run_file
+from lockstep_reports.analysis.normalisation import layout_effects, normalised, rank_tables
+from lockstep_reports.common import statistics
+from lockstep_reports.common.names import parse_name
+from lockstep_reports.compare import compare_text, pace_statistics
+from lockstep_reports.compare.compare import compare_pair
+from lockstep_reports.compare.comparison import PaceAware, verdict_of
 from lockstep_reports.main import compare_parser, report_parser
-from lockstep_reports.names import parse_name
+from lockstep_reports.read.inputs import load_run_file
 
 FORCED = "rk4/sync:futex_spin/layout:packed/pin:compact/threads:4"
 
@@ -236,7 +237,7 @@ class AcrossMachines(unittest.TestCase):
         self.assertAlmostEqual(vs_c2c, sync / 61.5)
 
     def test_in_run_entries_stand_in_for_missing_context_calibrations(self):
-        from lockstep_reports.run_analysis import calibration
+        from lockstep_reports.analysis.run_analysis import calibration
         run_file = load("machine_a.json")
         del run_file.context["serial_step_ns"]
         run_file.context["c2c_one_way_ns"] = "unavailable"
@@ -1099,7 +1100,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertNotIn("--repetitions 10` or more", out)
         with open(os.path.join(self.directory.name, "c.json"), encoding="utf-8") as stream:
             document = json.load(stream)
-        import jsonschema  # Debian's python3-jsonschema, as lockstep_reports/schemas.py
+        import jsonschema  # Debian's python3-jsonschema, as lockstep_reports/read/schemas.py
         with open(REPORTS_DIR.parent / "docs" / "schemas" / "compare.schema.json", encoding="utf-8") as stream:
             jsonschema.Draft202012Validator(json.load(stream)).validate(document)
         written = document["comparisons"][0]

@@ -8,10 +8,10 @@ import unittest
 
 from support import REPORTS_DIR, Scratch, fixture, logical_line, run_tool
 
-from lockstep_reports.answer_reader import read_answer
-from lockstep_reports.compare import compare_pair
-from lockstep_reports.inputs import load_run_file
-from lockstep_reports.text_layout import WIDTH, table
+from lockstep_reports.common.text_layout import WIDTH, table
+from lockstep_reports.compare.compare import compare_pair
+from lockstep_reports.read.answer_reader import read_answer
+from lockstep_reports.read.inputs import load_run_file
 
 # An Intel Xeon guest's Release default run and an AMD EPYC guest's: its Debug --quick run (with the headline),
 # its Release --quick run (with the headline) and its Release default run (written before the headline).

@@ -6,9 +6,10 @@ import unittest
 
 from support import fixture
 
-from lockstep_reports import delay_reader, figures
-from lockstep_reports.checks import InputError
-from lockstep_reports.words import DELAY_CAUSES
+from lockstep_reports.common.words import DELAY_CAUSES
+from lockstep_reports.read import delay_reader
+from lockstep_reports.read.checks import InputError
+from lockstep_reports.report import figures
 
 SPLIT = {"compute": 0.0, "run_queue_wait": 300.0, "migration": 0.0, "page_faults": 0.0, "interrupts": 0.0,
          "wake_up_latency": 700.0, "machine_stall": 0.0, "unexplained": 0.0}

@@ -8,11 +8,11 @@ import os
 import unittest
 
 from support import Scratch, fixture, run_tool
-from lockstep_reports import matrix, paper
-from lockstep_reports.inputs import load_any, load_run_file
-from lockstep_reports.names import parse_name
-from lockstep_reports.normalisation import rank_tables
-from lockstep_reports.run_analysis import layout_facts, mode_medians, sharing_layout
+from lockstep_reports.analysis.normalisation import rank_tables
+from lockstep_reports.analysis.run_analysis import layout_facts, mode_medians, sharing_layout
+from lockstep_reports.common.names import parse_name
+from lockstep_reports.read.inputs import load_any, load_run_file
+from lockstep_reports.report import matrix, paper
 
 
 def document(name: str) -> dict:

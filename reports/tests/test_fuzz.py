@@ -49,10 +49,11 @@ from collections import Counter
 
 from support import FIXTURES, REPORTS_DIR
 
-from lockstep_reports import fields, figures
-from lockstep_reports.schemas import json_kind
+from lockstep_reports.common import fields
+from lockstep_reports.common.names import parse_name
 from lockstep_reports.main import main
-from lockstep_reports.names import parse_name
+from lockstep_reports.read.schemas import json_kind
+from lockstep_reports.report import figures
 
 SEED = int(os.environ.get("LOCKSTEP_FUZZ_SEED", "20260310"))
 CASES = int(os.environ.get("LOCKSTEP_FUZZ_CASES", "1200"))

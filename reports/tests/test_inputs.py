@@ -7,14 +7,14 @@ import unittest
 
 from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
-from lockstep_reports import statistics
-from lockstep_reports.c2c_reader import C2cFile
-from lockstep_reports.delay_reader import DelayFile
-from lockstep_reports.inputs import InputError, load_any, load_run_file
-from lockstep_reports.run_analysis import against_best_other_views
-from lockstep_reports.verify_reader import VerifyFile
-from lockstep_reports.words import DELAY_CAUSES
-from lockstep_reports.names import parse_name
+from lockstep_reports.analysis.run_analysis import against_best_other_views
+from lockstep_reports.common import statistics
+from lockstep_reports.common.names import parse_name
+from lockstep_reports.common.words import DELAY_CAUSES
+from lockstep_reports.read.c2c_reader import C2cFile
+from lockstep_reports.read.delay_reader import DelayFile
+from lockstep_reports.read.inputs import InputError, load_any, load_run_file
+from lockstep_reports.read.verify_reader import VerifyFile
 
 
 class NameParsing(unittest.TestCase):

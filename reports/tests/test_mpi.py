@@ -9,9 +9,9 @@ import unittest
 
 from support import fixture, run_tool
 
-from lockstep_reports.run_analysis import is_calibration
-from lockstep_reports.inputs import InputError, load_any
-from lockstep_reports.names import parse_name
+from lockstep_reports.analysis.run_analysis import is_calibration
+from lockstep_reports.common.names import parse_name
+from lockstep_reports.read.inputs import InputError, load_any
 
 EXCHANGES = ["p2p", "allgather", "rma_put", "shm_window/futex_spin", "shm_window/mailbox"]
 

@@ -8,8 +8,8 @@ from unittest import mock
 
 from support import fixture, run_tool
 
-from lockstep_reports import output
-from lockstep_reports.formatting import format_ns, format_number
+from lockstep_reports.common import output
+from lockstep_reports.common.formatting import format_ns, format_number
 
 REPORT_INPUTS = [fixture("machine_a.json"), fixture("verify_a.csv")]
 

@@ -15,10 +15,10 @@ import numpy as np
 from support import run_tool
 from synthetic_runs import matrix_document
 
-from lockstep_reports import replicates
-from lockstep_reports.inputs import load_run_file
-from lockstep_reports.planner import (MAX_PLAN_REPETITIONS, MIN_PLAN_REPETITIONS, Pilot, _Entry,
-                                      allocated_repetitions, cheapest_plan, entries_change, read_pilot)
+from lockstep_reports.compare import replicates
+from lockstep_reports.compare.planner import (MAX_PLAN_REPETITIONS, MIN_PLAN_REPETITIONS, Pilot, _Entry,
+                                              allocated_repetitions, cheapest_plan, entries_change, read_pilot)
+from lockstep_reports.read.inputs import load_run_file
 
 
 def nested_data(seed: int, sigmas: tuple[float, ...], counts: tuple[int, ...]) -> np.ndarray:
@@ -276,9 +276,9 @@ class RunsASide(unittest.TestCase):
         self.assertRegex(text, rf"A against A: {alternate['changed']} of {alternate['compared']} changed")
 
     def test_a_side_of_runs_reads_its_calibrations_as_their_median(self):
-        from lockstep_reports.fields import SERIAL_CONTEXT
-        from lockstep_reports.replicated import merged_side
-        from lockstep_reports.run_analysis import calibration
+        from lockstep_reports.common.fields import SERIAL_CONTEXT
+        from lockstep_reports.compare.replicated import merged_side
+        from lockstep_reports.analysis.run_analysis import calibration
 
         runs = [load_run_file(os.path.join(self.a, f"run-{i}.json")) for i in range(1, 5)]
         for run_file, serial in zip(runs, ("90.0", "30.0", "31.0", "32.0")):

@@ -12,9 +12,9 @@ from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
 import matplotlib.figure
 
-from lockstep_reports import answer, c2c_analysis, figures, matrix, paper, report
-from lockstep_reports.run_analysis import run_median
-from lockstep_reports.inputs import load_any, load_run_file
+from lockstep_reports.analysis.run_analysis import run_median
+from lockstep_reports.read.inputs import load_any, load_run_file
+from lockstep_reports.report import answer, c2c_analysis, figures, matrix, paper, report
 
 # headline.json with team_cpu_* and the split of a step: fixtures/make_cpu_fixture.py.
 CPU_SPLIT = "cpu_split.json"

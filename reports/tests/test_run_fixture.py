@@ -11,8 +11,11 @@ import tempfile
 import unittest
 
 from support import REPORTS_DIR, run_tool
-from lockstep_reports import comparison, inputs, run_analysis, run_file, run_reader, statistics
-from lockstep_reports.formatting import format_number
+from lockstep_reports.analysis import run_analysis
+from lockstep_reports.common import statistics
+from lockstep_reports.common.formatting import format_number
+from lockstep_reports.compare import comparison
+from lockstep_reports.read import inputs, run_file, run_reader
 
 FIXTURE = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.json")
 

@@ -11,7 +11,8 @@ import unittest
 import numpy as np
 
 from support import REPORTS_DIR
-from lockstep_reports import comparison, fields, statistics
+from lockstep_reports.common import fields, statistics
+from lockstep_reports.compare import comparison
 
 GOLDEN = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "statistics", "golden.json")
 with open(GOLDEN, encoding="utf-8") as golden_file:

@@ -1,6 +1,6 @@
 """The shape of reports/ that review keeps: no function longer than longest_functions.LONGEST_LINES, and no
 primitive's or layout's name in the tools' code outside the one module that maps names to words
-(lockstep_reports/words.py): what the tools act on comes from the result file (docs/design.md, Traits and
+(lockstep_reports/common/words.py): what the tools act on comes from the result file (docs/design.md, Traits and
 registries). The names are the registries' own: every kName (and kAlternativeName) in sync/ and layouts/."""
 import re
 import unittest
@@ -10,7 +10,7 @@ from support import REPORTS_DIR
 
 REPOSITORY = REPORTS_DIR.parent
 TOOLS = REPORTS_DIR / "lockstep_reports"
-WORDS = TOOLS / "words.py"
+WORDS = TOOLS / "common" / "words.py"
 
 
 def registry_names() -> set[str]:
@@ -42,7 +42,7 @@ class Structure(unittest.TestCase):
                 continue
             for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), start=1):
                 found += [f"{path.relative_to(REPORTS_DIR)}:{number}: {match}" for match in pattern.findall(line)]
-        self.assertEqual(found, [], "a primitive's or layout's name outside lockstep_reports/words.py")
+        self.assertEqual(found, [], "a primitive's or layout's name outside lockstep_reports/common/words.py")
 
 
 if __name__ == "__main__":

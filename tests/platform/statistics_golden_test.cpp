@@ -1,5 +1,5 @@
 // platform/statistics.hpp against the golden file it shares with
-// reports/lockstep_reports/statistics.py (tests/fixtures/statistics/golden.json,
+// reports/lockstep_reports/common/statistics.py (tests/fixtures/statistics/golden.json,
 // numpy's answers and the verdict rule's; reports/tests/test_statistics.py
 // checks the Python side against the same file).
 #include "platform/statistics.hpp"

@@ -4,8 +4,8 @@ Runs one kind's commands with the smallest settings that still write every shape
 --compare-pinning, --per-cpu, --find-period with and without an answer; run: plain, --scaling and --crossover; verify: two
 masses and a chain; topology: this machine and a synthetic one; mpi: two ranks, and two ranks that must share
 a CPU), and checks each file as a writer's test does: strictly, so a key
-a writer adds or misspells without its schema fails here (reports/lockstep_reports/schemas.py, strict=True).
-The reader checks the same schemas when it reads a file (reports/lockstep_reports/inputs.py, read_document).
+a writer adds or misspells without its schema fails here (reports/lockstep_reports/read/schemas.py, strict=True).
+The reader checks the same schemas when it reads a file (reports/lockstep_reports/read/inputs.py, read_document).
 
     check_result_schemas.py --lockstep BIN KIND [--keep DIR]
 
@@ -20,7 +20,7 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "reports"))
-from lockstep_reports import schemas  # noqa: E402
+from lockstep_reports.read import schemas  # noqa: E402
 
 # kind -> [(shape, arguments before --out, arguments after it, extra environment)]
 SHAPES = {

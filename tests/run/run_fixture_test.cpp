@@ -5,7 +5,7 @@
 // own calls (bench::bootstrap_median, bench::verdict_of: paired_ratio.hpp)
 // are the file's to the last bit, and the summary `lockstep run --verbose`
 // prints over a run book rebuilt from the file shows each of them.
-// reports/tests/test_run_fixture.py holds reports/lockstep_reports/statistics.py
+// reports/tests/test_run_fixture.py holds reports/lockstep_reports/common/statistics.py
 // and the figures compare and report print to the same file: a change of the
 // rule (median, quantile, draws, verdict edge) on one side alone fails one of
 // the two. No timing is measured or asserted.

@@ -6,10 +6,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from . import fields
+from ..common import fields
+from ..common.words import DELAY_CAUSES
 from .checks import Distribution, fail, read_distribution
 from .schemas import json_kind, shown
-from .words import DELAY_CAUSES
 
 
 @dataclass(frozen=True)

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import statistics
+from ..common import statistics
 
 # The power the planner and the comparison's "smallest change it could see" are stated at.
 POWER = 0.80

@@ -4,12 +4,12 @@ latency (the file's vs_serial / vs_c2c where it has them), each layout's speed-u
 placement and thread count per machine."""
 from __future__ import annotations
 
-from . import statistics
-from .fields import (C2C_CONTEXT, FINGERPRINT_KEYS, MACHINE_KEYS, SERIAL_CONTEXT, SYNC_COUNTER, VS_C2C_COUNTER,
-                     VS_SERIAL_COUNTER)
-from .names import BenchmarkKey, parse_name
+from ..common import statistics
+from ..common.fields import (C2C_CONTEXT, FINGERPRINT_KEYS, MACHINE_KEYS, SERIAL_CONTEXT, SYNC_COUNTER, VS_C2C_COUNTER,
+                             VS_SERIAL_COUNTER)
+from ..common.names import BenchmarkKey, parse_name
+from ..read.run_file import RunFile
 from .run_analysis import calibration, median_ratio, run_median
-from .run_file import RunFile
 
 def fingerprint(run_file: RunFile) -> dict[str, str]:
     context = run_file.context

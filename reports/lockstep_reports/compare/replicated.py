@@ -17,14 +17,14 @@ import dataclasses
 import math
 from collections import Counter
 
-from . import statistics
+from ..common import statistics
+from ..common.fields import C2C_CONTEXT, SERIAL_CONTEXT
+from ..read.run_file import Run, RunFile
 from .compare import compare_pair
 from .comparison import (ALTERNATE, DEFAULT_NOISE_PERCENT, IN_TIME_ORDER, AgainstItself, Aggregate, Comparison,
                          PaceAware, Replicated, aggregate_groups, clustered, verdict_of)
-from .fields import C2C_CONTEXT, SERIAL_CONTEXT
 from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
                          t_quantile, two_sided_p)
-from .run_file import Run, RunFile
 
 # PaceAware.method of an interval from the spread of the runs.
 BETWEEN_RUNS = "between runs"

@@ -6,22 +6,22 @@ from __future__ import annotations
 
 import math
 
-from . import statistics
+from ..analysis.normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
+from ..analysis.run_analysis import sharing_layout
+from ..common import statistics
+from ..common.fields import C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS, UNAVAILABLE
+from ..common.formatting import format_ns, format_number
+from ..common.names import BenchmarkKey
+from ..common.text_layout import WIDTH, table, wrapped
+from ..read.run_file import RunFile
 from .comparability import build_difference, findings, unoptimised, withheld_text
 from .comparison import (ALTERNATE, COLLAPSED, DEFAULT_NOISE_PERCENT, DRIFT_SHOWN_ABOVE, IN_TIME_ORDER,
                          MIN_AGGREGATE_ENTRIES, NOISE_RATIONALE, VERDICTS, Aggregate, Comparison, PaceAware, Row)
-from .fields import C2C_COUNTER, COUNTERS_SHOWN, FINGERPRINT_KEYS, MACHINE_KEYS, UNAVAILABLE
-from .formatting import format_ns, format_number
-from .mpi_context import mpi_difference_lines
-from .names import BenchmarkKey
 from .machine_answers import answer_lines, crossover_lines, difference_lines
-from .normalisation import fingerprint, layout_effects, normalised, rank_tables, rk4_keys, same_machine
+from .mpi_context import mpi_difference_lines
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
 from .replicated import BETWEEN_RUNS, one_run_power
-from .run_analysis import sharing_layout
-from .run_file import RunFile
-from .text_layout import WIDTH, table, wrapped
 
 def mode_text(mode) -> str:
     value = f"c2c {mode.c2c_ns:.0f} ns" if mode.c2c_ns is not None else f"serial {mode.serial_ns:.1f} ns"

@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import math
 
-from . import statistics
+from ..analysis.run_analysis import is_calibration
+from ..common import statistics
+from ..common.fields import UNAVAILABLE
+from ..common.names import BenchmarkKey
+from ..read.run_file import RunFile
 from .comparison import PaceAware, Row, cluster_key
-from .fields import UNAVAILABLE
-from .names import BenchmarkKey
-from .run_analysis import is_calibration
-from .run_file import RunFile
 
 # Two pace modes of two runs are the same mode when their c2c medians (serial medians on a machine of one
 # CPU) are within this factor of each other. This VM's modes are 2x apart or more (c2c one-way about 25,

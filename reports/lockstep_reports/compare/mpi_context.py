@@ -10,8 +10,8 @@ band and intervals are for the same benchmark measured twice).
 
 from __future__ import annotations
 
-from . import statistics
-from .formatting import format_ns
+from ..common import statistics
+from ..common.formatting import format_ns
 
 JOB_FIELDS = ("ranks", "hosts", "transport")
 

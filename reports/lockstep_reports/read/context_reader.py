@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import fields
+from ..common import fields
 from .checks import InputError
 from .schemas import shown
 

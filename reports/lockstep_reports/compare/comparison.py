@@ -6,12 +6,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from . import statistics
+from ..analysis.run_analysis import calibration, median_ratio
+from ..common import statistics
+from ..common.fields import C2C_CONTEXT, SERIAL_CONTEXT
+from ..common.names import BenchmarkKey
+from ..read.run_file import RunFile
 from .comparability import unoptimised
-from .fields import C2C_CONTEXT, SERIAL_CONTEXT
-from .names import BenchmarkKey
-from .run_analysis import calibration, median_ratio
-from .run_file import RunFile
 
 # The default noise threshold, percent (see NOISE_RATIONALE).
 DEFAULT_NOISE_PERCENT = 5.0

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from . import fields
+from ..common import fields
 from .checks import fail
 from .schemas import json_kind, shown
 

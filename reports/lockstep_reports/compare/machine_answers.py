@@ -8,16 +8,16 @@ answer_reader.py): nothing is recomputed here, so each machine's answer reads as
 """
 from __future__ import annotations
 
-from . import statistics
-from .answer_reader import Ceiling, Crossover, PairedRatio, RunAnswer
+from ..analysis.run_analysis import calibration
+from ..common import statistics
+from ..common.fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE_CONTEXT, QUICK_MODE, SERIAL_CONTEXT,
+                             UNAVAILABLE)
+from ..common.formatting import crossover_interval, format_ns
+from ..common.text_layout import WIDTH, column_width, table
+from ..common.words import PIN_ORDER
+from ..read.answer_reader import Ceiling, Crossover, PairedRatio, RunAnswer
+from ..read.run_file import Recommendation, RunFile
 from .comparability import letter, unoptimised
-from .fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE_CONTEXT, QUICK_MODE, SERIAL_CONTEXT,
-                     UNAVAILABLE)
-from .formatting import crossover_interval, format_ns
-from .run_analysis import calibration
-from .run_file import Recommendation, RunFile
-from .text_layout import WIDTH, column_width, table
-from .words import PIN_ORDER
 
 # The files side by side in one table; more go into a second table below.
 COLUMNS = 4

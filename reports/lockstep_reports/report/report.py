@@ -22,20 +22,21 @@ from dataclasses import dataclass, field
 import jinja2
 import markupsafe
 
-from . import answer, c2c_analysis, figures, matrix, paper, statistics, words
+from ..analysis.normalisation import fingerprint, layout_effects, rank_tables
+from ..analysis.run_analysis import against_best_other_views, calibration, mode_medians, run_median, sharing_layout
+from ..common import statistics, words
+from ..common.fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
+                             SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
+from ..common.formatting import format_count, format_crossover, format_duration, format_ns, format_number, format_rate
+from ..common.names import parse_name
+from ..common.output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
+from ..read.c2c_reader import C2cFile
+from ..read.delay_reader import DelayExtras, DelayFile
+from ..read.inputs import load_any, unique_labels
+from ..read.run_file import RunFile
+from ..read.verify_reader import VerifyFile
+from . import answer, c2c_analysis, figures, matrix, paper
 from .answer import Answer
-from .normalisation import fingerprint, layout_effects, rank_tables
-from .fields import (DELAY_SETTINGS, DISTRIBUTION_STATISTICS, FINGERPRINT_KEYS, PINGPONG_P50_COUNTER,
-                     SERIAL_CONTEXT, STEP_SPLIT_COUNTERS, UNAVAILABLE)
-from .formatting import format_count, format_crossover, format_duration, format_ns, format_number, format_rate
-from .c2c_reader import C2cFile
-from .delay_reader import DelayExtras, DelayFile
-from .inputs import load_any, unique_labels
-from .run_analysis import against_best_other_views, calibration, mode_medians, run_median, sharing_layout
-from .run_file import RunFile
-from .verify_reader import VerifyFile
-from .names import parse_name
-from .output import FIGURES_DIRECTORY, HTML_PAGE, MARKDOWN_PAGE, PAGES, write_directory
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
 

@@ -6,7 +6,7 @@ import io
 import math
 from dataclasses import dataclass
 
-from . import fields
+from ..common import fields
 from .checks import InputError
 from .schemas import shown
 

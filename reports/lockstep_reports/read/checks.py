@@ -9,7 +9,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from . import fields, schemas
+from ..common import fields
+from . import schemas
 from .schemas import shown
 
 

@@ -79,14 +79,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import statistics
+from ..analysis.run_analysis import is_calibration, sample
+from ..common import statistics
+from ..common.fields import BACK_TO_BACK_ORDER, C2C_COUNTER, COUNTERS_SHOWN, PER_UNIT_TIMES_SCHEMA, UNAVAILABLE
+from ..common.names import BenchmarkKey
+from ..read.run_file import RunFile
 from .comparison import DEFAULT_NOISE_PERCENT, Comparison, Row, cluster_key
-from .fields import BACK_TO_BACK_ORDER, C2C_COUNTER, COUNTERS_SHOWN, PER_UNIT_TIMES_SCHEMA, UNAVAILABLE
-from .names import BenchmarkKey
-from .pace_statistics import (MIN_IN_MODE, matching_modes, modes_differ, pace_aware, pace_elasticities,
-                              pool_evidence)
-from .run_analysis import is_calibration, sample
-from .run_file import RunFile
+from .pace_statistics import MIN_IN_MODE, matching_modes, modes_differ, pace_aware, pace_elasticities, pool_evidence
 
 
 def calibration_sample(key: BenchmarkKey, run, time_kind: str) -> tuple[list[float], bool, str]:

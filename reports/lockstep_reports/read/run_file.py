@@ -7,8 +7,8 @@ from collections import Counter
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
-from . import fields, statistics
-from .names import BenchmarkKey
+from ..common import fields, statistics
+from ..common.names import BenchmarkKey
 
 if TYPE_CHECKING:
     from .answer_reader import RunAnswer

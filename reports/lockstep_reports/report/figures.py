@@ -24,9 +24,9 @@ import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 from matplotlib.colors import LogNorm  # noqa: E402
 
-from . import words  # noqa: E402
-from .fields import STEP_SPLIT_COUNTERS  # noqa: E402
-from .formatting import format_ns  # noqa: E402
+from ..common import words  # noqa: E402
+from ..common.fields import STEP_SPLIT_COUNTERS  # noqa: E402
+from ..common.formatting import format_ns  # noqa: E402
 from .matrix import CpuPoint, PenaltyRow, StepSplit, ordered  # noqa: E402
 
 matplotlib.rcParams.update({

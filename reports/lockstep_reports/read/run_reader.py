@@ -12,11 +12,12 @@ from __future__ import annotations
 import json
 import math
 
-from . import answer_reader, derived_reader, fields, schemas
+from ..common import fields
+from ..common.names import BenchmarkKey, parse_name
+from . import answer_reader, derived_reader, schemas
 from .checks import CheckedObject, InputError, checked_number, fail
 from .context_reader import read_context
 from .mpi_reader import read_mpi
-from .names import BenchmarkKey, parse_name
 from .run_file import (Headline, HeadlineAnswer, HeadlineRival, PaceMode, PacePair, PaceReading, PaceTrace,
                        Recommendation, Repetition, RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
 from .schemas import json_kind, shown

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .fields import UNAVAILABLE
-from .formatting import format_ns, format_number
-from .run_file import HeadlineAnswer, HeadlineRival, Recommendation, RunFile
+from ..common.fields import UNAVAILABLE
+from ..common.formatting import format_ns, format_number
+from ..read.run_file import HeadlineAnswer, HeadlineRival, Recommendation, RunFile
 
 # The words of a rival's verdict (its step over the choice's, paired: statistics.VERDICTS): above the noise
 # band the rival is slower, below it faster.

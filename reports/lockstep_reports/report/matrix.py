@@ -6,10 +6,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import statistics, words
-from .fields import TEAM_CPU_COUNTERS
-from .names import BenchmarkKey
-from .run_analysis import layout_facts, median_ratio, run_median, sample
+from ..analysis.run_analysis import layout_facts, median_ratio, run_median, sample
+from ..common import statistics, words
+from ..common.fields import TEAM_CPU_COUNTERS
+from ..common.names import BenchmarkKey
 
 
 def ordered(values, preferred):

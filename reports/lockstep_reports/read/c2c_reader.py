@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import fields
+from ..common import fields
 from .checks import fail, read_distribution
 
 

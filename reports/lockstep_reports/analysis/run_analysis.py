@@ -3,10 +3,10 @@ entries' medians, its repetitions per pace mode, the in-run calibrations, which 
 each primitive's line against the best other. Nothing here compares two files (compare.py) or draws."""
 from __future__ import annotations
 
-from . import statistics, words
-from .fields import C2C_COUNTER, SERIAL_CONTEXT
-from .names import BenchmarkKey, parse_name
-from .run_file import LayoutFacts, PacePair, Run, RunFile
+from ..common import statistics, words
+from ..common.fields import C2C_COUNTER, SERIAL_CONTEXT
+from ..common.names import BenchmarkKey, parse_name
+from ..read.run_file import LayoutFacts, PacePair, Run, RunFile
 
 # Families that measure the machine or the instrumentation, not a combination.
 CALIBRATION_FAMILIES = ("c2c", "overhead")

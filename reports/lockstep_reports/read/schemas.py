@@ -22,7 +22,7 @@ import math
 import re
 from pathlib import Path
 
-SCHEMA_DIR = Path(__file__).resolve().parents[2] / "docs" / "schemas"
+SCHEMA_DIR = Path(__file__).resolve().parents[3] / "docs" / "schemas"
 # Every kind with a schema; a file without "kind" is a `lockstep run` file (Google Benchmark JSON).
 KINDS = ("run", "c2c", "delay", "falseshare", "migrate", "mpi", "verify", "topology")
 # The top-level lists whose entries are Google Benchmark's (NaN and infinities allowed in them).

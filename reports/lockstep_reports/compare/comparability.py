@@ -8,12 +8,12 @@ the calibrations' move is blamed on the build, not the machine, when the builds 
 """
 from __future__ import annotations
 
-from . import statistics
-from .fields import (BUILD_TYPE_CONTEXT, CXX_FLAGS_CONTEXT, DIRTY_SUFFIX, MODE_CONTEXT, QUICK_MODE, REVISION_CONTEXT,
-                     SERIAL_CONTEXT)
-from .formatting import format_ns
-from .run_analysis import calibration
-from .run_file import RunFile
+from ..analysis.run_analysis import calibration
+from ..common import statistics
+from ..common.fields import (BUILD_TYPE_CONTEXT, CXX_FLAGS_CONTEXT, DIRTY_SUFFIX, MODE_CONTEXT, QUICK_MODE,
+                             REVISION_CONTEXT, SERIAL_CONTEXT)
+from ..common.formatting import format_ns
+from ..read.run_file import RunFile
 
 # The build types whose code is built without optimisation (CMake's Debug: -g alone, GCC's -O0).
 UNOPTIMISED_BUILD_TYPES = ("debug",)

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 import math
 
-from . import fields
+from ..common import fields
+from ..common.names import BenchmarkKey, parse_name
 from .checks import fail
-from .names import BenchmarkKey, parse_name
 from .run_file import LayoutFacts, ModeMedians, ModelConstants, PaceTrace, PlannedPair, Ranking
 from .schemas import json_kind, shown
 

@@ -21,14 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import statistics
+from ..analysis.run_analysis import is_calibration
+from ..common import statistics
+from ..common.fields import MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT
+from ..common.text_layout import wrapped
+from ..read.run_file import RunFile
 from .comparison import aggregate_groups
-from .fields import MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT
 from .replicates import (MEDIAN_EFFICIENCY, POWER, Components, allocation, assumed_drift, change_seen_by_share,
                          detectable_at_power, median_components, run_summary)
-from .run_analysis import is_calibration
-from .run_file import RunFile
-from .text_layout import wrapped
 
 # The plans the planner searches: repetitions per run and runs a side.
 MIN_PLAN_REPETITIONS = 3
