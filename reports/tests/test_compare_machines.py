@@ -243,7 +243,7 @@ class TheAnswersParts(Scratch):
         with open(LOCKSTEP_HEADLINE, encoding="utf-8") as stream:
             written = json.load(stream)
         self.assertTrue(written["false_sharing_patterns"])
-        answer = read_answer(LOCKSTEP_HEADLINE, {"lockstep_headline": written})
+        answer = read_answer({"lockstep_headline": written})
         self.assertEqual([(p.name, p.median, p.ci_low, p.ci_high, p.verdict) for p in answer.patterns],
                          [(w["words"], w["median"], w["ci_low"], w["ci_high"], w["verdict"])
                           for w in written["false_sharing_patterns"]])
@@ -260,7 +260,7 @@ class TheAnswersParts(Scratch):
         document["lockstep_headline"]["migration_probe"] = {"cpus": "0,1", "bytes": 262144, "moves": 60,
                                                             "move_p50_ns": 10230.0, "refill_p50_ns": -338.5}
         path = self.write("refill.json", document)
-        self.assertEqual(read_answer(path, document).migration.refill_ns, -338.5)
+        self.assertEqual(read_answer(document).migration.refill_ns, -338.5)
         compared(path, AMD_DEBUG_QUICK)
 
     def test_a_malformed_part_is_one_line_naming_its_place(self):

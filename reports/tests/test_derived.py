@@ -151,7 +151,7 @@ class MalformedSections(Scratch):
                   "lockstep_layouts[1].name: repeats 'packed'"),
                  ("lockstep_layouts", layouts(("packed", "spread", 0)), "lockstep_layouts[0].kind: is 'spread'"),
                  ("lockstep_planned_pairs", [{"comparison": "false_sharing", "group": "g", "a": "/", "b": "x/y"}],
-                  "lockstep_planned_pairs[0].a: is '/': no benchmark family"),
+                  "lockstep_planned_pairs[0].a: is '/', not an entry's name"),
                  ("lockstep_rankings", {"pin": "compact"}, "lockstep_rankings: expected a list, not an object"))
         for key, value, problem in cases:
             with self.subTest(problem):

@@ -1,10 +1,12 @@
 """What each lockstep command writes against its kind's schema (docs/schemas/<kind>.schema.json).
 
 Runs one kind's commands with the smallest settings that still write every shape of the file (delay: plain,
---compare-pinning, --per-cpu, --find-period with and without an answer; run: plain, --scaling and --crossover; verify: two
-masses and a chain; topology: this machine and a synthetic one; mpi: two ranks, and two ranks that must share
+--compare-pinning, --per-cpu, --find-period with and without an answer; run: plain, --scaling and --crossover; verify:
+two masses and a chain; topology: this machine and a synthetic one; mpi: two ranks, and two ranks that must share
 a CPU), and checks each file as a writer's test does: strictly, so a key
-a writer adds or misspells without its schema fails here (reports/lockstep_reports/read/schemas.py, strict=True).
+a writer adds or misspells without its schema fails here (reports/lockstep_reports/read/schemas.py, strict=True), a
+top-level lockstep_* section as well. The shapes of a kind together must write every section its schema names
+(but the older names a reader still accepts, OLDER_SECTIONS), so that no section goes unchecked.
 The reader checks the same schemas when it reads a file (reports/lockstep_reports/read/inputs.py, read_document).
 
     check_result_schemas.py --lockstep BIN KIND [--keep DIR]
@@ -60,6 +62,9 @@ SHAPES = {
 }
 
 
+# Sections a schema names for files written before a writer renamed them: no shape writes them.
+OLDER_SECTIONS: dict[str, set] = {}
+
 # (kind, shape) -> the command lockstep runs under (taskset -c 0: the process may run on CPU 0 only).
 WRAPPERS = {("mpi", "two ranks on one CPU"): ["taskset", "-c", "0"]}
 
@@ -72,6 +77,7 @@ def main() -> int:
     options = parser.parse_args()
 
     failures = 0
+    written = set()
     with tempfile.TemporaryDirectory(prefix="lockstep-schema-") as scratch:
         directory = options.keep or scratch
         for index, (shape, before, after, environment) in enumerate(SHAPES[options.kind]):
@@ -86,6 +92,7 @@ def main() -> int:
                 continue
             with open(out, encoding="utf-8") as stream:
                 document = json.load(stream)
+            written |= {key for key in document if key.startswith(schemas.SECTION_PREFIX)}
             problem = schemas.problem(document, options.kind, strict=True)
             if problem is None:
                 print(f"ok   {options.kind} ({shape}): fits {schemas.schema_path(options.kind).name}")
@@ -93,6 +100,13 @@ def main() -> int:
                 print(f"FAIL {options.kind} ({shape}): {out}: {problem} "
                       f"(docs/schemas/{options.kind}.schema.json)")
                 failures += 1
+    named = {key for key in json.loads(schemas.schema_path(options.kind).read_text(encoding="utf-8"))["properties"]
+             if key.startswith(schemas.SECTION_PREFIX)}
+    unwritten = sorted(named - written - OLDER_SECTIONS.get(options.kind, set()))
+    if unwritten and not failures:
+        print(f"FAIL {options.kind}: no shape writes {', '.join(unwritten)}, which "
+              f"docs/schemas/{options.kind}.schema.json names: add a shape that does")
+        failures += 1
     return 1 if failures else 0
 
 

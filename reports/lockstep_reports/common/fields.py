@@ -111,6 +111,14 @@ SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, th
 HEADLINE_KEY = "lockstep_headline"
 # How a recommendation was chosen (lockstep_headline.recommendations[].basis).
 HEADLINE_BASES = ("paired", "medians")
+# top level (run --crossover): {crossovers, ceilings, lines, budget_s, ...}
+CROSSOVER_KEY = "lockstep_crossover"
+# What the run derived for the tools (derived_reader.py), each at the top level but the last (inside PACE_KEY).
+LAYOUTS_KEY = "lockstep_layouts"
+PLANNED_KEY = "lockstep_planned_pairs"
+RANKINGS_KEY = "lockstep_rankings"
+MODEL_KEY = "lockstep_model"
+MODE_MEDIANS_KEY = "entry_medians"
 SCALING_COUNTERS = ("sync_ns_per_stage", "ns_per_step")
 # Per-repetition counters (iteration rows only; an aggregate's median or mean of a mode index means nothing).
 PACE_C2C_COUNTER = "pace_c2c_ns"  # ns; NaN on a machine of one CPU (no pair to measure)

@@ -44,8 +44,8 @@ from .schemas import json_kind, shown
 from .verify_reader import load_verify_csv
 
 # The prefix of every key lockstep adds to Google Benchmark's JSON (the context's lockstep_schema, lockstep_mode,
-# ...; the top level's lockstep_pace, lockstep_headline, ...).
-LOCKSTEP_PREFIX = "lockstep_"
+# ...; the top level's lockstep_pace, lockstep_answer, ...).
+LOCKSTEP_PREFIX = schemas.SECTION_PREFIX
 
 
 # ---------------------------------------------------------------- files as text

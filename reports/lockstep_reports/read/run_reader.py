@@ -14,13 +14,14 @@ import math
 
 from ..common import fields
 from ..common.names import BenchmarkKey, parse_name
-from . import answer_reader, derived_reader, schemas
-from .checks import CheckedObject, InputError, checked_number, fail
+from . import answer_reader, derived_reader
+from .checks import CheckedObject, InputError, checked_number
 from .context_reader import read_context
 from .mpi_reader import read_mpi
 from .run_file import (Headline, HeadlineAnswer, HeadlineRival, PaceMode, PacePair, PaceReading, PaceTrace,
                        Recommendation, Repetition, RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
-from .schemas import json_kind, shown
+from .run_checks import check_sections
+from .schemas import shown
 
 
 def _measured_values(entry: CheckedObject, run: Run, scale: float, least: float,
@@ -91,96 +92,36 @@ def _repetition_pace(entry: CheckedObject, run: Run, trace: "PaceTrace | None") 
                           None if mode is None else int(mode))
 
 
-def _read_pace(path: str, document: dict) -> PaceTrace | None:
-    """The top-level "lockstep_pace" (its fields checked by the schema, what ties them together here); None
-    when the file has none (an older file)."""
+def _read_pace(document: dict) -> PaceTrace | None:
+    """The top-level "lockstep_pace"; None when the file has none (an older file)."""
     if fields.PACE_KEY not in document:
         return None
-    trace, at = document[fields.PACE_KEY], (fields.PACE_KEY,)
-    cpus = trace["cpus"]
-    if len(cpus) not in (0, 2) or len(set(cpus)) != len(cpus) or max(cpus, default=0) >= fields.CPU_LIMIT:
-        fail(path, at + ("cpus",), f"is {cpus}: the pinned pair of two different CPUs, or [] on a machine of one")
-
-    modes = []
-    for index, raw in enumerate(trace["modes"]):
-        here = at + ("modes", index)
-        if raw["mode"] != index:
-            fail(path, here + ("mode",), f"is {shown(raw['mode'])}, not {index}: the modes are listed in the order "
-                                         "of their index")
-        c2c = raw["c2c_ns"]
-        if modes and (c2c is None) != (modes[0].c2c_ns is None):
-            fail(path, here + ("c2c_ns",), "is null in some modes and a number in others: either the machine has a "
-                                           "pair of CPUs to measure or it has not")
-        if modes and c2c is not None and c2c < modes[-1].c2c_ns:
-            fail(path, here + ("c2c_ns",), f"is {c2c:g} ns, below the {modes[-1].c2c_ns:g} ns of the mode before: "
-                                           "the modes are sorted fastest first")
-        modes.append(PaceMode(index, c2c, raw["serial_ns"], raw["share"], int(raw["readings"])))
-    if sum(mode.share for mode in modes) > 1.0 + fields.SHARE_SLACK:
-        fail(path, at + ("modes",), f"have shares adding up to {sum(mode.share for mode in modes):g}, more than "
-                                    "the whole run")
-
-    readings = []
-    for index, raw in enumerate(trace["readings"]):
-        here = at + ("readings", index)
-        if readings and raw["t_s"] < readings[-1].t_s:
-            fail(path, here + ("t_s",), f"is {raw['t_s']:g} s, before the {readings[-1].t_s:g} s of the reading "
-                                        "before: the readings are in time order")
-        if raw["mode"] >= len(modes):
-            fail(path, here + ("mode",), f"is {shown(raw['mode'])}, not one of the {len(modes)} modes (0.."
-                                         f"{len(modes) - 1}) or -1")
-        readings.append(PaceReading(raw["t_s"], raw["c2c_ns"], raw["serial_ns"], int(raw["mode"])))
-    if trace["changes"] > len(readings) - 1:
-        fail(path, at + ("changes",), f"is {shown(trace['changes'])}, more than the {len(readings)} readings "
-                                      "can change")
-    return PaceTrace(trace["reference"], tuple(cpus), tuple(readings), tuple(modes), int(trace["changes"]),
+    trace = document[fields.PACE_KEY]
+    modes = tuple(PaceMode(raw["mode"], raw["c2c_ns"], raw["serial_ns"], raw["share"], int(raw["readings"]))
+                  for raw in trace["modes"])
+    readings = tuple(PaceReading(raw["t_s"], raw["c2c_ns"], raw["serial_ns"], int(raw["mode"]))
+                     for raw in trace["readings"])
+    return PaceTrace(trace["reference"], tuple(trace["cpus"]), readings, modes, int(trace["changes"]),
                      trace["summary"])
 
 
-def _read_pairs(path: str, document: dict, trace: PaceTrace | None) -> list[PacePair]:
-    """The top-level "lockstep_pairs" (checked by the schema but for what ties them to the entries and the
-    trace); [] when the file has none (an older file)."""
-    pairs, seen = [], {}
-    highest_mode = len(trace.modes) - 1 if trace else fields.OUTLIER_MODE
-    for index, pair in enumerate(document.get(fields.PAIRS_KEY, [])):
-        at = (fields.PAIRS_KEY, index)
-        comparison = pair["comparison"]
-        names = {}
-        for side in ("a", "b"):
-            key = parse_name(pair[side])
-            if not key.family:
-                fail(path, at + (side,), f"is {shown(pair[side])}: no benchmark family")
-            names[side] = (pair[side], key)
-        identity = (comparison, names["a"][1], names["b"][1])
-        if identity in seen:
-            fail(path, at, f"repeats entry {seen[identity]} (the same {comparison} pair of {names['a'][0]} and "
-                           f"{names['b'][0]}): a damaged or concatenated file")
-        seen[identity] = index
-        ratios, modes = tuple(pair["ratios"]), tuple(pair["modes"])
-        if len(modes) != len(ratios):
-            fail(path, at + ("modes",), f"has {len(modes)} values for {len(ratios)} ratios: one mode per pair")
-        for place, mode in enumerate(modes):
-            if mode > highest_mode:
-                where = (f"one of the {highest_mode + 1} modes of {fields.PACE_KEY} or -1" if trace
-                         else f"-1: the file has no {fields.PACE_KEY}")
-                fail(path, at + ("modes", place), f"is {shown(mode)}, not {where}")
-        if pair["ci_low"] > pair["ci_high"]:
-            fail(path, at + ("ci_low",), f"is {pair['ci_low']:g}, above ci_high {pair['ci_high']:g}")
-        pairs.append(PacePair(comparison, pair["group"], names["a"][0], names["b"][0], names["a"][1], names["b"][1],
-                              ratios, tuple(int(mode) for mode in modes), pair["median"], pair["ci_low"],
-                              pair["ci_high"], pair["confidence"], pair["noise"], pair["verdict"], pair["block_ms"]))
-    return pairs
+def _read_pairs(document: dict) -> list[PacePair]:
+    """The top-level "lockstep_pairs"; [] when the file has none (an older file)."""
+    return [PacePair(pair["comparison"], pair["group"], pair["a"], pair["b"], parse_name(pair["a"]),
+                     parse_name(pair["b"]), tuple(pair["ratios"]), tuple(int(mode) for mode in pair["modes"]),
+                     pair["median"], pair["ci_low"], pair["ci_high"], pair["confidence"], pair["noise"],
+                     pair["verdict"], pair["block_ms"])
+            for pair in document.get(fields.PAIRS_KEY, [])]
 
 
-def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
+def _read_scaling(document: dict) -> ScalingCurve | None:
     """The top-level "lockstep_scaling"; None when the file has none. Each point holds the curve's counter."""
     if fields.SCALING_KEY not in document:
         return None
     curve = document[fields.SCALING_KEY]
     counter = curve["counter"]
     points = []
-    for index, point in enumerate(curve["points"]):
-        if counter not in point:
-            fail(path, (fields.SCALING_KEY, "points", index, counter), "is missing: the curve's counter")
+    for point in curve["points"]:
         low, high = point.get("repetitions_min"), point.get("repetitions_max")
         points.append(ScalingPoint(point["sync"], int(point["threads"]), point["layout"], point["model"],
                                    point[counter], bool(point.get("oversubscribed")),
@@ -189,143 +130,54 @@ def _read_scaling(path: str, document: dict) -> ScalingCurve | None:
                         curve.get("best"), curve.get("c2c_one_way_ns"))
 
 
-def _headline_text(path: str, place: tuple, value) -> str:
-    if not isinstance(value, str):
-        fail(path, place, f"is {json_kind(value)}, not text")
-    return value
+def _float(value) -> float | None:
+    """A number the schema has checked, as the tools hold it (a float); None for null or missing."""
+    return None if value is None else float(value)
 
 
-def _headline_list(path: str, block: dict, key: str) -> list:
-    if key not in block:
-        fail(path, (fields.HEADLINE_KEY, key), "is missing")
-    if not isinstance(block[key], list):
-        fail(path, (fields.HEADLINE_KEY, key), f"is {json_kind(block[key])}, not a list")
-    return block[key]
-
-
-def _headline_object(path: str, place: tuple, raw) -> CheckedObject:
-    if not isinstance(raw, dict):
-        fail(path, place, f"is {json_kind(raw)}, not an object")
-    return CheckedObject(path, raw, schemas.json_path(place))
-
-
-def _headline_entry(path: str, place: tuple, item: CheckedObject) -> tuple[str, BenchmarkKey]:
-    name = _headline_text(path, place + ("entry",), item.get("entry", required=True))
-    key = parse_name(name)
-    if not key.family:
-        fail(path, place + ("entry",), f"is {shown(name)}: no benchmark family")
-    return name, key
-
-
-def _headline_threads(path: str, place: tuple, threads) -> int:
-    if not isinstance(threads, int) or isinstance(threads, bool) or not 1 <= threads <= fields.CPU_LIMIT:
-        fail(path, place, f"is {shown(threads)}, not a thread count (a whole number from 1)")
-    return threads
-
-
-def _headline_flag(path: str, place: tuple, item: CheckedObject, key: str) -> bool:
-    """An optional true or false (false when the key is missing: a file written before it)."""
-    value = item.get(key, required=False)
-    if value is not None and not isinstance(value, bool):
-        fail(path, place + (key,), f"is {json_kind(value)}, not true or false")
-    return bool(value)
-
-
-def _read_rival(path: str, place: tuple, raw) -> HeadlineRival | None:
+def _rival(raw: dict | None) -> HeadlineRival | None:
     """A recommendation's runner_up or baseline: null (none), or its entry and its paired ratio to the choice."""
     if raw is None:
         return None
-    item = _headline_object(path, place, raw)
-    entry, key = _headline_entry(path, place, item)
-    sync = _headline_text(path, place + ("sync",), item.get("sync", required=True))
-    median, low, high = (item.number(name, fields.SMALLEST_RATIO, fields.LARGEST_AMOUNT)
-                         for name in ("median", "ci_low", "ci_high"))
-    verdict = item.get("verdict", required=True)
-    if verdict not in fields.PAIR_VERDICTS:
-        fail(path, place + ("verdict",), f"is {shown(verdict)}, not one of {', '.join(fields.PAIR_VERDICTS)}")
-    return HeadlineRival(entry, key, sync, median, low, high, verdict)
+    return HeadlineRival(raw["entry"], parse_name(raw["entry"]), raw["sync"], float(raw["median"]),
+                         float(raw["ci_low"]), float(raw["ci_high"]), raw["verdict"])
 
 
-def _read_recommendation(path: str, here: tuple, raw) -> Recommendation:
-    """One of lockstep_headline.recommendations: what the table of choices shows, checked; the keys written
-    after the first headlines (spread, paces, runner-up, baseline, tied, ...) optional."""
-    item = _headline_object(path, here, raw)
-    texts = {}
-    for key in ("pin", "model", "entry", "sync", "layout", "basis"):
-        texts[key] = _headline_text(path, here + (key,), item.get(key, required=True))
-    if texts["basis"] not in fields.HEADLINE_BASES:
-        fail(path, here + ("basis",), f"is {shown(texts['basis'])}, not one of {', '.join(fields.HEADLINE_BASES)}")
-    threads = _headline_threads(path, here + ("threads",), item.get("threads", required=True))
-    entry, entry_key = _headline_entry(path, here, item)
-    step = item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")
-    paces = item.get("paces", required=False)
-    if paces is not None and (not isinstance(paces, int) or isinstance(paces, bool) or paces < 0):
-        fail(path, here + ("paces",), f"is {shown(paces)}, not a count of pace modes (a whole number from 0)")
-    leader = item.get("median_leader", required=False)
+def _recommendation(raw: dict) -> Recommendation:
+    """One of lockstep_headline.recommendations; the keys written after the first headlines (spread, paces,
+    runner-up, baseline, tied, ...) optional."""
     return Recommendation(
-        threads, texts["pin"], texts["model"], entry, entry_key, texts["sync"], texts["layout"], step, texts["basis"],
-        spread_pct=item.number("spread_pct", 0.0, fields.LARGEST_AMOUNT, required=False),
-        paces=paces, straddles_pace_change=_headline_flag(path, here, item, "straddles_pace_change"),
-        vs_c2c=item.number("vs_c2c", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
-        cpus_busy=item.number("cpus_busy", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
-        oversubscribed=_headline_flag(path, here, item, "oversubscribed"),
-        median_leader=_headline_text(path, here + ("median_leader",), leader) if leader is not None else "",
-        runner_up=_read_rival(path, here + ("runner_up",), item.value.get("runner_up")),
-        baseline=_read_rival(path, here + ("baseline",), item.value.get("baseline")),
-        tied=_headline_flag(path, here, item, "tied"))
+        raw["threads"], raw["pin"], raw["model"], raw["entry"], parse_name(raw["entry"]), raw["sync"], raw["layout"],
+        float(raw["ns_per_step"]), raw["basis"], spread_pct=_float(raw.get("spread_pct")), paces=raw.get("paces"),
+        straddles_pace_change=bool(raw.get("straddles_pace_change")), vs_c2c=_float(raw.get("vs_c2c")),
+        cpus_busy=_float(raw.get("cpus_busy")), oversubscribed=bool(raw.get("oversubscribed")),
+        median_leader=raw.get("median_leader") or "", runner_up=_rival(raw.get("runner_up")),
+        baseline=_rival(raw.get("baseline")), tied=bool(raw.get("tied")))
 
 
-def _read_answer(path: str, place: tuple, raw) -> HeadlineAnswer | None:
+def _answer(raw: dict | None) -> HeadlineAnswer | None:
     """lockstep_headline.answer, the answer first (None: a file written before it)."""
     if raw is None:
         return None
-    item = _headline_object(path, place, raw)
-    threads = _headline_threads(path, place + ("threads",), item.get("threads", required=True))
-    pin = _headline_text(path, place + ("pin",), item.get("pin", required=True))
-    entry, key = _headline_entry(path, place, item)
-    level = []
-    for index, raw_other in enumerate(item.value.get("level") or []):
-        other = _headline_object(path, place + ("level", index), raw_other)
-        level.append((_headline_threads(path, place + ("level", index, "threads"), other.get("threads", required=True)),
-                      _headline_text(path, place + ("level", index, "pin"), other.get("pin", required=True)),
-                      other.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns")))
-    return HeadlineAnswer(threads, pin, entry, key, item.number("ns_per_step", 0.0, fields.LONGEST_NS, unit=" ns"),
-                          item.number("serial_ns_per_step", 0.0, fields.LONGEST_NS, required=False, nullable=True,
-                                      unit=" ns"),
-                          item.number("vs_serial", 0.0, fields.LARGEST_AMOUNT, required=False, nullable=True),
-                          tuple(level))
+    level = tuple((other["threads"], other["pin"], float(other["ns_per_step"])) for other in raw.get("level") or [])
+    return HeadlineAnswer(raw["threads"], raw["pin"], raw["entry"], parse_name(raw["entry"]), float(raw["ns_per_step"]),
+                          _float(raw.get("serial_ns_per_step")), _float(raw.get("vs_serial")), level)
 
 
-def _read_headline(path: str, document: dict) -> Headline | None:
-    """The top-level "lockstep_headline"; None when the file has none (written before it). Read leniently (a
-    key it does not name is ignored) but whole: what it reads is checked here, whatever the schema says."""
+def _read_headline(document: dict) -> Headline | None:
+    """The top-level "lockstep_headline"; None when the file has none (written before it)."""
     if fields.HEADLINE_KEY not in document:
         return None
     block = document[fields.HEADLINE_KEY]
-    at = (fields.HEADLINE_KEY,)
-    if not isinstance(block, dict):
-        fail(path, at, f"is {json_kind(block)}, not an object")
-    lines = tuple(_headline_text(path, at + ("lines", index), line)
-                  for index, line in enumerate(_headline_list(path, block, "lines")))
-    if not lines:
-        fail(path, at + ("lines",), "is empty: a run's answer has at least its first line")
     collapsed, keys = [], set()
-    for index, name in enumerate(_headline_list(path, block, "collapsed")):
-        key = parse_name(_headline_text(path, at + ("collapsed", index), name))
-        if not key.family:
-            fail(path, at + ("collapsed", index), f"is {shown(name)}: no benchmark family")
+    for name in block["collapsed"]:
+        key = parse_name(name)
         if key not in keys:
             collapsed.append(name)
             keys.add(key)
-    recommendations = [_read_recommendation(path, at + ("recommendations", index), raw)
-                       for index, raw in enumerate(_headline_list(path, block, "recommendations"))]
-    crossover = block.get("crossover", [])
-    if not isinstance(crossover, list):
-        fail(path, at + ("crossover",), f"is {json_kind(crossover)}, not a list")
-    return Headline(lines, tuple(recommendations), tuple(collapsed), frozenset(keys),
-                    _read_answer(path, at + ("answer",), block.get("answer")),
-                    tuple(_headline_text(path, at + ("crossover", index), line)
-                          for index, line in enumerate(crossover)))
+    return Headline(tuple(block["lines"]), tuple(_recommendation(raw) for raw in block["recommendations"]),
+                    tuple(collapsed), frozenset(keys), _answer(block.get("answer")),
+                    tuple(block.get("crossover", [])))
 
 
 class _Entries:
@@ -418,8 +270,9 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
     context_values, warnings = read_context(path, label, document["context"])
     lockstep_schema = context_values.get("lockstep_schema")
     batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
-    pace = _read_pace(path, document)
-    pairs = _read_pairs(path, document, pace)
+    check_sections(path, document)
+    pace = _read_pace(document)
+    pairs = _read_pairs(document)
     entries = _Entries(path, pace, batch_times)
     for index, raw in enumerate(document["benchmarks"]):
         entries.read(index, raw)
@@ -431,14 +284,12 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs, scaling=_read_scaling(path, document), headline=_read_headline(path, document),
+                   pairs=pairs, scaling=_read_scaling(document), headline=_read_headline(document),
                    mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None,
-                   layouts=derived_reader.read_layouts(path, document),
-                   planned=derived_reader.read_planned(path, document),
-                   mode_medians=derived_reader.read_mode_medians(path, document, pace),
-                   rankings=derived_reader.read_rankings(path, document),
-                   model=derived_reader.read_model(path, document),
-                   answer=answer_reader.read_answer(path, document))
+                   layouts=derived_reader.read_layouts(document), planned=derived_reader.read_planned(document),
+                   mode_medians=derived_reader.read_mode_medians(document),
+                   rankings=derived_reader.read_rankings(document), model=derived_reader.read_model(document),
+                   answer=answer_reader.read_answer(document))
 
 
 def step_split(raw: dict) -> tuple[float, ...] | None:

@@ -25,6 +25,8 @@ from pathlib import Path
 SCHEMA_DIR = Path(__file__).resolve().parents[3] / "docs" / "schemas"
 # Every kind with a schema; a file without "kind" is a `lockstep run` file (Google Benchmark JSON).
 KINDS = ("run", "c2c", "delay", "falseshare", "migrate", "mpi", "verify", "topology")
+# The prefix of lockstep's own sections at a file's top level (lockstep_pace, lockstep_answer, ...).
+SECTION_PREFIX = "lockstep_"
 # The top-level lists whose entries are Google Benchmark's (NaN and infinities allowed in them).
 ENTRY_LISTS = ("benchmarks",)
 
@@ -135,6 +137,10 @@ def _message(error) -> tuple[list, str]:
         return path, f"has {len(value)} items, more than {expected}"
     if keyword == "minLength":
         return path, "is empty"
+    if keyword == "uniqueItems":
+        return path, "holds an item twice"
+    if keyword == "pattern" or error.schema.get("title") and keyword in ("anyOf", "oneOf"):
+        return path, f"is {shown(value)}, not {error.schema.get('title') or 'text of the form ' + str(expected)}"
     return path, " ".join(str(error.message).split())[:160]
 
 
@@ -163,13 +169,24 @@ def _marked(node, top: bool = True):
     return node
 
 
+def unnamed_sections(document, kind: str) -> list[str]:
+    """The top-level lockstep_* keys of a document that its kind's schema does not name (a run file's top level is
+    Google Benchmark's, open to its later keys; lockstep's own sections are each named)."""
+    if not isinstance(document, dict):
+        return []
+    named = _store()[schema_path(kind).as_uri()].get("properties", {})
+    return [key for key in document if str(key).startswith(SECTION_PREFIX) and key not in named]
+
+
 def problem(document, kind: str, strict: bool = False) -> str | None:
-    """The first thing wrong with a document of the kind, as "<json path>: <problem>"; None when it fits."""
+    """The first thing wrong with a document of the kind, as "<json path>: <problem>"; None when it fits. strict: also
+    a top-level lockstep_* section the schema does not name (a writer's section without its schema)."""
     import jsonschema
 
     error = jsonschema.exceptions.best_match(_validator(kind, strict).iter_errors(_marked(document)))
     if error is None:
-        return None
+        unnamed = unnamed_sections(document, kind) if strict else []
+        return f"{unnamed[0]}: a section {schema_path(kind).name} does not name" if unnamed else None
     if isinstance(error.instance, _NonFinite):
         return f"{json_path(error.absolute_path)}: is {error.instance}, not a finite number"
     path, text = _message(error)
