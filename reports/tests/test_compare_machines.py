@@ -54,8 +54,8 @@ class AnswerFirst(unittest.TestCase):
         for row in ("core-to-core, one way", "2 threads, pin:compact", "4 threads, pin:none", "  std_barrier takes",
                     "false sharing"):
             self.assertLess(line_index(out, row), 40, row)
-        recommended = lines[line_index(out, "2 threads, pin:compact")]
-        self.assertRegex(recommended, r"^2 threads, pin:compact +- +mailbox \+ per_thread$")
+        chosen = lines[line_index(out, "2 threads, pin:compact")]
+        self.assertRegex(chosen, r"^2 threads, pin:compact +- +mailbox \+ per_thread$")
         self.assertIn("767 ns", lines[line_index(out, "2 threads, pin:compact") + 1])
         self.assertLess(line_index(out, "Each machine's answer"), line_index(out, "What differs between the machines"))
         # no aggregate verdict reads the Debug times as the machine's
@@ -236,9 +236,9 @@ class TheAnswersParts(Scratch):
         self.assertNotIn("crossover", compared(XEON, AMD_DEBUG_QUICK))  # absent from both: not a word
 
     def test_the_patterns_lockstep_run_writes_are_read_as_written(self):
-        """The writer and the reader agree: lockstep run's own headline (headline_json in bench/run/answer.cpp,
+        """The writer and the reader agree: lockstep run's own answer (answer_json in bench/run/answer.cpp,
         whose output tests/run/run_fixture_test.cpp pins as tests/fixtures/run/quick-pairs.headline.json) read
-        through answer_reader gives each pattern's figures as the file holds them, named by the headline's words,
+        through answer_reader gives each pattern's figures as the file holds them, named by the answer's words,
         and compare shows them."""
         with open(LOCKSTEP_HEADLINE, encoding="utf-8") as stream:
             written = json.load(stream)

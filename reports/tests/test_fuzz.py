@@ -348,10 +348,10 @@ def mutate_json(rng, kind, base):
     # A negative value a field may hold: a signed counter's, or a mode's -1 (outlier, straddling, unknown).
     signed = kind == "negative number" and (path[-1] in fields.SIGNED_COUNTERS or path[-1] in fields.MODE_KEYS
                                             or (len(path) > 1 and path[-2] in fields.MODE_KEYS))
-    # The run's answer with a list emptied or an entry twice (a line, a recommendation) is another answer a run
-    # may give: its lines are shown as they are.
-    headline = kind in ("empty list", "duplicated entry") and bool(path) and path[0] == fields.HEADLINE_KEY
-    return Mutation(kind, text, "/".join(str(p) for p in path), other_value_allowed=signed or headline)
+    # The run's answer with a list emptied or an entry twice (a line, a choice) is another answer a run may give:
+    # its lines are shown as they are.
+    answer = kind in ("empty list", "duplicated entry") and bool(path) and path[0] in fields.ANSWER_KEYS
+    return Mutation(kind, text, "/".join(str(p) for p in path), other_value_allowed=signed or answer)
 
 
 def mutate_csv(rng, kind, text):

@@ -374,13 +374,13 @@ class PaceTraceAndPairs(unittest.TestCase):
                          {key: run.times_ns() for key, run in paced.runs.items()})
 
 
-class ReadingTheHeadline(Scratch):
-    def test_the_lines_recommendations_and_collapsed_entries_are_read(self):
+class ReadingTheAnswer(Scratch):
+    def test_the_lines_choices_and_collapsed_entries_are_read(self):
         run_file = load_run_file(fixture(HEADLINE))
         document = headline_document()["lockstep_headline"]
-        self.assertEqual(list(run_file.headline.lines), document["lines"])
-        self.assertEqual(len(run_file.headline.recommendations), len(document["recommendations"]))
-        first = run_file.headline.recommendations[0]
+        self.assertEqual(list(run_file.answer.lines), document["lines"])
+        self.assertEqual(len(run_file.answer.choices), len(document["recommendations"]))
+        first = run_file.answer.choices[0]
         self.assertEqual((first.threads, first.pin, first.model, first.basis), (2, "compact", "", "paired"))
         self.assertEqual(run_file.collapsed, frozenset(parse_name(name) for name in document["collapsed"]))
         self.assertIn(parse_name("rk4/sync:ck_tas/layout:packed/pin:none/threads:4"), run_file.collapsed)
@@ -389,25 +389,32 @@ class ReadingTheHeadline(Scratch):
         document = headline_document()
         block = document["lockstep_headline"]
         raw = block["recommendations"][0]
-        first = load_run_file(fixture(HEADLINE)).headline.recommendations[0]
+        first = load_run_file(fixture(HEADLINE)).answer.choices[0]
         self.assertFalse(first.tied)  # a file written before the key: no tie
         self.assertEqual((first.runner_up.entry, first.runner_up.median, first.runner_up.verdict),
                          (raw["runner_up"]["entry"], raw["runner_up"]["median"], raw["runner_up"]["verdict"]))
         self.assertEqual(first.baseline.sync, raw["baseline"]["sync"])
         self.assertEqual(first.spread_pct, raw["spread_pct"])
-        self.assertIsNone(load_run_file(fixture(HEADLINE)).headline.answer)
+        self.assertIsNone(load_run_file(fixture(HEADLINE)).answer.best)
         raw["tied"] = True
         block["answer"] = {"model": "", "threads": 2, "pin": "compact", "entry": raw["entry"], "ns_per_step": 316.9,
                            "serial_ns_per_step": 182.0, "vs_serial": 1.74, "a_later_key": 1}
-        headline = load_run_file(self.write("tied.json", document)).headline
-        self.assertTrue(headline.recommendations[0].tied)
-        self.assertEqual((headline.answer.threads, headline.answer.pin, headline.answer.entry,
-                          headline.answer.ns_per_step, headline.answer.serial_ns_per_step, headline.answer.vs_serial),
+        answer = load_run_file(self.write("tied.json", document)).answer
+        self.assertTrue(answer.choices[0].tied)
+        self.assertEqual((answer.best.threads, answer.best.pin, answer.best.entry,
+                          answer.best.ns_per_step, answer.best.serial_ns_per_step, answer.best.vs_serial),
                          (2, "compact", raw["entry"], 316.9, 182.0, 1.74))
+
+    def test_it_reads_the_same_under_its_name_and_its_earlier_one(self):
+        """lockstep_answer, and lockstep_headline in a file written before that name: the same answer."""
+        document = headline_document()
+        document["lockstep_answer"] = document.pop("lockstep_headline")
+        self.assertEqual(load_run_file(self.write("answer.json", document)).answer,
+                         load_run_file(fixture(HEADLINE)).answer)
 
     def test_a_file_without_it_reads_as_before(self):
         run_file = load_run_file(fixture("paced_a.json"))
-        self.assertIsNone(run_file.headline)
+        self.assertIsNone(run_file.answer)
         self.assertEqual(run_file.collapsed, frozenset())
 
     def test_unknown_keys_are_ignored(self):
@@ -415,7 +422,7 @@ class ReadingTheHeadline(Scratch):
         document["lockstep_headline"]["a_later_key"] = {"anything": [1, 2]}
         document["lockstep_headline"]["recommendations"][0]["a_later_key"] = "text"
         run_file = load_run_file(self.write("later.json", document))
-        self.assertEqual(run_file.headline, load_run_file(fixture(HEADLINE)).headline)
+        self.assertEqual(run_file.answer, load_run_file(fixture(HEADLINE)).answer)
 
     def test_what_it_reads_is_checked_in_one_line(self):
         def set_line(block):

@@ -492,9 +492,9 @@ class CpuPerStep(Scratch):
         run_file = load_run_file(fixture(CPU_SPLIT))
         points = matrix.cpu_points(run_file, "rk4", run_file.collapsed)
         captured = []
-        recommended = frozenset(item.entry_key for item in run_file.headline.recommendations)
+        chosen = frozenset(item.entry_key for item in run_file.answer.choices)
         with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
-            figures.cpu_against_time(points, "step", 2, recommended)
+            figures.cpu_against_time(points, "step", 2, chosen)
         panels = captured[0].axes
         self.assertEqual([axes.get_title() for axes in panels], ["2 threads", "4 threads on 2 CPUs"])
         for axes, threads in zip(panels, (2, 4)):
@@ -516,7 +516,7 @@ class CpuPerStep(Scratch):
         self.assertIn("ck_tas (padded128)", [text.get_text() for text in panels[0].texts])  # the fastest
         ringed = {(float(line.get_xdata()[0]), float(line.get_ydata()[0])) for axes in panels for line in axes.lines
                   if line.get_markeredgecolor() == "#d62728"}
-        self.assertEqual(ringed, {(point.unit_ns, point.team_cpu_ns) for point in points if point.key in recommended})
+        self.assertEqual(ringed, {(point.unit_ns, point.team_cpu_ns) for point in points if point.key in chosen})
         self.assertEqual(len(ringed), 4)  # one per placement and thread count
 
     def test_the_report_shows_it_with_what_a_user_reads_from_it(self):
@@ -589,7 +589,7 @@ class CpuPerStep(Scratch):
         by_key = {point.key: point for point in points}
         with open(fixture(REAL_SPLIT), encoding="utf-8") as stream:
             written = json.load(stream)["lockstep_headline"]["recommendations"]
-        for read, raw in zip(run_file.headline.recommendations, written):
+        for read, raw in zip(run_file.answer.choices, written):
             self.assertEqual(by_key[read.entry_key].cpus_busy, raw["cpus_busy"], read.entry)
         html, markdown = self.report(fixture(REAL_SPLIT))
         self.assertIn('<figure id="cpu-0-rk4"', html)
@@ -715,7 +715,7 @@ class Crossover(Scratch):
 
     def test_the_figure_draws_each_series_its_serial_step_its_model_and_its_crossover(self):
         run_file = load_run_file(fixture(CROSSOVER_A))
-        series = run_file.answer.crossovers
+        series = run_file.crossover.crossovers
         captured = []
         with mock.patch.object(figures, "to_svg", side_effect=lambda figure: captured.append(figure) or "<svg/>"):
             report.crossover_section(run_file, [0])
@@ -743,7 +743,7 @@ class Crossover(Scratch):
         self.assertEqual(len(written), 1)
         ceiling_line = next(line for line in document["lockstep_headline"]["crossover"] if line.startswith("Ceiling"))
         run_file = load_run_file(fixture(CROSSOVER_CEILING))
-        (ceiling,) = run_file.answer.sweep.ceilings
+        (ceiling,) = run_file.crossover.ceilings
         self.assertEqual((ceiling.threads, ceiling.pin), (written[0]["threads"], written[0]["pin"]))
         measured = [point for point in ceiling.points if point.measured]
         self.assertTrue(measured)
@@ -755,7 +755,7 @@ class Crossover(Scratch):
         self.assertEqual(drawn.get_linestyle(), "-.")
         self.assertEqual(list(drawn.get_ydata()), [point.blocks_ns for point in measured])
         # Each series point's share of it, as written.
-        shares = [point.of_ceiling for series in run_file.answer.crossovers for point in series.points]
+        shares = [point.of_ceiling for series in run_file.crossover.crossovers for point in series.points]
         self.assertEqual(shares, [point.get("of_ceiling") for series in document["lockstep_crossover"]["crossovers"]
                                   for point in series["points"]])
         self.assertTrue(any(share is not None for share in shares))

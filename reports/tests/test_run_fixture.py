@@ -19,7 +19,7 @@ from lockstep_reports.read import inputs, run_file, run_reader
 
 FIXTURE = os.path.join(REPORTS_DIR.parent, "tests", "fixtures", "run", "quick-pairs.json")
 
-# "1.24x [1.17, 1.33] penalty": a paired figure as the summary and the headline print it.
+# "1.24x [1.17, 1.33] penalty": a paired figure as the summary and the answer print it.
 PAIRED_FIGURE = re.compile(r"\d+\.\d\dx \[\d+\.\d\d, \d+\.\d\d\] (?:penalty|gain|within noise|unsure)")
 
 
@@ -83,15 +83,14 @@ class RunFixture(unittest.TestCase):
             with self.subTest(f"{pair.a} / {pair.b}", cells=cells):
                 self.assertTrue(any(all(cell in row for cell in cells) for row in rows))
 
-    def test_every_figure_of_the_headline_is_a_pairs_or_the_probes(self):
-        """The headline (the summary's last lines, shown verbatim by the report) prints paired figures: each is
+    def test_every_figure_of_the_answer_is_a_pairs_or_the_probes(self):
+        """The answer (the summary's last lines, shown verbatim by the report) prints paired figures: each is
         a recomputed pair's, read either way round, or the false-sharing probe's, whose verdict is the rule's."""
         known = set()
         for pair in self.recomputed:
             for view in (pair, pair.inverse()):
                 known.add(figure(view.median, view.ci_low, view.ci_high, view.verdict))
-        headline = self.run_file.headline
-        self.assertIsNotNone(headline)
+        self.assertIsNotNone(self.run_file.answer)
         _, document = inputs.read_document(FIXTURE)
         # The plain stores' figure (false_sharing_probe) and, in files that have them, every access pattern's.
         probes = [document["lockstep_headline"].get("false_sharing_probe")]
@@ -101,7 +100,7 @@ class RunFixture(unittest.TestCase):
             # kDefaultNoise; bench/probe_reports/falseshare_report.cpp).
             self.assertEqual(statistics.verdict(probe["ci_low"], probe["ci_high"], 0.05), probe["verdict"])
             known.add(figure(probe["median"], probe["ci_low"], probe["ci_high"], probe["verdict"]))
-        found = [match for line in headline.lines for match in PAIRED_FIGURE.findall(line)]
+        found = [match for line in self.run_file.answer.lines for match in PAIRED_FIGURE.findall(line)]
         self.assertTrue(found)
         for match in found:
             self.assertIn(match, known)

@@ -16,6 +16,8 @@ RUN_FILES = sorted([*(REPORTS_DIR.parent / "tests" / "fixtures" / "run").glob("*
 # The sections no kept file holds, and what holds them instead.
 HELD_ELSEWHERE = {
     "lockstep_scaling": "a --scaling run: reports.schema.run's scaling shape (tests/reports/check_result_schemas.py)",
+    "lockstep_answer": "the answer's name since the typed entry; the kept files hold it as lockstep_headline, and "
+                       "test_inputs.ReadingTheAnswer reads one moved to it",
 }
 # A stand-in for what the sections sit beside: the context and the entries have their own tests.
 BESIDE = {"context": {}, "benchmarks": [{"name": "rk4/serial", "run_type": "iteration", "time_unit": "ns",

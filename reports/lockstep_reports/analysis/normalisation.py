@@ -67,7 +67,7 @@ def rk4_keys(run_files: list[RunFile]) -> list[BenchmarkKey]:
 
 def layout_effects(run_files: list[RunFile], reference: str | None, time_kind: str = "real"):
     """Rows (sync, pin, threads, layout, [speed-up over the reference layout per file]); a file where either
-    entry collapsed (its headline's) has none. The reference is the layout whose writers share lines
+    entry collapsed (its answer's) has none. The reference is the layout whose writers share lines
     (run_analysis.sharing_layout); None: no rows."""
     rows = []
     if reference is None:
@@ -86,7 +86,7 @@ def layout_effects(run_files: list[RunFile], reference: str | None, time_kind: s
 
 def rank_tables(run_files: list[RunFile], time_kind: str = "real", top: int = 10):
     """{(pin, threads): [per file: [(sync/layout, median ns, x serial), ...] fastest first]}; the entries a
-    file's headline calls collapsed are not ranked."""
+    file's answer calls collapsed are not ranked."""
     groups: dict[tuple[str, int], list] = {}
     for key in rk4_keys(run_files):
         group = (key.get("pin") or "", key.threads or 0)

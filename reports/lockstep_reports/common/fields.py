@@ -106,11 +106,14 @@ PER_REPETITION_COUNTERS = (SYNC_COUNTER, VS_C2C_COUNTER)
 PACE_KEY = "lockstep_pace"  # top level: {reference, cpus, readings, modes, changes, summary}
 PAIRS_KEY = "lockstep_pairs"  # top level: the paired ratios, one object per ratio the summary prints
 SCALING_KEY = "lockstep_scaling"  # top level (run --scaling): {pin, counter, threads, points, best, c2c_one_way_ns}
-# top level: the run's answer (bench/run/answer.hpp): {lines, recommendations, collapsed, ...}; a file
-# written before it has none and reads as before.
-HEADLINE_KEY = "lockstep_headline"
-# How a recommendation was chosen (lockstep_headline.recommendations[].basis).
-HEADLINE_BASES = ("paired", "medians")
+# top level: the run's answer (bench/run/answer.hpp): {lines, recommendations (its choices), collapsed, ...}; a
+# file written before it has none and reads as before, and one written before the key had its name held the answer
+# as lockstep_headline, which reads the same.
+ANSWER_KEY = "lockstep_answer"
+OLDER_ANSWER_KEY = "lockstep_headline"
+ANSWER_KEYS = (ANSWER_KEY, OLDER_ANSWER_KEY)
+# How a choice was made (the answer's recommendations[].basis).
+CHOICE_BASES = ("paired", "medians")
 # top level (run --crossover): {crossovers, ceilings, lines, budget_s, ...}
 CROSSOVER_KEY = "lockstep_crossover"
 # What the run derived for the tools (derived_reader.py), each at the top level but the last (inside PACE_KEY).

@@ -34,7 +34,7 @@ repetition's time divided by the c2c reading taken around it (pace_c2c_ns)
 to the power of its cluster's elasticity (pace_elasticities: how far the
 cluster's times follow the readings inside each run; a sleeping primitive's
 barely do).
-The headline count of changed entries counts what changed beyond the pace:
+The summary's count of changed entries counts what changed beyond the pace:
 the pace-aware verdict where there is one, else the raw one.
 
 More evidence at the same run time, the drift kept in (statistics.py,
@@ -57,7 +57,7 @@ primitive at one thread count), then the entries of each drawn cluster, because
 between two runs whole clusters drift together: a block of primitives that
 slowed reads as spread, a shift common to every cluster stays tight. A group of
 fewer than MIN_AGGREGATE_CLUSTERS clusters (a primitive's own) also carries the
-file pair's spread of whole clusters (cluster_drifts), which it cannot show. Entries that either file's headline
+file pair's spread of whole clusters (cluster_drifts), which it cannot show. Entries that either file's answer
 calls collapsed (they ran oversubscribed at 100 times the best of their kind
 or more, with one repetition) are "collapsed", never "untested", and stay out
 of the aggregates and --fail-above.

@@ -380,12 +380,12 @@ def _counts_lines(comparison: Comparison) -> list[str]:
         unpaced = len(comparison.rows) - len(paced_rows)
         out.append(f"pace-aware verdicts: {_counts_text(pace_counts)} ({methods}"
                    + (f"; {unpaced} {UNAVAILABLE}" if unpaced else "") + ")")
-    headline = comparison.pace_verdict_counts()
+    beyond = comparison.pace_verdict_counts()
     _, discovered = comparison.discoveries(comparison.beyond_pace)
     what = ("beyond the pace (pace-aware verdicts; the raw one where an entry has no pace)" if comparison.paced
             else f"(raw verdicts: pace {UNAVAILABLE})")
-    out.append(f"changed {what}: {headline['slower'] + headline['faster']} of {len(comparison.rows)} "
-               f"({headline['slower']} slower, {headline['faster']} faster; {discovered} of them with BH q < alpha "
+    out.append(f"changed {what}: {beyond['slower'] + beyond['faster']} of {len(comparison.rows)} "
+               f"({beyond['slower']} slower, {beyond['faster']} faster; {discovered} of them with BH q < alpha "
                f"{comparison.alpha:g})")
     return out
 

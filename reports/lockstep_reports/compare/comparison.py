@@ -77,7 +77,7 @@ class Row:
     counters: dict[str, tuple[float | None, float | None]] = field(default_factory=dict)
     measure: str = "time"  # what median_a / median_b are: "time", or a counter's name
     pace: PaceAware | None = None  # None: a file without the pace trace, or a repetition without its pace
-    collapsed: bool = False  # either file's headline calls it collapsed: no verdict, no aggregate, no gate
+    collapsed: bool = False  # either file's answer calls it collapsed: no verdict, no aggregate, no gate
 
     def significant(self, alpha: float) -> bool:
         return self.p_adjusted is not None and self.p_adjusted < alpha
@@ -315,7 +315,7 @@ class Comparison:
         return self._counts(self.verdict)
 
     def pace_verdict_counts(self) -> dict[str, int]:
-        """The headline: what changed beyond the pace (pace-aware where available, else raw)."""
+        """The summary's count: what changed beyond the pace (pace-aware where available, else raw)."""
         return self._counts(self.beyond_pace)
 
     def discoveries(self, verdict_of_row) -> tuple[int, int]:

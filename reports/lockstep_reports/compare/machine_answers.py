@@ -1,9 +1,9 @@
 """Each machine's answer side by side, one column per file (compare across machines opens with it): per thread
-count and placement the combination its run recommends with its step and the baseline set against it, the crossover
+count and placement the combination its run chose with its step and the baseline set against it, the crossover
 where the file has one, core-to-core latency, false sharing (the probe, and per access pattern where the file has
 them), migration; then what differs between the machines.
 
-Every figure is the file's own (lockstep_headline, lockstep_crossover and the context, read by run_reader.py and
+Every figure is the file's own (its answer, lockstep_crossover and the context, read by run_reader.py and
 answer_reader.py): nothing is recomputed here, so each machine's answer reads as its own run printed it.
 """
 from __future__ import annotations
@@ -15,8 +15,8 @@ from ..common.fields import (BUILD_TYPE_CONTEXT, C2C_CONTEXT, MACHINE_KEYS, MODE
 from ..common.formatting import crossover_interval, format_ns
 from ..common.text_layout import WIDTH, column_width, table
 from ..common.words import PIN_ORDER
-from ..read.answer_reader import Ceiling, Crossover, PairedRatio, RunAnswer
-from ..read.run_file import Recommendation, RunFile
+from ..read.run_answer import Answer, Ceiling, Choice, Crossover, CrossoverSweep, PairedRatio, Rival
+from ..read.run_file import RunFile
 from .comparability import letter, unoptimised
 
 # The files side by side in one table; more go into a second table below.
@@ -25,7 +25,7 @@ COLUMNS = 4
 ABSENT = "-"
 # What the machines' differences show beside the CPU model (which the answers' first row shows).
 MACHINE_DETAIL = tuple(key for key in MACHINE_KEYS if key != "cpu_model") + ("mhz_per_cpu",)
-# A paired verdict (statistics.VERDICTS) in the words of each ratio: the baseline's step over the recommended
+# A paired verdict (statistics.VERDICTS) in the words of each ratio: the baseline's step over the chosen
 # one's, and an access's time on one shared cache line over its time on lines apart.
 BASELINE_WORDS = {statistics.GAIN: "faster", statistics.WITHIN_NOISE: "a tie", statistics.UNSURE: "unsure"}
 FALSE_SHARING_WORDS = {statistics.GAIN: "one line faster",
@@ -37,7 +37,7 @@ def _figure(value: float) -> str:
     return f"{value:#.3g}" if value < 100 else f"{value:.0f}"
 
 
-def paired_text(ratio: PairedRatio | None, words: dict[str, str]) -> str:
+def paired_text(ratio: PairedRatio | Rival | None, words: dict[str, str]) -> str:
     """"11.4x [5.98, 25.3]": the median and its interval, and the verdict in words where it is not the penalty
     the ratio's own words say ("1.03x [0.91, 1.09], a tie"); "-" for none."""
     if ratio is None:
@@ -51,21 +51,18 @@ def paired_text(ratio: PairedRatio | None, words: dict[str, str]) -> str:
     return text + (f", {words.get(ratio.verdict, ratio.verdict)}" if shown else "")
 
 
-def _answer(run_file: RunFile) -> RunAnswer:
-    return run_file.answer or RunAnswer()
+def _answer(run_file: RunFile) -> Answer:
+    """The file's answer; Answer() (nothing in it) for a file written before it."""
+    return run_file.answer or Answer()
 
 
-def _choices(run_file: RunFile) -> dict[tuple, tuple[Recommendation, PairedRatio | None, bool | None]]:
-    """{(model, threads, pin): (the recommendation, its baseline, oversubscribed)} of a file's headline."""
-    if run_file.headline is None:
-        return {}
-    answer = _answer(run_file)
-    result = {}
-    for index, choice in enumerate(run_file.headline.recommendations):
-        baseline = answer.baselines[index] if index < len(answer.baselines) else None
-        crowded = answer.oversubscribed[index] if index < len(answer.oversubscribed) else None
-        result[(choice.model, choice.threads, choice.pin)] = (choice, baseline, crowded)
-    return result
+def _crossovers_of(run_file: RunFile) -> tuple[Crossover, ...]:
+    return run_file.crossover.crossovers if run_file.crossover else ()
+
+
+def _choices(run_file: RunFile) -> dict[tuple, Choice]:
+    """{(model, threads, pin): the choice} of a file's answer."""
+    return {(choice.model, choice.threads, choice.pin): choice for choice in _answer(run_file).choices}
 
 
 def _group_order(group: tuple) -> tuple:
@@ -86,12 +83,12 @@ def _build(run_file: RunFile) -> str:
     return f"{build}, {run}" + (" (not the machine's times)" if unoptimised(run_file) else "")
 
 
-def _combination(choice: Recommendation) -> str:
+def _combination(choice: Choice) -> str:
     return f"{choice.sync} + {choice.layout}" if choice.layout else choice.sync
 
 
 def _crowded(run_file: RunFile, group: tuple) -> str:
-    """" (4 threads on 2 CPUs)": a recommendation that ran with more threads than its machine's CPUs."""
+    """" (4 threads on 2 CPUs)": a choice that ran with more threads than its machine's CPUs."""
     cpus = run_file.context.get("num_cpus")
     return f" ({group[1]} on {cpus} CPUs)" if cpus else " (more threads than CPUs)"
 
@@ -119,19 +116,19 @@ def _crossover_text(crossover: Crossover) -> str:
 def _crossovers(run_file: RunFile) -> dict[tuple, str]:
     """{(model, threads, pin): the file's crossovers there, in words}; the crossover's model is the paper's."""
     found: dict[tuple, list[str]] = {}
-    for crossover in _answer(run_file).crossovers:
+    for crossover in _crossovers_of(run_file):
         found.setdefault(("", crossover.threads, crossover.pin), []).append(_crossover_text(crossover))
     return {group: "; ".join(texts) for group, texts in found.items()}
 
 
-def ceiling_words(answer: RunAnswer, ceiling: Ceiling) -> str | None:
+def ceiling_words(sweep: CrossoverSweep, ceiling: Ceiling) -> str | None:
     """A file's ceiling as its ceiling line quotes it: "1.82x [1.74, 1.91] at 32 masses, LEADER 0.87 of it" (the
     leader: the run's choice there); None where it measured nothing."""
     point = ceiling.quoted()
     if point is None:
         return None
     words = f"{point.speedup:.2f}x [{point.ci_low:.2f}, {point.ci_high:.2f}] at {point.masses} masses"
-    for crossover in answer.crossovers:
+    for crossover in sweep.crossovers:
         if crossover.threads == ceiling.threads and crossover.pin == ceiling.pin and crossover.leader:
             reached = next((p for p in crossover.points if p.masses == point.masses and p.of_ceiling is not None), None)
             if reached:
@@ -141,10 +138,10 @@ def ceiling_words(answer: RunAnswer, ceiling: Ceiling) -> str | None:
 
 def _ceilings(run_file: RunFile) -> dict[tuple, str]:
     """{(model, threads, pin): the file's ceiling there, in words} (ceiling_words)."""
-    answer = _answer(run_file)
+    sweep = run_file.crossover
     found = {}
-    for ceiling in answer.sweep.ceilings if answer.sweep else ():
-        words = ceiling_words(answer, ceiling)
+    for ceiling in sweep.ceilings if sweep else ():
+        words = ceiling_words(sweep, ceiling)
         if words:
             found[("", ceiling.threads, ceiling.pin)] = words
     return found
@@ -155,7 +152,7 @@ def crossover_lines(files: list[RunFile]) -> list[str]:
     primitive each file's crossover as it wrote it, side by side (one column per file, its letter); none
     otherwise. Compare between runs of one machine shows it (across machines the answers' table has the
     crossover rows)."""
-    found = [{(c.threads, c.pin, c.sync): crossover_words(c) for c in _answer(run_file).crossovers}
+    found = [{(c.threads, c.pin, c.sync): crossover_words(c) for c in _crossovers_of(run_file)}
              for run_file in files]
     if sum(1 for each in found if each) < 2:
         return []
@@ -172,26 +169,27 @@ def crossover_lines(files: list[RunFile]) -> list[str]:
             + table(headings, rows, width=WIDTH))
 
 
-def _recommendation_rows(files: list[RunFile]) -> list[list[str]]:
-    """Per model, thread count and placement any file answers for: the combination it recommends, its step, the
+def _choice_rows(files: list[RunFile]) -> list[list[str]]:
+    """Per model, thread count and placement any file answers for: the combination it chose, its step, the
     baseline set against it, and the crossover where the file has one."""
     choices = [_choices(run_file) for run_file in files]
     crossovers = [_crossovers(run_file) for run_file in files]
     ceilings = [_ceilings(run_file) for run_file in files]
     rows = []
     for group in sorted({group for found in choices + crossovers for group in found}, key=_group_order):
-        picked = [found.get(group) for found in choices]  # (recommendation, baseline, oversubscribed) or None
+        picked = [found.get(group) for found in choices]  # a choice or None
         # A group only a crossover names keeps its title (rows of nothing but ABSENT are left out).
-        rows.append([_group_label(group)] + [_combination(p[0]) if p else ABSENT if any(picked) else ""
+        rows.append([_group_label(group)] + [_combination(p) if p else ABSENT if any(picked) else ""
                                              for p in picked])
-        rows.append(["  a step"] + [format_ns(p[0].ns_per_step, 3) + (_crowded(run_file, group) if p[2] else "")
+        rows.append(["  a step"] + [format_ns(p.ns_per_step, 3) + (_crowded(run_file, group) if p.oversubscribed
+                                                                   else "")
                                     if p else ABSENT for p, run_file in zip(picked, files)])
-        names = {p[1].name for p in picked if p and p[1]}
+        names = {p.baseline.sync for p in picked if p and p.baseline}
         if names:
             one = len(names) == 1
             rows.append([f"  {next(iter(names))} takes" if one else "  the baseline takes"]
-                        + [ABSENT if not (p and p[1]) else paired_text(p[1], BASELINE_WORDS) if one
-                           else f"{p[1].name} {paired_text(p[1], BASELINE_WORDS)}" for p in picked])
+                        + [ABSENT if not (p and p.baseline) else paired_text(p.baseline, BASELINE_WORDS) if one
+                           else f"{p.baseline.sync} {paired_text(p.baseline, BASELINE_WORDS)}" for p in picked])
         rows.append(["  crossover"] + [found.get(group, ABSENT) for found in crossovers])
         if any(found.get(group) for found in ceilings):
             rows.append(["  the ceiling"] + [found.get(group, ABSENT) for found in ceilings])
@@ -225,12 +223,12 @@ def _rows(files: list[RunFile]) -> list[list[str]]:
     rows = [["CPU"] + [f"{f.context.get('cpu_model') or UNAVAILABLE}, {f.context.get('num_cpus') or '?'} CPUs"
                        for f in files],
             ["build, run"] + [_build(f) for f in files]]
-    if any(f.headline is None for f in files):
-        rows.append(["the run's answer"] + ["in the file" if f.headline else "none: the file predates it"
+    if any(f.answer is None for f in files):
+        rows.append(["the run's answer"] + ["in the file" if f.answer else "none: the file predates it"
                                             for f in files])
     rows += [["core-to-core, one way"] + [_calibration_cell(f, C2C_CONTEXT) for f in files],
              ["serial RK4 step"] + [_calibration_cell(f, SERIAL_CONTEXT) for f in files]]
-    rows += _recommendation_rows(files) + _probe_rows(files)
+    rows += _choice_rows(files) + _probe_rows(files)
     return [row for row in rows if any(cell != ABSENT for cell in row[1:])]
 
 

@@ -1,7 +1,7 @@
 """A comparison whose sides hold several runs each (`lockstep run --runs K`, a directory or comma list a side).
 
 merged_side joins a side's runs into one RunFile (every repetition of every run, the first run's context and
-headline; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
+answer; no pace trace: each run has its own modes) for compare_pair's rows, medians and counters. Then
 apply_replicates replaces each entry's verdict interval with the one from the variance between runs
 (replicates.py: each run's median log time is one observation, the runs' spread moderated over the entries), the
 aggregates likewise on each run's mean over a group's entries of those medians, states the smallest uniform change

@@ -1,180 +1,32 @@
-"""The parts of a run's answer that compare sets side by side across machines, as the run's file states them
-(nothing here is recomputed): each recommendation's baseline (the primitive `lockstep run` sets against the
-chosen one, paired) and whether it ran oversubscribed, the known-answer probes (false sharing, migration),
-false sharing per access pattern, and the crossover (the model size from which a parallel step pays off), whose
-series and points the report draws (report.crossover_section).
+"""The run's answer and its crossover sweep, as the run's file states them (nothing here is recomputed): the
+answer's lines, choices (each with its runner-up and baseline, paired), collapsed entries, the answer first, the
+crossover's lines and the known-answer probes (false sharing, per access pattern, migration); the sweep's series,
+points and ceilings, which the report draws (report.crossover_section). run_answer.py holds what they read into.
 
-Their shapes are docs/schemas/run.schema.json's, checked with the rest of the file before they are read
-(inputs.read_document), and what a schema cannot say (an interval in order, a measured speedup within its interval)
-in run_checks.py: this module only builds them. A file without a part reads without it:
-`lockstep_headline.false_sharing_patterns` (false sharing per access pattern) is written by `lockstep run` since
-the probe measures each pattern (headline_json in bench/run/answer.cpp; tests/fixtures/run/quick-pairs.headline.json
-is its output), the top-level `lockstep_crossover` by `lockstep run --crossover` (crossover_json in
-bench/run/crossover.cpp; reports/tests/fixtures/crossover_a.json is its output). A crossover in the shape this
-reader was written ahead of the writer for, {threads, pin, sync, masses, ci_low, ci_high}, still reads (its status,
-layout and points empty). Their shapes are the ones below, in docs/schemas/run.schema.json and in reports/README.md
-("compare", across machines).
+The answer is the file's lockstep_answer; a file written before that name holds it as lockstep_headline and reads
+the same (ANSWER_KEYS). Their shapes are docs/schemas/run.schema.json's, checked with the rest of the file before
+they are read (inputs.read_document), and what a schema cannot say (an interval in order, a measured speedup within
+its interval) in run_checks.py: this module only builds them. A file without a part reads without it:
+false sharing per access pattern is written by `lockstep run` since the probe measures each pattern (answer_json
+in bench/run/answer.cpp; tests/fixtures/run/quick-pairs.headline.json is its output), the top-level
+`lockstep_crossover` by `lockstep run --crossover` (crossover_json in bench/run/crossover.cpp;
+reports/tests/fixtures/crossover_a.json is its output). A crossover in the shape this reader was written ahead of the
+writer for, {threads, pin, sync, masses, ci_low, ci_high}, still reads (its status, layout and points empty).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from ..common import fields
+from ..common.names import parse_name
+from .run_answer import (Answer, BestChoice, Ceiling, CeilingPoint, Choice, Crossover, CrossoverPoint, CrossoverSweep,
+                         Migration, PairedRatio, Rival)
 
-HEADLINE = fields.HEADLINE_KEY
-# In lockstep_headline: [{pattern, median, ci_low, ci_high, verdict}, with `words`, the pattern as the headline
-# names it ("atomic read-modify-writes"), where lockstep run wrote them].
+# In the answer: [{pattern, median, ci_low, ci_high, verdict}, with `words`, the pattern as the answer names it
+# ("atomic read-modify-writes"), where lockstep run wrote them].
 PATTERNS_KEY = "false_sharing_patterns"
 PATTERN_WORDS = "words"
-CROSSOVER_KEY = fields.CROSSOVER_KEY  # top level: {crossovers: [{threads, sync, masses, ci_low, ci_high, pin}]}
 # What a crossover's status may say (docs/schemas/run.schema.json; bench/run/crossover.cpp, to_string): "" where
 # the file has no status (written ahead of the writer, in the shape above).
 CROSSOVER_STATUSES = ("crossed", "crossed_unconfirmed", "none_within_sweep", "always")
-
-
-@dataclass(frozen=True)
-class PairedRatio:
-    """A ratio measured as a pair, with its interval and verdict (fields.PAIR_VERDICTS' words as the file wrote
-    them): a recommendation's baseline (its step over the chosen one's; `name` the baseline's primitive), a
-    false-sharing probe or pattern (an access's time on one shared line over its time on lines apart; `name` the
-    pattern, in the headline's words where the file has them). median None: the file says it could not be
-    measured."""
-
-    name: str
-    median: float | None
-    ci_low: float | None
-    ci_high: float | None
-    verdict: str | None
-
-
-@dataclass(frozen=True)
-class Migration:
-    """lockstep_headline.migration_probe: the medians of a forced move between two CPUs and of refilling the
-    cache after it."""
-
-    move_ns: float
-    refill_ns: float
-    cpus: str
-
-
-@dataclass(frozen=True)
-class CrossoverPoint:
-    """One size of a crossover series (lockstep_crossover.crossovers[].points[]), as the run wrote it: the chain of
-    `masses` masses, its serial step and the series' parallel step (medians of the pairs), the paired speedup
-    serial / parallel with its interval and verdict, the pairs it stands on, and the model's step (serial / T +
-    the stages' syncs; None: the file has none there) with the measured step over it. `failure` non-empty: no
-    speedup was measured at this size, and why (its numbers are then the writer's zeros, never drawn)."""
-
-    masses: int
-    serial_ns: float
-    parallel_ns: float
-    speedup: float
-    ci_low: float
-    ci_high: float
-    verdict: str | None
-    pairs: int
-    pairs_set_aside: int
-    model_ns: float | None
-    measured_over_model: float | None
-    failure: str
-    of_ceiling: float | None = None  # its speedup over the ceiling's at this size (None: not measured, or no ceiling)
-
-    @property
-    def measured(self) -> bool:
-        """A speedup was measured here (bench/run/crossover.hpp, crossover_sweep_point::measured)."""
-        return not self.failure and self.pairs > 0
-
-
-@dataclass(frozen=True)
-class CeilingPoint:
-    """One size of the machine's ceiling (lockstep_crossover.ceilings[].points[]): the serial step paired with the
-    chain's blocks stepped at once with no exchange and no sync (blocks_ns), the speedup serial / blocks with its
-    interval; `failure` non-empty: not measured here."""
-
-    masses: int
-    serial_ns: float
-    blocks_ns: float
-    speedup: float
-    ci_low: float
-    ci_high: float
-    pairs: int
-    pairs_set_aside: int
-    failure: str
-
-    @property
-    def measured(self) -> bool:
-        return not self.failure and self.pairs > 0
-
-
-@dataclass(frozen=True)
-class Ceiling:
-    """The machine's ceiling at one thread count and placement (bench/run/crossover.hpp, crossover_ceiling): the
-    most an even split of the chain reaches there, per size."""
-
-    threads: int
-    pin: str
-    points: tuple[CeilingPoint, ...] = ()
-    quoted_masses: int | None = None  # the size the run's ceiling line quotes (None: nothing measured)
-
-    def quoted(self) -> CeilingPoint | None:
-        """The point the run's ceiling line quotes, as written."""
-        return next((point for point in self.points if point.masses == self.quoted_masses and point.measured), None)
-
-
-@dataclass(frozen=True)
-class Crossover:
-    """One crossover of lockstep_crossover: at this thread count (and placement, when the file gives one) and
-    with this primitive, the model size (masses) from which the parallel step beats the serial one, with its
-    interval; masses None: no crossover within what the run swept. Where the file has them (lockstep run writes
-    them; a file in the earlier shape has none): the layout, whether the primitive is the run's leader, the
-    status (CROSSOVER_STATUSES), the sizes that confirmed or contradicted it, why the series stopped, the
-    measured sync of a stage the model uses, and every point in the order written."""
-
-    threads: int
-    pin: str
-    sync: str
-    masses: float | None
-    ci_low: float | None
-    ci_high: float | None
-    layout: str = ""
-    leader: bool = False
-    status: str = ""
-    confirmed_at: float | None = None
-    contradicted_at: float | None = None
-    stop_reason: str = ""
-    stage_sync_ns: float | None = None
-    points: tuple[CrossoverPoint, ...] = ()
-
-
-@dataclass(frozen=True)
-class CrossoverSweep:
-    """The sweep as a whole (lockstep_crossover's top level, where the file has it): its budget and the time it
-    spent in seconds, the pairs it asked per point, why it stopped (None: the file does not say), and its lines
-    (the answer's crossover lines, as lockstep run wrote them)."""
-
-    budget_s: float | None
-    spent_s: float | None
-    pairs_per_point: int | None
-    stop_reason: str
-    lines: tuple[str, ...]
-    ceilings: tuple[Ceiling, ...] = ()  # none in a file written before the sweep measured them
-
-
-@dataclass(frozen=True)
-class RunAnswer:
-    """What a run file's answer holds beyond Headline (run_file.py): per recommendation, in the headline's order,
-    its baseline and whether it ran with more threads than CPUs (None: the file does not say); the probes, or
-    why each was unavailable (None: the file says nothing); the false-sharing patterns; the crossovers."""
-
-    baselines: tuple[PairedRatio | None, ...] = ()
-    oversubscribed: tuple[bool | None, ...] = ()
-    false_sharing: PairedRatio | None = None
-    false_sharing_unavailable: str | None = None
-    patterns: tuple[PairedRatio, ...] = ()
-    migration: Migration | None = None
-    migration_unavailable: str | None = None
-    crossovers: tuple[Crossover, ...] = ()
-    sweep: CrossoverSweep | None = None  # None: a file without lockstep_crossover
 
 
 def _float(value) -> float | None:
@@ -230,31 +82,67 @@ def _crossover(raw: dict) -> Crossover:
                      points=tuple(_point(point) for point in raw.get("points", [])))
 
 
-def _crossovers(document: dict) -> tuple[tuple[Crossover, ...], CrossoverSweep | None]:
-    if CROSSOVER_KEY not in document:
-        return (), None
-    block = document[CROSSOVER_KEY]
-    sweep = CrossoverSweep(_float(block.get("budget_s")), _float(block.get("spent_s")), block.get("pairs_per_point"),
-                           block.get("stop_reason") or "", tuple(block.get("lines", [])),
-                           tuple(_ceiling(raw) for raw in block.get("ceilings", [])))
-    return tuple(_crossover(raw) for raw in block.get("crossovers", [])), sweep
-
-
-def read_answer(document: dict) -> RunAnswer | None:
-    """The answer's parts compare shows side by side; None for a file with neither lockstep_headline nor
-    lockstep_crossover (written before them)."""
-    if HEADLINE not in document and CROSSOVER_KEY not in document:
+def _rival(raw: dict | None) -> Rival | None:
+    """A choice's runner_up or baseline: null (none), or its entry and its paired ratio to the choice."""
+    if raw is None:
         return None
-    crossovers, sweep = _crossovers(document)
-    if HEADLINE not in document:
-        return RunAnswer(crossovers=crossovers, sweep=sweep)
-    block = document[HEADLINE]
-    recommendations = block.get("recommendations", [])
-    baselines = tuple(None if raw.get("baseline") is None else _paired(raw["baseline"], "sync")
-                      for raw in recommendations)
+    return Rival(raw["entry"], parse_name(raw["entry"]), raw["sync"], float(raw["median"]), float(raw["ci_low"]),
+                 float(raw["ci_high"]), raw["verdict"])
+
+
+def _choice(raw: dict) -> Choice:
+    """One of the answer's choices (the file's recommendations); the keys written after the first answers (spread,
+    paces, runner-up, baseline, tied, ...) optional."""
+    return Choice(
+        raw["threads"], raw["pin"], raw["model"], raw["entry"], parse_name(raw["entry"]), raw["sync"], raw["layout"],
+        float(raw["ns_per_step"]), raw["basis"], spread_pct=_float(raw.get("spread_pct")), paces=raw.get("paces"),
+        straddles_pace_change=bool(raw.get("straddles_pace_change")), vs_c2c=_float(raw.get("vs_c2c")),
+        cpus_busy=_float(raw.get("cpus_busy")), oversubscribed=bool(raw.get("oversubscribed")),
+        median_leader=raw.get("median_leader") or "", runner_up=_rival(raw.get("runner_up")),
+        baseline=_rival(raw.get("baseline")), tied=bool(raw.get("tied")))
+
+
+def _best(raw: dict | None) -> BestChoice | None:
+    """The answer first (None: a file written before it)."""
+    if raw is None:
+        return None
+    level = tuple((other["threads"], other["pin"], float(other["ns_per_step"])) for other in raw.get("level") or [])
+    return BestChoice(raw["threads"], raw["pin"], raw["entry"], parse_name(raw["entry"]), float(raw["ns_per_step"]),
+                      _float(raw.get("serial_ns_per_step")), _float(raw.get("vs_serial")), level)
+
+
+def answer_block(document: dict) -> tuple[str, dict] | None:
+    """(its key, the run's answer as the file holds it): lockstep_answer, or in a file written before that name
+    lockstep_headline; None for a file with neither."""
+    return next(((key, document[key]) for key in fields.ANSWER_KEYS if key in document), None)
+
+
+def read_answer(document: dict) -> Answer | None:
+    """The run's answer; None for a file written before it."""
+    found = answer_block(document)
+    if found is None:
+        return None
+    block = found[1]
+    collapsed, keys = [], set()
+    for name in block["collapsed"]:
+        key = parse_name(name)
+        if key not in keys:
+            collapsed.append(name)
+            keys.add(key)
     probe = block.get("false_sharing_probe")
-    return RunAnswer(baselines, tuple(raw.get("oversubscribed") for raw in recommendations),
-                     None if probe is None else _paired(probe, ""),
-                     block.get("false_sharing_probe_unavailable") or None,
-                     tuple(_pattern(raw) for raw in block.get(PATTERNS_KEY, [])), _migration(block),
-                     block.get("migration_probe_unavailable") or None, crossovers, sweep)
+    return Answer(tuple(block["lines"]), tuple(_choice(raw) for raw in block["recommendations"]), tuple(collapsed),
+                  frozenset(keys), _best(block.get("answer")), tuple(block.get("crossover", [])),
+                  None if probe is None else _paired(probe, ""), block.get("false_sharing_probe_unavailable") or None,
+                  tuple(_pattern(raw) for raw in block.get(PATTERNS_KEY, [])), _migration(block),
+                  block.get("migration_probe_unavailable") or None)
+
+
+def read_crossover(document: dict) -> CrossoverSweep | None:
+    """The file's lockstep_crossover; None for a file without it (no --crossover)."""
+    if fields.CROSSOVER_KEY not in document:
+        return None
+    block = document[fields.CROSSOVER_KEY]
+    return CrossoverSweep(_float(block.get("budget_s")), _float(block.get("spent_s")), block.get("pairs_per_point"),
+                          block.get("stop_reason") or "", tuple(block.get("lines", [])),
+                          tuple(_ceiling(raw) for raw in block.get("ceilings", [])),
+                          tuple(_crossover(raw) for raw in block.get("crossovers", [])))

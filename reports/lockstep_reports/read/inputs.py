@@ -12,7 +12,7 @@ read_document checks a JSON file against its kind's schema (docs/schemas/<kind>.
 schemas.py) before anything reads it: the types, what is required, the ranges that need no other field. Then the
 reader of its kind turns it into what the tools use and checks what a schema cannot express (checks.py):
 
-  run, mpi   run_reader.py (run_file.py: the entries, pace, pairs, scaling, headline; mpi_reader.py: an mpi
+  run, mpi   run_reader.py (run_file.py: the entries, pace, pairs, scaling; run_answer.py: the answer; mpi_reader.py: an mpi
              file's settings and exchanges)
   c2c        c2c_reader.py
   delay      delay_reader.py

@@ -152,8 +152,9 @@ def check_sections(path: str, document: dict) -> None:
     _pairs(path, document)
     if fields.SCALING_KEY in document:
         _scaling(path, document[fields.SCALING_KEY])
-    if fields.HEADLINE_KEY in document:
-        _answer(path, fields.HEADLINE_KEY, document[fields.HEADLINE_KEY])
+    for key in fields.ANSWER_KEYS:
+        if key in document:
+            _answer(path, key, document[key])
     if fields.CROSSOVER_KEY in document:
         _crossover(path, document[fields.CROSSOVER_KEY])
     _derived(path, document)

@@ -1,18 +1,16 @@
 """A `lockstep run` (or `lockstep mpi`) file as the tools hold it: its entries and their repetitions, the pace
-trace, the paired ratios, the scaling curve and the run's answer (run_reader.py reads and checks them)."""
+trace, the paired ratios, the scaling curve, what the run derived, and the run's answer and crossover sweep
+(run_answer.py); run_reader.py reads them."""
 from __future__ import annotations
 
 import math
 from collections import Counter
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 from ..common import fields, statistics
 from ..common.names import BenchmarkKey
-
-if TYPE_CHECKING:
-    from .answer_reader import RunAnswer
-    from .mpi_reader import MpiDetails
+from .mpi_reader import MpiDetails
+from .run_answer import Answer, CrossoverSweep
 
 
 @dataclass(frozen=True)
@@ -245,17 +243,15 @@ class RunFile:
     pace: PaceTrace | None = None  # None: written before the pace trace
     pairs: list[PacePair] = field(default_factory=list)  # empty: no paired ratios in the file
     scaling: ScalingCurve | None = None  # None: not a --scaling run
-    headline: Headline | None = None  # None: written before lockstep_headline
-    mpi: "MpiDetails | None" = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
+    answer: Answer | None = None  # None: written before the run's answer (lockstep_answer, lockstep_headline)
+    mpi: MpiDetails | None = None  # a `lockstep mpi` file's exchanges and settings; None: another kind
     # What the run derived and wrote (derived_reader.py); None: a file written before the writer gave it.
     layouts: tuple[LayoutFacts, ...] | None = None
     planned: tuple[PlannedPair, ...] | None = None
     mode_medians: dict[BenchmarkKey, ModeMedians] | None = None
     rankings: tuple[Ranking, ...] | None = None
     model: ModelConstants | None = None
-    # The answer's parts compare sets side by side across machines (answer_reader.py): the recommendations'
-    # baselines, the probes, false sharing per pattern, the crossover; None: a file without lockstep_headline.
-    answer: "RunAnswer | None" = None
+    crossover: CrossoverSweep | None = None  # None: a file without lockstep_crossover (no --crossover)
     # A side of several runs (`lockstep run --runs K`, or files given together): the runs it merges, each as read;
     # empty for a single file (replicates.merged_side).
     replicates: tuple["RunFile", ...] = ()
@@ -272,87 +268,4 @@ class RunFile:
     @property
     def collapsed(self) -> frozenset:
         """The entries (BenchmarkKey) the run found collapsed: out of every ranking, ratio and colour scale."""
-        return self.headline.collapsed_keys if self.headline else frozenset()
-
-
-@dataclass(frozen=True)
-class Recommendation:
-    """One of lockstep_headline's recommendations: the combination to use at one model, thread count and
-    placement, as lockstep run chose it (bench/run/answer.hpp)."""
-
-    threads: int
-    pin: str
-    model: str  # "": the paper's two-mass system
-    entry: str  # its entry's name, as written
-    entry_key: BenchmarkKey
-    sync: str
-    layout: str
-    ns_per_step: float
-    basis: str  # fields.HEADLINE_BASES: "paired" (its pair with the runner-up decided) or "medians"
-    # What the terminal's line says beside it, as lockstep run wrote it (None or the default: a file written
-    # before the key): the repetitions' spread (half their range over the median, in %), the pace modes they
-    # ran in and whether one straddled a change of pace, a stage's sync in c2c transfers, the CPUs the team
-    # kept busy, whether the threads outnumbered the CPUs, the median leader (the entry first by median).
-    spread_pct: float | None = None
-    paces: int | None = None
-    straddles_pace_change: bool = False
-    vs_c2c: float | None = None
-    cpus_busy: float | None = None
-    oversubscribed: bool = False
-    median_leader: str = ""
-    # The runner-up and the baseline primitive against the choice (their step / the choice's, paired), None
-    # where the run has none; tied: the pair with the runner-up is within noise or unsure, so the two are named
-    # as tied (false in a file written before the key).
-    runner_up: "HeadlineRival | None" = None
-    baseline: "HeadlineRival | None" = None
-    tied: bool = False
-
-
-@dataclass(frozen=True)
-class HeadlineRival:
-    """Another primitive set against a recommendation (lockstep_headline.recommendations[].runner_up, .baseline):
-    its entry and primitive, and its step over the chosen one's, paired: the median ratio, its interval and
-    verdict (fields.PAIR_VERDICTS: penalty, the rival is slower; gain, faster)."""
-
-    entry: str
-    entry_key: BenchmarkKey
-    sync: str
-    median: float
-    ci_low: float
-    ci_high: float
-    verdict: str
-
-
-@dataclass(frozen=True)
-class HeadlineAnswer:
-    """lockstep_headline.answer: the answer first, the best combination of the run (its thread count,
-    placement and entry, its median step) and that step against the serial step of its model (vs_serial:
-    the parallel step over the serial one)."""
-
-    threads: int
-    pin: str
-    entry: str
-    entry_key: BenchmarkKey
-    ns_per_step: float
-    serial_ns_per_step: float | None
-    vs_serial: float | None
-    # (threads, pin, ns_per_step) of the choices the run does not separate from this one (lockstep_headline.answer
-    # .level: their repetitions overlap and no pair compared them): a tie, said beside the best.
-    level: tuple = ()
-
-
-@dataclass(frozen=True)
-class Headline:
-    """The file's "lockstep_headline": the run's answer as its terminal printed it (lines, shown verbatim:
-    the same fact reads the same everywhere), the recommendations, and the entries that collapsed
-    (oversubscribed and at least 100 times the best of their kind and thread count: kept out of rankings,
-    ratios and colour scales)."""
-
-    lines: tuple[str, ...]
-    recommendations: tuple[Recommendation, ...]
-    collapsed: tuple[str, ...]  # entry names as written, each once
-    collapsed_keys: frozenset
-    answer: HeadlineAnswer | None = None  # None: a file written before lockstep_headline.answer
-    # lockstep_headline.crossover: the crossover lines (per thread count swept the crossover's and the ceiling's, also among `lines`), as the
-    # run wrote them; empty without `--crossover` or in a file written before the key.
-    crossover: tuple[str, ...] = ()
+        return self.answer.collapsed_keys if self.answer else frozenset()

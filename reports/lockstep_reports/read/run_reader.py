@@ -1,8 +1,10 @@
 """The reader of `lockstep run` files (Google Benchmark JSON with lockstep's keys) and of `lockstep mpi` files,
 whose benchmarks have the same shape: run_file_from_document turns a document read_document (inputs.py) has
-checked against its schema into a RunFile (run_file.py), checking what the schema cannot say: an entry appears
-once, the repetitions of one benchmark carry the same counters, a time in its unit lies within
-fields.SHORTEST_NS..LONGEST_NS, a mode names one of the trace's, the headline's lines and recommendations.
+checked against its schema into a RunFile (run_file.py). What the schema cannot say of the lockstep_* sections is
+checked first (run_checks.py); the sections are then built here (the pace, the pairs, the scaling curve),
+in answer_reader.py (the answer, the crossover sweep) and in derived_reader.py. The benchmark entries are checked
+as they are read: an entry appears once, the repetitions of one benchmark carry the same counters, a time in its
+unit lies within fields.SHORTEST_NS..LONGEST_NS, a repetition's pace mode names one of the trace's.
 
 NaN and Infinity in a benchmark entry (Google Benchmark writes them for a value it could not compute) make that
 one value unavailable and the file's warnings count what was left out; anywhere else they are a damaged file.
@@ -18,8 +20,8 @@ from . import answer_reader, derived_reader
 from .checks import CheckedObject, InputError, checked_number
 from .context_reader import read_context
 from .mpi_reader import read_mpi
-from .run_file import (Headline, HeadlineAnswer, HeadlineRival, PaceMode, PacePair, PaceReading, PaceTrace,
-                       Recommendation, Repetition, RepetitionPace, Run, RunFile, ScalingCurve, ScalingPoint)
+from .run_file import (PaceMode, PacePair, PaceReading, PaceTrace, Repetition, RepetitionPace, Run, RunFile,
+                       ScalingCurve, ScalingPoint)
 from .run_checks import check_sections
 from .schemas import shown
 
@@ -130,56 +132,6 @@ def _read_scaling(document: dict) -> ScalingCurve | None:
                         curve.get("best"), curve.get("c2c_one_way_ns"))
 
 
-def _float(value) -> float | None:
-    """A number the schema has checked, as the tools hold it (a float); None for null or missing."""
-    return None if value is None else float(value)
-
-
-def _rival(raw: dict | None) -> HeadlineRival | None:
-    """A recommendation's runner_up or baseline: null (none), or its entry and its paired ratio to the choice."""
-    if raw is None:
-        return None
-    return HeadlineRival(raw["entry"], parse_name(raw["entry"]), raw["sync"], float(raw["median"]),
-                         float(raw["ci_low"]), float(raw["ci_high"]), raw["verdict"])
-
-
-def _recommendation(raw: dict) -> Recommendation:
-    """One of lockstep_headline.recommendations; the keys written after the first headlines (spread, paces,
-    runner-up, baseline, tied, ...) optional."""
-    return Recommendation(
-        raw["threads"], raw["pin"], raw["model"], raw["entry"], parse_name(raw["entry"]), raw["sync"], raw["layout"],
-        float(raw["ns_per_step"]), raw["basis"], spread_pct=_float(raw.get("spread_pct")), paces=raw.get("paces"),
-        straddles_pace_change=bool(raw.get("straddles_pace_change")), vs_c2c=_float(raw.get("vs_c2c")),
-        cpus_busy=_float(raw.get("cpus_busy")), oversubscribed=bool(raw.get("oversubscribed")),
-        median_leader=raw.get("median_leader") or "", runner_up=_rival(raw.get("runner_up")),
-        baseline=_rival(raw.get("baseline")), tied=bool(raw.get("tied")))
-
-
-def _answer(raw: dict | None) -> HeadlineAnswer | None:
-    """lockstep_headline.answer, the answer first (None: a file written before it)."""
-    if raw is None:
-        return None
-    level = tuple((other["threads"], other["pin"], float(other["ns_per_step"])) for other in raw.get("level") or [])
-    return HeadlineAnswer(raw["threads"], raw["pin"], raw["entry"], parse_name(raw["entry"]), float(raw["ns_per_step"]),
-                          _float(raw.get("serial_ns_per_step")), _float(raw.get("vs_serial")), level)
-
-
-def _read_headline(document: dict) -> Headline | None:
-    """The top-level "lockstep_headline"; None when the file has none (written before it)."""
-    if fields.HEADLINE_KEY not in document:
-        return None
-    block = document[fields.HEADLINE_KEY]
-    collapsed, keys = [], set()
-    for name in block["collapsed"]:
-        key = parse_name(name)
-        if key not in keys:
-            collapsed.append(name)
-            keys.add(key)
-    return Headline(tuple(block["lines"]), tuple(_recommendation(raw) for raw in block["recommendations"]),
-                    tuple(collapsed), frozenset(keys), _answer(block.get("answer")),
-                    tuple(block.get("crossover", [])))
-
-
 class _Entries:
     """The benchmark entries of one file, read one by one into a Run per benchmark: each entry once, a failed
     one's message kept, the counters read alike across a benchmark's entries, NaN counted as unavailable."""
@@ -284,12 +236,12 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs, scaling=_read_scaling(document), headline=_read_headline(document),
+                   pairs=pairs, scaling=_read_scaling(document), answer=answer_reader.read_answer(document),
                    mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None,
                    layouts=derived_reader.read_layouts(document), planned=derived_reader.read_planned(document),
                    mode_medians=derived_reader.read_mode_medians(document),
                    rankings=derived_reader.read_rankings(document), model=derived_reader.read_model(document),
-                   answer=answer_reader.read_answer(document))
+                   crossover=answer_reader.read_crossover(document))
 
 
 def step_split(raw: dict) -> tuple[float, ...] | None:

@@ -1,13 +1,13 @@
 """The answer a report shows first for one `lockstep run` file (report.answer_of): a table a person reads, built
-from the file's lockstep_headline (its recommendations and, where the file has it, its answer-first object;
-nothing recomputed), the headline's other lines whole, the entries that errored, and the words they use.
+from the file's answer (its choices and, where the file has it, the answer first; nothing recomputed), the answer's
+other lines whole, the entries that errored, and the words they use.
 
-The headline's lines are the terminal's: the choices (a line per thread count and placement, its details
+The answer's lines are the terminal's: the choices (a line per thread count and placement, its details
 indented under it), then the rest, each fact a line at column 0 with its details indented (false sharing,
 migration, pace, what was left out), then the terminal's pointers to the result file and the next commands
 (bench/run/answer.cpp, make_headline). The table replaces the choices' lines; the rest is shown whole,
 wrapped by the page; the pointers are the terminal's, and the report's own "where the rest is" replaces them.
-A run with `--crossover` writes its crossover lines (lockstep_headline.crossover) between the answer first and
+A run with `--crossover` writes its crossover lines (the answer's crossover) between the answer first and
 the choices: they are shown as written, under the answer first, and kept out of the grouping of the others.
 """
 from __future__ import annotations
@@ -16,12 +16,13 @@ from dataclasses import dataclass, field
 
 from ..common.fields import UNAVAILABLE
 from ..common.formatting import format_ns, format_number
-from ..read.run_file import HeadlineAnswer, HeadlineRival, Recommendation, RunFile
+from ..read.run_answer import BestChoice, Choice, Rival
+from ..read.run_file import RunFile
 
 # The words of a rival's verdict (its step over the choice's, paired: statistics.VERDICTS): above the noise
 # band the rival is slower, below it faster.
 RIVAL_VERDICTS = {"penalty": "slower", "gain": "faster", "within noise": "within noise", "unsure": "unsure"}
-# The terminal's pointers among the headline's lines (bench/run/answer.cpp): where its result file is, and
+# The terminal's pointers among the answer's lines (bench/run/answer.cpp): where its result file is, and
 # the commands that make this report and a comparison.
 TERMINAL_POINTERS = ("Results: ", "Report: ")
 # How a lockstep run before whole lines marked a line it cut at its 120 characters.
@@ -30,18 +31,18 @@ CUT_NOTE = " [cut here in the file, by the lockstep run that wrote it]"
 
 
 @dataclass
-class Answer:
-    """What the page shows first for one `lockstep run` file. A file without a headline: lines empty, and `note`
-    says so in one line. Otherwise: `first`, the answer first (lockstep_headline.answer; "" for a file without
-    it); `crossover`, the crossover lines as the run wrote them (empty without the sweep); the table of choices
-    (`headings`, `rows`, `caption`); `findings`, the headline's other facts, each a line and the lines under it,
+class AnswerBox:
+    """What the page shows first for one `lockstep run` file. A file without an answer: lines empty, and `note`
+    says so in one line. Otherwise: `first`, the answer first ("" for a file without it); `crossover`, the
+    crossover lines as the run wrote them (empty without the sweep); the table of choices
+    (`headings`, `rows`, `caption`); `findings`, the answer's other facts, each a line and the lines under it,
     whole; `errored`, the entries that errored ("" when none did); `glossary`,
     (word, what it means) for the words the answer uses."""
     label: str
     lines: list[str]
     note: str = ""
     first: str = ""
-    crossover: list[str] = field(default_factory=list)  # lockstep_headline.crossover, as written
+    crossover: list[str] = field(default_factory=list)  # the answer's crossover lines, as written
     headings: list[str] = field(default_factory=list)
     rows: list[list[str]] = field(default_factory=list)
     caption: str = ""
@@ -51,14 +52,14 @@ class Answer:
 
 
 def whole(line: str) -> str:
-    """A headline line as the report shows it: as written, but for a line its writer cut at its width (ending
+    """An answer's line as the report shows it: as written, but for a line its writer cut at its width (ending
     " ..."), which is said to be cut in words instead of ending in dots."""
     stripped = line.strip()
     return stripped[:-len(CUT_MARK)].rstrip() + CUT_NOTE if line.endswith(CUT_MARK) else stripped
 
 
 def line_groups(lines) -> list[list[str]]:
-    """The headline's lines by fact: a line at column 0 starts one, the indented lines under it belong to it."""
+    """The answer's lines by fact: a line at column 0 starts one, the indented lines under it belong to it."""
     groups: list[list[str]] = []
     for line in lines:
         if groups and line[:1].isspace():
@@ -100,12 +101,12 @@ def _entry_words(key) -> str:
     return f"{sync} + {layout}" if sync and layout else (sync or key.display)
 
 
-def _ratio_words(rival: HeadlineRival) -> str:
+def _ratio_words(rival: Rival) -> str:
     return (f"{format_number(rival.median, 2, 'x')} [{format_number(rival.ci_low, 2)}, "
             f"{format_number(rival.ci_high, 2)}], {RIVAL_VERDICTS.get(rival.verdict, rival.verdict)}")
 
 
-def _where(item: Recommendation, cpus: int | None) -> str:
+def _where(item: Choice, cpus: int | None) -> str:
     threads = f"{item.threads} thread{'s' if item.threads != 1 else ''}"
     if item.oversubscribed and cpus:
         threads += f" on {cpus} CPUs"
@@ -113,7 +114,7 @@ def _where(item: Recommendation, cpus: int | None) -> str:
     return f"{model}{threads}, pin:{item.pin}"
 
 
-def _step_words(item: Recommendation) -> str:
+def _step_words(item: Choice) -> str:
     """The choice's median step, its spread, and where the spread comes from when the machine changed pace."""
     words = format_ns(item.ns_per_step)
     if item.spread_pct is not None:
@@ -125,14 +126,14 @@ def _step_words(item: Recommendation) -> str:
     return words
 
 
-def _use_words(item: Recommendation) -> str:
+def _use_words(item: Choice) -> str:
     chosen = _entry_words(item.entry_key)
     if item.tied and item.runner_up is not None:
         return f"{chosen} or {_entry_words(item.runner_up.entry_key)}: tied"
     return chosen
 
 
-def _runner_up_words(item: Recommendation) -> str:
+def _runner_up_words(item: Choice) -> str:
     rival = item.runner_up
     if rival is None:
         return ("none: no paired comparison (ranked by the medians only)" if item.basis == "medians"
@@ -143,51 +144,51 @@ def _runner_up_words(item: Recommendation) -> str:
     return f"{'tied: ' if item.tied else ''}{words}: {_ratio_words(rival)}"
 
 
-def _baseline_column(recommendations) -> tuple[str, bool]:
+def _baseline_column(choices) -> tuple[str, bool]:
     """The baseline column's heading, and whether each cell names its primitive (when the baselines differ)."""
-    syncs = {item.baseline.sync for item in recommendations if item.baseline is not None}
+    syncs = {item.baseline.sync for item in choices if item.baseline is not None}
     if len(syncs) == 1:
         return f"{next(iter(syncs))}: its step / the choice's", False
     return "the baseline: its step / the choice's", True
 
 
-def _baseline_words(item: Recommendation, named: bool, baseline_sync: str | None) -> str:
+def _baseline_words(item: Choice, named: bool, baseline_sync: str | None) -> str:
     rival = item.baseline
     if rival is None:
         return "the choice itself" if baseline_sync and item.sync == baseline_sync else "none measured"
     return (f"{_entry_words(rival.entry_key)}: " if named else "") + _ratio_words(rival)
 
 
-def choices_table(recommendations, cpus: int | None) -> tuple[list[str], list[list[str]]]:
-    """The recommendations as a table: per thread count and placement, the choice, its step with its spread,
+def choices_table(choices, cpus: int | None) -> tuple[list[str], list[list[str]]]:
+    """The choices as a table: per thread count and placement, the choice, its step with its spread,
     a stage's sync in c2c transfers, its runner-up (or the tie) and the baseline against it."""
-    if not recommendations:
+    if not choices:
         return [], []
-    baseline_heading, named = _baseline_column(recommendations)
-    syncs = {item.baseline.sync for item in recommendations if item.baseline is not None}
+    baseline_heading, named = _baseline_column(choices)
+    syncs = {item.baseline.sync for item in choices if item.baseline is not None}
     baseline_sync = next(iter(syncs)) if len(syncs) == 1 else None
     headings = ["threads, placement", "use", "step (median ± spread)", "a stage's sync, in c2c transfers",
                 "runner-up: its step / the choice's", baseline_heading]
     rows = [[_where(item, cpus), _use_words(item), _step_words(item),
              format_number(item.vs_c2c, 2, missing=UNAVAILABLE), _runner_up_words(item),
-             _baseline_words(item, named, baseline_sync)] for item in recommendations]
+             _baseline_words(item, named, baseline_sync)] for item in choices]
     return headings, rows
 
 
-def first_words(answer: HeadlineAnswer) -> str:
+def first_words(best: BestChoice) -> str:
     """The answer first: the run's best combination, and its step against the serial step of its model."""
-    words = (f"Best of the run: {answer.threads} thread{'s' if answer.threads != 1 else ''}, pin:{answer.pin}, "
-             f"{_entry_words(answer.entry_key)}, {format_ns(answer.ns_per_step)} a step")
-    if answer.level:
+    words = (f"Best of the run: {best.threads} thread{'s' if best.threads != 1 else ''}, pin:{best.pin}, "
+             f"{_entry_words(best.entry_key)}, {format_ns(best.ns_per_step)} a step")
+    if best.level:
         others = " and ".join(f"{threads} thread{'s' if threads != 1 else ''}, pin:{pin} ({format_ns(step)})"
-                              for threads, pin, step in answer.level)
+                              for threads, pin, step in best.level)
         words += f", tied with {others}: their repetitions overlap and no pair compared them"
-    if answer.vs_serial is None:
+    if best.vs_serial is None:
         return words + "."
-    serial = f" ({format_ns(answer.serial_ns_per_step)})" if answer.serial_ns_per_step is not None else ""
+    serial = f" ({format_ns(best.serial_ns_per_step)})" if best.serial_ns_per_step is not None else ""
     meaning = ("one thread alone computes it faster: the synchronisation costs more than sharing the work saves"
-               if answer.vs_serial > 1.0 else "sharing the work pays for its synchronisation")
-    return f"{words}: {format_number(answer.vs_serial, 1, 'x')} the serial step{serial}; {meaning}."
+               if best.vs_serial > 1.0 else "sharing the work pays for its synchronisation")
+    return f"{words}: {format_number(best.vs_serial, 1, 'x')} the serial step{serial}; {meaning}."
 
 
 def errored_keys(run_file: RunFile) -> list:
@@ -252,18 +253,18 @@ CROSSOVER_WORDS = ("crossover, S*", "from what model size a parallel step beats 
                                     "\"Crossover\" draws every point and the model beside it.")
 
 
-def answer_of(run_file: RunFile, cpus: int | None) -> Answer:
-    """The answer box of a run file with a headline (report.answer_of says it when the file has none)."""
-    headline = run_file.headline
-    headings, rows = choices_table(headline.recommendations, cpus)
-    first = first_words(headline.answer) if headline.answer is not None else ""
-    crossover = set(headline.crossover)
-    title, facts = findings([line for line in headline.lines if line not in crossover], bool(rows), bool(first))
+def answer_of(run_file: RunFile, cpus: int | None) -> AnswerBox:
+    """The answer box of a run file with an answer (report.answer_of says it when the file has none)."""
+    answer = run_file.answer
+    headings, rows = choices_table(answer.choices, cpus)
+    first = first_words(answer.best) if answer.best is not None else ""
+    crossover = set(answer.crossover)
+    title, facts = findings([line for line in answer.lines if line not in crossover], bool(rows), bool(first))
     caption = ""
     if rows:
         caption = ((title + ". ") if title else "") + ("Each ratio is the other's step over the choice's, measured "
                                                        "side by side (above 1: the other is slower).")
-    return Answer(run_file.label, list(headline.lines), first=first,
-                  crossover=[whole(line) for line in headline.crossover], headings=headings, rows=rows,
-                  caption=caption, findings=facts, errored=errored_words(run_file),
-                  glossary=list(GLOSSARY) + ([CROSSOVER_WORDS] if headline.crossover else []))
+    return AnswerBox(run_file.label, list(answer.lines), first=first,
+                     crossover=[whole(line) for line in answer.crossover], headings=headings, rows=rows,
+                     caption=caption, findings=facts, errored=errored_words(run_file),
+                     glossary=list(GLOSSARY) + ([CROSSOVER_WORDS] if answer.crossover else []))

@@ -62,8 +62,8 @@ def heatmap(cells) -> str:
     """Median step time, primitive (rows, fastest first) x layout (columns), for one placement and thread
     count (matrix.HeatmapCells); the colour scale is in the cells' unit (a time, on a log scale) and spans the
     entries that count. A cell within noise (its false-sharing pair made no call) is hatched, its value marked
-    with "≈"; a collapsed one is grey and out of the colour scale; the recommended one is outlined."""
-    pin, threads, within_noise, recommended = cells.pin, cells.threads, cells.within_noise, cells.recommended
+    with "≈"; a collapsed one is grey and out of the colour scale; the chosen one is outlined."""
+    pin, threads, within_noise, chosen = cells.pin, cells.threads, cells.within_noise, cells.chosen
     syncs, layouts = list(cells.syncs), list(cells.layouts)
     grid = np.full((len(syncs), len(layouts)), np.nan)
     gone = np.zeros((len(syncs), len(layouts)), dtype=bool)
@@ -105,12 +105,12 @@ def heatmap(cells) -> str:
             axes.text(column, row, text, ha="center", va="center", fontsize=8, color="white" if dark else "black",
                       bbox=dict(boxstyle="round,pad=0.2", fc="black" if dark else "white", ec="none", alpha=0.75)
                       if noisy else None)
-    if recommended and recommended[0] in syncs and recommended[1] in layouts:
-        row, column = syncs.index(recommended[0]), layouts.index(recommended[1])
+    if chosen and chosen[0] in syncs and chosen[1] in layouts:
+        row, column = syncs.index(chosen[0]), layouts.index(chosen[1])
         axes.add_patch(matplotlib.patches.Rectangle((column - 0.47, row - 0.47), 0.94, 0.94, fill=False,
                                                     edgecolor="#d62728", lw=2.2))
     axes.set_title(f"median step time, pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
-                   + ("\n(red outline: the combination the run recommends)" if recommended else ""), fontsize=9)
+                   + ("\n(red outline: the combination the run recommends)" if chosen else ""), fontsize=9)
     if norm is not None:
         colorbar = figure.colorbar(image, ax=axes, label="median step time (log)")
         duration_axis(colorbar.ax.yaxis)
@@ -304,14 +304,14 @@ def _place_names(axes, named: list[CpuPoint], members: list[CpuPoint]) -> None:
                           arrowprops=dict(arrowstyle="-", color="#777777", lw=0.5, shrinkA=1, shrinkB=3))
 
 
-def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, recommended=frozenset(),
+def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None, chosen=frozenset(),
                      layout_order=()) -> str:
     """Median time per unit (x) against the median CPU time the team burned per unit (y), log-log, one panel
     per thread count (CPU_PANELS_PER_ROW to a row), one point per entry: marker by placement, colour by layout
     (rk4). The lines y = k x for k = 1 .. threads (busy_lines: up to the machine's `cpus`, and the thread count
     dotted beyond them) are "k CPUs busy", named at the panel's right edge: a spinning team sits on k = its
     threads (or the CPUs it has), a sleeping one below. The fastest primitives and the entry that keeps the
-    fewest CPUs busy are named; the `recommended` entries (keys: the headline's choices) are ringed in red, as
+    fewest CPUs busy are named; the `chosen` entries (keys: the answer's choices) are ringed in red, as
     the heat maps outline them. layout_order: the layouts in the order of their colours (matrix.syncs_layouts)."""
     thread_counts = sorted({point.key.threads for point in points})
     layouts = ordered({point.key.get("layout") for point in points if point.key.get("layout")}, layout_order)
@@ -350,7 +350,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
                          color=colors.get(point.key.get("layout"), "#4c72b0"), edgecolors="black", linewidths=0.3,
                          alpha=0.85)
         for point in members:
-            if point.key in recommended:
+            if point.key in chosen:
                 axes.plot([point.unit_ns], [point.team_cpu_ns], marker="o", ms=11, mfc="none", mec="#d62728",
                           mew=1.6, ls="none", zorder=4)
         duration_axis(axes.xaxis)
@@ -368,7 +368,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
     if cpus is not None and max(thread_counts) > cpus:
         handles.append(matplotlib.lines.Line2D([], [], ls=":", color="#aaaaaa", lw=0.7,
                                                label=f"more than the machine's {cpus} CPUs"))
-    if any(point.key in recommended for point in points):
+    if any(point.key in chosen for point in points):
         handles.append(matplotlib.lines.Line2D([], [], ls="none", marker="o", ms=9, mfc="none", mec="#d62728",
                                                mew=1.6, label="the run recommends it"))
     figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,

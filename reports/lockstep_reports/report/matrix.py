@@ -74,9 +74,9 @@ class HeatmapCells:
     """One heat map (figures.heatmap): the median step time of each primitive (rows, fastest first) with each
     layout (columns) at one placement and thread count. values[row][column]: None where the combination was not
     run or errored; errored: the (row, column) of those that errored (drawn "error", apart from the ones not run,
-    "n/a"); collapsed: the (row, column) of cells whose entry collapsed (the headline's: grey, out of the
+    "n/a"); collapsed: the (row, column) of cells whose entry collapsed (the answer's: grey, out of the
     colour scale); within_noise: the (sync, layout) cells whose false-sharing pair made no call (hatched, "≈");
-    recommended: the (sync, layout) the headline recommends there (outlined)."""
+    chosen: the (sync, layout) the run's answer chose there (outlined)."""
 
     pin: str
     threads: int
@@ -85,12 +85,12 @@ class HeatmapCells:
     values: tuple[tuple[float | None, ...], ...]
     collapsed: frozenset = frozenset()
     within_noise: frozenset = frozenset()
-    recommended: tuple[str, str] | None = None
+    chosen: tuple[str, str] | None = None
     errored: frozenset = frozenset()
 
 
 def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), collapsed=frozenset(),
-                  recommended: tuple[str, str] | None = None) -> HeatmapCells:
+                  chosen: tuple[str, str] | None = None) -> HeatmapCells:
     """The heat map of one placement and thread count (HeatmapCells); collapsed: the entries (keys) that
     collapsed."""
     _, layouts = syncs_layouts(run_file)
@@ -108,7 +108,7 @@ def heatmap_cells(run_file, pin: str, threads: int, within_noise=frozenset(), co
                 errored.add((row, column))
         values.append(tuple(cells))
     return HeatmapCells(pin, threads, tuple(syncs), tuple(layouts), tuple(values), frozenset(gone),
-                        frozenset(within_noise), recommended, frozenset(errored))
+                        frozenset(within_noise), chosen, frozenset(errored))
 
 
 @dataclass(frozen=True)
@@ -180,7 +180,7 @@ class CpuPoint:
 
 def cpu_points(run_file, family: str, collapsed=frozenset()) -> list[CpuPoint]:
     """The entries of one family (rk4: the sync/layout/pin/threads matrix; barrier: the bare barriers) with a
-    time and a team CPU time per unit, collapsed entries (the headline's) left out; sorted by name. An entry
+    time and a team CPU time per unit, collapsed entries (the answer's) left out; sorted by name. An entry
     without the counter (a file written before it) has no point."""
     points = []
     for key in sorted(run_file.runs, key=BenchmarkKey.sort_key):

@@ -36,7 +36,7 @@ from ..read.inputs import load_any, unique_labels
 from ..read.run_file import RunFile
 from ..read.verify_reader import VerifyFile
 from . import answer, c2c_analysis, figures, matrix, paper
-from .answer import Answer
+from .answer import AnswerBox
 TEMPLATES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "templates")
 
 
@@ -106,18 +106,18 @@ WHERE_THE_RESULTS_ARE = {
 }
 
 
-def answer_of(run_file: RunFile) -> Answer:
+def answer_of(run_file: RunFile) -> AnswerBox:
     """The run's answer (answer.py: the table of its choices, its other facts whole, what errored, the words
     it uses), or one line saying the file has none."""
-    if run_file.headline is None:
-        return Answer(run_file.label, [], f"{run_file.label} has no headline (the run's answer, lockstep_headline, "
+    if run_file.answer is None:
+        return AnswerBox(run_file.label, [], f"{run_file.label} has no headline (the run's answer, lockstep_headline, "
                                           f"is {UNAVAILABLE}: its `lockstep run` is older than the saved answer); its "
                                           "results are in the sections below.")
     return answer.answer_of(run_file, _machine_cpus(run_file))
 
 
 def collapsed_line(run_file: RunFile) -> str:
-    """One line naming the entries the run found collapsed (its headline's), with the range of their medians;
+    """One line naming the entries the run found collapsed (its answer's), with the range of their medians;
     "" when none did."""
     keys = sorted(run_file.collapsed, key=lambda key: key.sort_key())
     if not keys:
@@ -145,11 +145,11 @@ def errored_section(run_file: RunFile, errored: list) -> Section:
         tables=[Table(["entry", "repetitions", "what failed"], rows)])
 
 
-def recommended_cell(run_file: RunFile, pin: str, threads: int) -> tuple[str, str] | None:
-    """(sync, layout) the run's headline recommends at this placement and thread count, if it has one."""
-    if run_file.headline is None:
+def chosen_cell(run_file: RunFile, pin: str, threads: int) -> tuple[str, str] | None:
+    """(sync, layout) the run's answer chose at this placement and thread count, if it has one."""
+    if run_file.answer is None:
         return None
-    return next(((item.sync, item.layout) for item in run_file.headline.recommendations
+    return next(((item.sync, item.layout) for item in run_file.answer.choices
                  if item.pin == pin and item.threads == threads), None)
 
 
@@ -168,7 +168,7 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                                + (f" error, hatched red: the entry ran and failed, so it has no time ({len(errored)} "
                                   "in this file: the section \"Errored entries\")."
                                   if errored else "")])
-    if any(recommended_cell(run_file, pin, threads) for pin, threads in groups):
+    if any(chosen_cell(run_file, pin, threads) for pin, threads in groups):
         heat.paragraphs.append("Outlined in red: the combination the run recommends there (its headline).")
     bars = Section(f"Spread per primitive: {run_file.label}",
                    paragraphs=["Per primitive (fastest first), one bar per layout at the median over repetitions, "
@@ -187,7 +187,7 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
         heat.figures.append(Figure(f"heatmap-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.heatmap(matrix.heatmap_cells(
                                        run_file, pin, threads, noisy_cells.get((pin, threads), frozenset()),
-                                       collapsed, recommended_cell(run_file, pin, threads)))))
+                                       collapsed, chosen_cell(run_file, pin, threads)))))
         bars.figures.append(Figure(f"bars-{counter[0]}-{pin}-{threads}", f"pin:{pin}, {threads} threads",
                                    figures.bars_with_spread(matrix.spread_bars(run_file, pin, threads, collapsed))))
     sections += [heat, bars, cpu_section(run_file, counter)]
@@ -262,16 +262,15 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     if left_out:
         section.paragraphs.append(f"Not drawn: the {left_out} collapsed entries (the run's headline lists them).")
     cpus = _machine_cpus(run_file)
-    recommended = frozenset(item.entry_key for item in run_file.headline.recommendations) if run_file.headline \
-        else frozenset()
-    if any(point.key in recommended for _, _, points in families for point in points):
+    chosen = frozenset(item.entry_key for item in run_file.answer.choices) if run_file.answer else frozenset()
+    if any(point.key in chosen for _, _, points in families for point in points):
         section.paragraphs.append("Ringed in red: the combination the run recommends at each placement and thread "
                                   "count (its headline).")
     for family, unit, points in families:
         if points:
             what = "the RK4 step (rk4/ entries)" if family == "rk4" else "the bare barrier (barrier/ entries)"
             section.figures.append(Figure(f"cpu-{counter[0]}-{family}", f"{what}, {len(points)} entries",
-                                          figures.cpu_against_time(points, unit, cpus, recommended,
+                                          figures.cpu_against_time(points, unit, cpus, chosen,
                                                                     matrix.syncs_layouts(run_file)[1])))
     if any(family == "barrier" and points for family, _, points in families):
         section.paragraphs.append("The barrier/ entries time the bare barrier, without the RK4 stages: per episode "
@@ -511,12 +510,11 @@ def crossover_section(run_file: RunFile, counter: list[int]) -> Section | None:
     """`lockstep run --crossover`: the run's crossover lines as written, one figure per thread count (step time
     against S, the crossover marked, the model beside), the series and their points as the file holds them; None
     for a file without the sweep."""
-    found = run_file.answer.crossovers if run_file.answer else ()
+    sweep = run_file.crossover
+    found = sweep.crossovers if sweep else ()
     if not found:
         return None
-    sweep = run_file.answer.sweep
-    lines = (run_file.headline.crossover if run_file.headline and run_file.headline.crossover
-             else sweep.lines if sweep else ())
+    lines = run_file.answer.crossover if run_file.answer and run_file.answer.crossover else sweep.lines
     paragraphs = [f"The run's answer: {line}" for line in lines]
     paragraphs.append(
         "`lockstep run --crossover`: from what model size a parallel step pays off. Per thread count, the step time "
@@ -1065,7 +1063,7 @@ def paper_section(run_files: list[RunFile]) -> Section:
 OPEN_SECTIONS = 2
 
 
-def build_sections(loaded) -> tuple[list[Answer], list[Section]]:
+def build_sections(loaded) -> tuple[list[AnswerBox], list[Section]]:
     """The answers (one per `lockstep run` file, shown first) and the sections after them: the results, then
     the paper's values, the inputs and machines, and the warnings; the first OPEN_SECTIONS open."""
     run_files = [item for item in loaded if isinstance(item, RunFile)]
@@ -1117,13 +1115,13 @@ def _templates() -> jinja2.Environment:
     return environment
 
 
-def render_html(title: str, answers: list[Answer], sections: list[Section]) -> str:
+def render_html(title: str, answers: list[AnswerBox], sections: list[Section]) -> str:
     anchored = [(f"s{index}-{_slug(section.title)}", section) for index, section in enumerate(sections)]
     return _templates().get_template("report.html.j2").render(title=title, answers=answers, sections=anchored,
                                                               where=WHERE_THE_RESULTS_ARE["html"])
 
 
-def render_markdown(title: str, answers: list[Answer], sections: list[Section]) -> str:
+def render_markdown(title: str, answers: list[AnswerBox], sections: list[Section]) -> str:
     text = _templates().get_template("report.md.j2").render(
         title=title, answers=answers, sections=sections,
         figures_directory=FIGURES_DIRECTORY, where=WHERE_THE_RESULTS_ARE["markdown"])
