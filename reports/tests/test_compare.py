@@ -804,7 +804,7 @@ class CompareSummary(Scratch):
         self.assertRegex(out, r"\n  \.\.\. and [0-9]+ more slower \(--all lists every entry\)\n")
         self.assertLessEqual(len(out.splitlines()), 45)
         # a collapsed entry is said to be one: counted as collapsed, never listed as slower, nor untested
-        self.assertIn(f"{len(collapsed)} collapsed (in a file's headline", " ".join(out.split()))
+        self.assertIn(f"{len(collapsed)} collapsed (in a file's answer", " ".join(out.split()))
         self.assertFalse(any(line.split()[0] in collapsed for line in shown))
         self.assertIn("0 untested", out)
 
@@ -1096,7 +1096,7 @@ class AggregatesAndPooledEvidence(ScratchFiles):
         self.assertEqual(comparison.pace_verdict_counts()["untested"], 0)
         self.assertFalse(any("untested" in warning for warning in comparison.warnings), comparison.warnings)
         status, out, err = run_tool("compare", a, b, "--out", os.path.join(self.directory.name, "c.json"))
-        self.assertIn("8 collapsed (in a file's headline", " ".join(out.split()))
+        self.assertIn("8 collapsed (in a file's answer", " ".join(out.split()))
         self.assertNotIn("--repetitions 10` or more", out)
         with open(os.path.join(self.directory.name, "c.json"), encoding="utf-8") as stream:
             document = json.load(stream)

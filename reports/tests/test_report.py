@@ -365,9 +365,9 @@ class AnswerFirst(Scratch):
 
     def test_a_file_without_a_headline_says_so_in_one_line(self):
         html, markdown = self.report(fixture("machine_a.json"))
-        notes = [line for line in markdown.splitlines() if "has no headline" in line]
+        notes = [line for line in markdown.splitlines() if "has no answer" in line]
         self.assertEqual(len(notes), 1)
-        self.assertTrue(notes[0].startswith("machine_a.json has no headline"))
+        self.assertTrue(notes[0].startswith("machine_a.json has no answer"))
         self.assertNotIn('<section class="answer"', html)
         self.assertIn("## Step time, sync x layout: machine_a.json", markdown)
 

@@ -593,7 +593,7 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     out.append(f"changed {what}: {counts['slower'] + counts['faster']} of {len(comparison.rows)} "
                f"({counts['slower']} slower, {counts['faster']} faster); {counts['unsure']} unsure, "
                f"{counts['within noise']} within noise, {counts['untested']} untested"
-               + (f", {counts[COLLAPSED]} {COLLAPSED} (in a file's headline: oversubscribed, one repetition)"
+               + (f", {counts[COLLAPSED]} {COLLAPSED} (in a file's answer: oversubscribed, one repetition)"
                   if counts[COLLAPSED] else "")
                + f" (verdict: the 95% interval of {b}/A against the {noise:g} % noise band)")
     unsure = detectable_line(comparison)

@@ -237,11 +237,11 @@ def _legend(rows: list[list[str]]) -> list[str]:
     labels = {row[0].strip() for row in rows}
     parts = []
     if "a step" in labels:
-        parts.append("a step: the recommended combination's median time per RK4 step")
+        parts.append("a step: the chosen combination's median time per RK4 step")
     if "false sharing" in labels or any(label.endswith(" takes") for label in labels):
         parts.append("2.50x [2.10, 3.00]: a ratio and its 95 % interval, measured side by side in that run")
     if any(label.endswith(" takes") for label in labels):
-        parts.append("<primitive> takes: its step over the recommended one's (its verdict named unless slower)")
+        parts.append("<primitive> takes: its step over the chosen one's (its verdict named unless slower)")
     if "crossover" in labels:
         parts.append("crossover: the model size from which the parallel step beats the serial one")
     if "false sharing" in labels:
@@ -263,7 +263,7 @@ def _heading(name: str, label: str, room: int) -> str:
 def answer_lines(files: list[RunFile], first: int = 0) -> list[str]:
     """The answers side by side (COLUMNS files a table), each column headed by its file's letter and name, then
     the legend; `first`: the index (letter) of files[0]."""
-    out = ["Each machine's answer, as its own run gave it (its lockstep_headline; nothing recomputed here):"]
+    out = ["Each machine's answer, as its own run gave it (the answer in its file; nothing recomputed here):"]
     shown = []
     for start in range(0, len(files), COLUMNS):
         chunk = files[start:start + COLUMNS]

@@ -110,7 +110,7 @@ def heatmap(cells) -> str:
         axes.add_patch(matplotlib.patches.Rectangle((column - 0.47, row - 0.47), 0.94, 0.94, fill=False,
                                                     edgecolor="#d62728", lw=2.2))
     axes.set_title(f"median step time, pin:{pin}, {threads} thread{'s' if threads != 1 else ''}"
-                   + ("\n(red outline: the combination the run recommends)" if chosen else ""), fontsize=9)
+                   + ("\n(red outline: the combination the run's answer chose)" if chosen else ""), fontsize=9)
     if norm is not None:
         colorbar = figure.colorbar(image, ax=axes, label="median step time (log)")
         duration_axis(colorbar.ax.yaxis)
@@ -370,7 +370,7 @@ def cpu_against_time(points: list[CpuPoint], unit: str, cpus: int | None = None,
                                                label=f"more than the machine's {cpus} CPUs"))
     if any(point.key in chosen for point in points):
         handles.append(matplotlib.lines.Line2D([], [], ls="none", marker="o", ms=9, mfc="none", mec="#d62728",
-                                               mew=1.6, label="the run recommends it"))
+                                               mew=1.6, label="the run's answer chose it"))
     figure.legend(handles=handles, fontsize=7, loc="upper center", bbox_to_anchor=(0.5, 0.0), frameon=False,
                   ncol=min(len(handles), 2 + 2 * columns))  # about as wide as the panels
     figure.suptitle(f"time per {unit} against the CPU the team burns per {unit} (one point per entry)", fontsize=9)

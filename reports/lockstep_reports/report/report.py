@@ -110,9 +110,9 @@ def answer_of(run_file: RunFile) -> AnswerBox:
     """The run's answer (answer.py: the table of its choices, its other facts whole, what errored, the words
     it uses), or one line saying the file has none."""
     if run_file.answer is None:
-        return AnswerBox(run_file.label, [], f"{run_file.label} has no headline (the run's answer, lockstep_headline, "
-                                          f"is {UNAVAILABLE}: its `lockstep run` is older than the saved answer); its "
-                                          "results are in the sections below.")
+        return AnswerBox(run_file.label, [], f"{run_file.label} has no answer (lockstep_answer, or lockstep_headline "
+                                             f"before that name, is {UNAVAILABLE}: its `lockstep run` is older than the "
+                                             "saved answer); its results are in the sections below.")
     return answer.answer_of(run_file, _machine_cpus(run_file))
 
 
@@ -130,7 +130,7 @@ def collapsed_line(run_file: RunFile) -> str:
               else f"their times {UNAVAILABLE} in this file")
     at = f" (at {', '.join(f'{count} threads' for count in threads)})" if threads else ""
     return (f"Collapse when threads outnumber CPUs: {', '.join(syncs)}{at}, {spread}; left out of the rankings, "
-            "ratios and colour scales below (the run's headline lists them).")
+            "ratios and colour scales below (the run's answer lists them).")
 
 
 def errored_section(run_file: RunFile, errored: list) -> Section:
@@ -169,7 +169,7 @@ def run_sections(run_file: RunFile, counter: list[int]) -> list[Section]:
                                   "in this file: the section \"Errored entries\")."
                                   if errored else "")])
     if any(chosen_cell(run_file, pin, threads) for pin, threads in groups):
-        heat.paragraphs.append("Outlined in red: the combination the run recommends there (its headline).")
+        heat.paragraphs.append("Outlined in red: the combination the run's answer chose there.")
     bars = Section(f"Spread per primitive: {run_file.label}",
                    paragraphs=["Per primitive (fastest first), one bar per layout at the median over repetitions, "
                                "whiskers over the interquartile range, one dot per repetition."])
@@ -260,12 +260,12 @@ def cpu_section(run_file: RunFile, counter: list[int]) -> Section:
     section = Section(title, paragraphs=[CPU_FIGURE_READING])
     left_out = sum(1 for key in collapsed if key.family in ("rk4", "barrier"))
     if left_out:
-        section.paragraphs.append(f"Not drawn: the {left_out} collapsed entries (the run's headline lists them).")
+        section.paragraphs.append(f"Not drawn: the {left_out} collapsed entries (the run's answer lists them).")
     cpus = _machine_cpus(run_file)
     chosen = frozenset(item.entry_key for item in run_file.answer.choices) if run_file.answer else frozenset()
     if any(point.key in chosen for _, _, points in families for point in points):
-        section.paragraphs.append("Ringed in red: the combination the run recommends at each placement and thread "
-                                  "count (its headline).")
+        section.paragraphs.append("Ringed in red: the combination the run's answer chose at each placement and "
+                                  "thread count.")
     for family, unit, points in families:
         if points:
             what = "the RK4 step (rk4/ entries)" if family == "rk4" else "the bare barrier (barrier/ entries)"
