@@ -16,7 +16,7 @@ from .compare import compare_text, planner
 from .compare.comparability import withheld_text
 from .compare.comparison import DEFAULT_NOISE_PERCENT, NOISE_RATIONALE
 from .compare.replicated import compare_sides, merged_side
-from .read.inputs import InputError, load_for_compare, side_paths, unique_labels
+from .read.inputs import InputError, in_run_order, load_for_compare, side_paths, unique_labels
 from .read.run_file import RunFile
 
 EXIT_OK, EXIT_REGRESSION, EXIT_USAGE = 0, 1, 2
@@ -311,7 +311,8 @@ def run_compare(argv: list[str]) -> int:
 
 def load_sides(arguments: list[str]) -> list:
     """Each argument one side: a file (load_for_compare), or several runs (a directory of `lockstep run --runs K`,
-    or files joined by commas) merged into one side (replicated.merged_side)."""
+    or files joined by commas) merged into one side (replicated.merged_side) in the order they ran (in_run_order:
+    by the run index in each context, else by file name)."""
     sides = []
     for argument, label in zip(arguments, unique_labels([os.path.normpath(a) for a in arguments])):
         paths = side_paths(argument)
@@ -321,7 +322,7 @@ def load_sides(arguments: list[str]) -> list:
         runs = [load_for_compare(path, f"{label}/{os.path.basename(path)}") for path in paths]
         if not all(isinstance(run, RunFile) for run in runs):
             raise UsageError(f"{argument}: a side of several runs takes `lockstep run` files only")
-        sides.append(merged_side(runs, label, argument))
+        sides.append(merged_side(in_run_order(runs), label, argument))
     return sides
 
 
@@ -334,7 +335,7 @@ def run_planner(options) -> int:
             if not isinstance(found, RunFile):
                 raise UsageError(f"{path}: a pilot is a `lockstep run` file (or a directory of them)")
             runs.append(found)
-    sys.stdout.write(planner.plan_text(runs, options.time, options.noise, options.detect))
+    sys.stdout.write(planner.plan_text(in_run_order(runs), options.time, options.noise, options.detect))
     return EXIT_OK
 
 

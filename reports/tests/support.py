@@ -46,6 +46,41 @@ def logical_line(text: str, start: str) -> str:
 HEADLINE = "headline.json"
 
 
+def typed_document(document: dict, rename=None) -> dict:
+    """A `lockstep run` document as the writer writes it since the typed entry: each benchmark entry with its spec
+    as values (lockstep_entry, the spec its name implies: names.spec_of) and the answer under lockstep_answer.
+    rename: a function of an entry's name giving the name the copy writes everywhere in its place (the entries'
+    names and run_names, and every section that names an entry): a reader that reads the spec cannot tell."""
+    from lockstep_reports.common.names import parse_name, spec_of
+    from lockstep_reports.read.run_checks import base_name
+
+    typed = json.loads(json.dumps(document))
+    for raw in typed["benchmarks"]:
+        spec = spec_of(parse_name(base_name(raw)))
+        raw["lockstep_entry"] = {"kind": spec.kind, "sync": spec.sync, "layout": spec.layout, "pin": spec.pin,
+                                 "threads": spec.threads, "model": spec.model, "masses": spec.masses,
+                                 "accounting": spec.accounting, "unit": spec.unit}
+    if "lockstep_headline" in typed:
+        typed["lockstep_answer"] = typed.pop("lockstep_headline")
+    if rename is None:
+        return typed
+    names = {base_name(raw) for raw in typed["benchmarks"]}
+
+    def renamed(node):
+        if isinstance(node, dict):
+            return {key: renamed(value) for key, value in node.items()}
+        if isinstance(node, list):
+            return [renamed(value) for value in node]
+        if isinstance(node, str):
+            if node in names:
+                return rename(node)
+            stem, _, aggregate = node.rpartition("_")
+            return f"{rename(stem)}_{aggregate}" if stem in names else node
+        return node
+
+    return {key: value if key == "context" else renamed(value) for key, value in typed.items()}
+
+
 def headline_document() -> dict:
     with open(fixture(HEADLINE), encoding="utf-8") as stream:
         return json.load(stream)

@@ -5,15 +5,16 @@ import os
 import tempfile
 import unittest
 
-from support import HEADLINE, Scratch, fixture, headline_document, run_tool
+from support import FIXTURES, HEADLINE, Scratch, fixture, headline_document, run_tool, typed_document
 
 from lockstep_reports.analysis.run_analysis import against_best_other_views
 from lockstep_reports.common import statistics
-from lockstep_reports.common.names import parse_name
+from lockstep_reports.common.names import parse_name, spec_of
 from lockstep_reports.common.words import DELAY_CAUSES
 from lockstep_reports.read.c2c_reader import C2cFile
 from lockstep_reports.read.delay_reader import DelayFile
 from lockstep_reports.read.inputs import InputError, load_any, load_run_file
+from lockstep_reports.read.run_checks import base_name
 from lockstep_reports.read.verify_reader import VerifyFile
 
 
@@ -463,6 +464,84 @@ class ReadingTheAnswer(Scratch):
                     load_run_file(path)
                 self.assertEqual(len(str(raised.exception).splitlines()), 1)
                 self.assertIn("lockstep_headline", str(raised.exception))
+
+
+class TypedEntries(Scratch):
+    """A file whose entries carry their spec (lockstep_entry) is read by the specs: the same keys, times, answer and
+    pairs as the names give, even with every name replaced by one that says nothing; the name's parser
+    (names.parse_name) reads only the files written before the spec."""
+
+    FILES = (HEADLINE, "xeon_default_run_trimmed.json", "crossover_ceiling.json")
+
+    def test_the_specs_give_what_the_names_gave(self):
+        for name in self.FILES:
+            with self.subTest(name):
+                with open(fixture(name), encoding="utf-8") as stream:
+                    document = json.load(stream)
+                older, typed = load_run_file(fixture(name)), load_run_file(self.write(name, typed_document(document)))
+                self.assertEqual(set(typed.runs), set(older.runs))
+                self.assertEqual({key: run.times_ns() for key, run in typed.runs.items()},
+                                 {key: run.times_ns() for key, run in older.runs.items()})
+                self.assertEqual((typed.answer, typed.pairs, typed.planned, typed.rankings, typed.mode_medians),
+                                 (older.answer, older.pairs, older.planned, older.rankings, older.mode_medians))
+                self.assertEqual({key: run.entry for key, run in typed.runs.items()},
+                                 {key: run.entry for key, run in older.runs.items()})
+
+    def test_a_name_that_says_nothing_reads_the_same(self):
+        with open(fixture(HEADLINE), encoding="utf-8") as stream:
+            document = json.load(stream)
+        numbers: dict = {}
+        opaque = typed_document(document, rename=lambda name: numbers.setdefault(name, f"entry {len(numbers) + 1}"))
+        self.assertNotIn("rk4/", json.dumps(opaque["benchmarks"][:3]))
+        typed = load_run_file(self.write("opaque.json", opaque))
+        older = load_run_file(fixture(HEADLINE))
+        self.assertEqual({key: run.times_ns() for key, run in typed.runs.items()},
+                         {key: run.times_ns() for key, run in older.runs.items()})
+        self.assertEqual([choice.entry_key for choice in typed.answer.choices],
+                         [choice.entry_key for choice in older.answer.choices])
+        self.assertEqual(typed.collapsed, older.collapsed)
+        self.assertEqual([(pair.a_key, pair.b_key) for pair in typed.pairs],
+                         [(pair.a_key, pair.b_key) for pair in older.pairs])
+
+    def test_the_spec_and_the_name_give_one_key(self):
+        """names.spec_of (what a name implies) and EntrySpec.key (the identity made from the values) agree with the
+        parser on every entry of every kept run file: an older file's entries match a newer file's."""
+        for path in sorted(FIXTURES.glob("*.json")):
+            try:
+                document = json.loads(path.read_text(encoding="utf-8"))
+            except ValueError:
+                continue
+            if not isinstance(document, dict) or "benchmarks" not in document or document.get("kind"):
+                continue
+            for raw in document["benchmarks"]:
+                key = parse_name(base_name(raw))
+                self.assertEqual(spec_of(key).key, key, raw["name"])
+
+    def test_what_a_spec_leaves_wrong_is_one_line(self):
+        with open(fixture(HEADLINE), encoding="utf-8") as stream:
+            document = typed_document(json.load(stream))
+
+        def one_without(changed):
+            del changed["benchmarks"][7]["lockstep_entry"]
+
+        def a_pair_of_no_entry(changed):
+            changed["lockstep_pairs"][0]["a"] = "rk4/sync:nothing/layout:packed/pin:compact/threads:2"
+
+        def a_step_without_its_time(changed):
+            entry = next(raw for raw in changed["benchmarks"] if raw["lockstep_entry"]["kind"] == "rk4")
+            del entry["ns_per_step"]
+
+        for mutate, place in ((one_without, "benchmarks[7].lockstep_entry: is missing"),
+                              (a_pair_of_no_entry, "lockstep_pairs[0].a: is 'rk4/sync:nothing"),
+                              (a_step_without_its_time, "ns_per_step is missing: its lockstep_entry says its time "
+                                                        "counts a step")):
+            with self.subTest(mutate.__name__):
+                changed = json.loads(json.dumps(document))
+                mutate(changed)
+                with self.assertRaises(InputError) as raised:
+                    load_run_file(self.write(f"{mutate.__name__}.json", changed))
+                self.assertEqual(len(str(raised.exception).splitlines()), 1)
+                self.assertIn(place, str(raised.exception))
 
 
 class LeaderLine(unittest.TestCase):

@@ -18,7 +18,7 @@ from synthetic_runs import matrix_document
 from lockstep_reports.compare import replicates
 from lockstep_reports.compare.planner import (MAX_PLAN_REPETITIONS, MIN_PLAN_REPETITIONS, Pilot, _Entry,
                                               allocated_repetitions, cheapest_plan, entries_change, read_pilot)
-from lockstep_reports.read.inputs import load_run_file
+from lockstep_reports.read.inputs import in_run_order, load_run_file
 
 
 def nested_data(seed: int, sigmas: tuple[float, ...], counts: tuple[int, ...]) -> np.ndarray:
@@ -195,9 +195,11 @@ class Power(unittest.TestCase):
 
 
 def write_group(directory: str, seeds, shift=1.0, drift: float = 0.02, spread: float = 0.03,
-                slow_first: float = 1.0) -> str:
+                slow_first: float = 1.0, file_numbers=None, numbers: bool = False) -> str:
     """Runs of matrix_document; shift one factor, or one per run; slow_first multiplies every entry's first
-    repetition (a change of pace in it)."""
+    repetition (a change of pace in it). file_numbers: run I is written to run-<file_numbers[I - 1]>.json (its
+    index in its context stays I); numbers: the index and the count as JSON numbers, as `lockstep run --runs K`
+    writes them since they were (earlier files: text)."""
     os.makedirs(directory)
     shifts = list(shift) if isinstance(shift, (list, tuple)) else [shift] * len(seeds)
     for index, (seed, factor) in enumerate(zip(seeds, shifts), start=1):
@@ -206,9 +208,12 @@ def write_group(directory: str, seeds, shift=1.0, drift: float = 0.02, spread: f
             if entry["repetition_index"] == 0 and entry["repetitions"] > 1:
                 for field in ("real_time", "cpu_time", "ns_per_step"):
                     entry[field] *= slow_first
-        document["context"].update({"lockstep_run_index": str(index), "lockstep_runs": str(len(seeds)),
+        count = len(shifts)
+        document["context"].update({"lockstep_run_index": index if numbers else str(index),
+                                    "lockstep_runs": count if numbers else str(count),
                                     "lockstep_matrix_s": "20.000", "lockstep_wall_s": "26.000"})
-        with open(os.path.join(directory, f"run-{index}.json"), "w") as stream:
+        number = file_numbers[index - 1] if file_numbers else index
+        with open(os.path.join(directory, f"run-{number}.json"), "w") as stream:
             json.dump(document, stream)
     return directory
 
@@ -224,6 +229,10 @@ class RunsASide(unittest.TestCase):
         cls.slow_first = write_group(os.path.join(root, "slow_first"), (201, 202, 203, 204), slow_first=2.0)
         # The machine 30 % slower for the second half of the side's runs.
         cls.drifted = write_group(os.path.join(root, "drifted"), range(401, 409), shift=(1.0,) * 4 + (1.3,) * 4)
+        # The same, its files named out of the order the runs ran (run 2 in run-3.json ...), their indices numbers:
+        # by file name the two paces alternate.
+        cls.misnamed = write_group(os.path.join(root, "misnamed"), range(401, 409), shift=(1.0,) * 4 + (1.3,) * 4,
+                                   file_numbers=(1, 3, 5, 7, 2, 4, 6, 8), numbers=True)
 
     @classmethod
     def tearDownClass(cls):
@@ -274,6 +283,17 @@ class RunsASide(unittest.TestCase):
         self.assertEqual(alternate["sides"][1]["changed"], 0)
         self.assertGreater(in_time_order["sides"][1]["changed"], in_time_order["sides"][1]["compared"] // 2)
         self.assertRegex(text, rf"A against A: {alternate['changed']} of {alternate['compared']} changed")
+
+    def test_a_groups_runs_are_ordered_by_their_index_not_their_file_names(self):
+        """The runs' order is each context's lockstep_run_index (a number; text in earlier files), so the halves in
+        time order are the runs' own even where the file names say otherwise."""
+        status, out, err = run_tool("compare", self.a, self.misnamed)
+        self.assertEqual(status, 0, err)
+        self.assertIn("the machine drifted while a side ran", " ".join(out.split()))
+        runs = [load_run_file(os.path.join(self.misnamed, f"run-{i}.json")) for i in range(1, 9)]
+        self.assertEqual([run.context["lockstep_run_index"] for run in in_run_order(runs)], list(range(1, 9)))
+        texts = [load_run_file(os.path.join(self.drifted, f"run-{i}.json")) for i in (3, 1, 2)]
+        self.assertEqual([run.context["lockstep_run_index"] for run in in_run_order(texts)], [1, 2, 3])
 
     def test_a_side_of_runs_reads_its_calibrations_as_their_median(self):
         from lockstep_reports.common.fields import SERIAL_CONTEXT

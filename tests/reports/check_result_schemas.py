@@ -7,7 +7,9 @@ a CPU), and checks each file as a writer's test does: strictly, so a key
 a writer adds or misspells without its schema fails here (reports/lockstep_reports/read/schemas.py, strict=True), a
 top-level lockstep_* section as well. The shapes of a kind together must write every section its schema names
 (a section with an older name a reader still accepts under either name: EARLIER_NAMES), so that no section goes
-unchecked.
+unchecked. A run file's entries that carry their spec (lockstep_entry) must each name the benchmark their spec
+is: the key reports/lockstep_reports/common/names.py makes from the spec equals the one it parses from the name, the
+one place where the reader and the writer's name are held together (the reader never parses a typed file's names).
 The reader checks the same schemas when it reads a file (reports/lockstep_reports/read/inputs.py, read_document).
 
     check_result_schemas.py --lockstep BIN KIND [--keep DIR]
@@ -23,7 +25,9 @@ import tempfile
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "reports"))
+from lockstep_reports.common.names import entry_spec, parse_name  # noqa: E402
 from lockstep_reports.read import schemas  # noqa: E402
+from lockstep_reports.read.run_checks import base_name  # noqa: E402
 
 # kind -> [(shape, arguments before --out, arguments after it, extra environment)]
 SHAPES = {
@@ -71,6 +75,15 @@ EARLIER_NAMES = {"run": {"lockstep_headline": "lockstep_answer"}}
 WRAPPERS = {("mpi", "two ranks on one CPU"): ["taskset", "-c", "0"]}
 
 
+def name_problem(document) -> str | None:
+    """The first benchmark entry whose lockstep_entry is not the benchmark its name names; None when all agree."""
+    for index, raw in enumerate(document.get("benchmarks", []) if isinstance(document, dict) else []):
+        if "lockstep_entry" in raw and entry_spec(raw["lockstep_entry"]).key != parse_name(base_name(raw)):
+            return (f"benchmarks[{index}].lockstep_entry: is not the entry its name {raw['name']!r} names "
+                    f"({entry_spec(raw['lockstep_entry']).key.display})")
+    return None
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lockstep", required=True)
@@ -95,7 +108,7 @@ def main() -> int:
             with open(out, encoding="utf-8") as stream:
                 document = json.load(stream)
             written |= {key for key in document if key.startswith(schemas.SECTION_PREFIX)}
-            problem = schemas.problem(document, options.kind, strict=True)
+            problem = schemas.problem(document, options.kind, strict=True) or name_problem(document)
             if problem is None:
                 print(f"ok   {options.kind} ({shape}): fits {schemas.schema_path(options.kind).name}")
             else:

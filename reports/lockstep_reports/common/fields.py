@@ -114,6 +114,8 @@ OLDER_ANSWER_KEY = "lockstep_headline"
 ANSWER_KEYS = (ANSWER_KEY, OLDER_ANSWER_KEY)
 # How a choice was made (the answer's recommendations[].basis).
 CHOICE_BASES = ("paired", "medians")
+# In each benchmark entry of a run file since the typed entry: its spec as values (names.EntrySpec).
+ENTRY_KEY = "lockstep_entry"
 # top level (run --crossover): {crossovers, ceilings, lines, budget_s, ...}
 CROSSOVER_KEY = "lockstep_crossover"
 # What the run derived for the tools (derived_reader.py), each at the top level but the last (inside PACE_KEY).
@@ -170,6 +172,8 @@ RUNS_CONTEXT = "lockstep_runs"
 MATRIX_SECONDS_CONTEXT = "lockstep_matrix_s"
 WALL_SECONDS_CONTEXT = "lockstep_wall_s"
 RUN_CONTEXT_KEYS = (MODE_CONTEXT, RUN_INDEX_CONTEXT, RUNS_CONTEXT, MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT)
+# Context keys read as whole numbers from 1 that files written before they were numbers hold as text ("3").
+CONTEXT_COUNTS = (RUN_INDEX_CONTEXT, RUNS_CONTEXT)
 # Google Benchmark writes these as whole numbers; every other fingerprint key is text.
 CONTEXT_INTEGERS = ("num_cpus", "mhz_per_cpu")
 # lockstep_order's value when a run measured every entry's repetitions back to back (no --interleave).

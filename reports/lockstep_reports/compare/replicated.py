@@ -38,7 +38,7 @@ def _merged_run(key, runs: list[Run]) -> Run:
     measured = [run for run in runs if not run.errored]
     runs = measured or runs
     first = runs[0]
-    return Run(key, names=list(first.names),
+    return Run(key, entry=first.entry, names=list(first.names),
                repetitions=[dataclasses.replace(r, pace=None) for run in runs for r in run.repetitions],
                aggregates=dict(first.aggregates),
                errors=[error for run in runs for error in run.errors],

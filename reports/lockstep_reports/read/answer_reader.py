@@ -82,32 +82,32 @@ def _crossover(raw: dict) -> Crossover:
                      points=tuple(_point(point) for point in raw.get("points", [])))
 
 
-def _rival(raw: dict | None) -> Rival | None:
+def _rival(raw: dict | None, key_of) -> Rival | None:
     """A choice's runner_up or baseline: null (none), or its entry and its paired ratio to the choice."""
     if raw is None:
         return None
-    return Rival(raw["entry"], parse_name(raw["entry"]), raw["sync"], float(raw["median"]), float(raw["ci_low"]),
+    return Rival(raw["entry"], key_of(raw["entry"]), raw["sync"], float(raw["median"]), float(raw["ci_low"]),
                  float(raw["ci_high"]), raw["verdict"])
 
 
-def _choice(raw: dict) -> Choice:
+def _choice(raw: dict, key_of) -> Choice:
     """One of the answer's choices (the file's recommendations); the keys written after the first answers (spread,
     paces, runner-up, baseline, tied, ...) optional."""
     return Choice(
-        raw["threads"], raw["pin"], raw["model"], raw["entry"], parse_name(raw["entry"]), raw["sync"], raw["layout"],
+        raw["threads"], raw["pin"], raw["model"], raw["entry"], key_of(raw["entry"]), raw["sync"], raw["layout"],
         float(raw["ns_per_step"]), raw["basis"], spread_pct=_float(raw.get("spread_pct")), paces=raw.get("paces"),
         straddles_pace_change=bool(raw.get("straddles_pace_change")), vs_c2c=_float(raw.get("vs_c2c")),
         cpus_busy=_float(raw.get("cpus_busy")), oversubscribed=bool(raw.get("oversubscribed")),
-        median_leader=raw.get("median_leader") or "", runner_up=_rival(raw.get("runner_up")),
-        baseline=_rival(raw.get("baseline")), tied=bool(raw.get("tied")))
+        median_leader=raw.get("median_leader") or "", runner_up=_rival(raw.get("runner_up"), key_of),
+        baseline=_rival(raw.get("baseline"), key_of), tied=bool(raw.get("tied")))
 
 
-def _best(raw: dict | None) -> BestChoice | None:
+def _best(raw: dict | None, key_of) -> BestChoice | None:
     """The answer first (None: a file written before it)."""
     if raw is None:
         return None
     level = tuple((other["threads"], other["pin"], float(other["ns_per_step"])) for other in raw.get("level") or [])
-    return BestChoice(raw["threads"], raw["pin"], raw["entry"], parse_name(raw["entry"]), float(raw["ns_per_step"]),
+    return BestChoice(raw["threads"], raw["pin"], raw["entry"], key_of(raw["entry"]), float(raw["ns_per_step"]),
                       _float(raw.get("serial_ns_per_step")), _float(raw.get("vs_serial")), level)
 
 
@@ -117,21 +117,22 @@ def answer_block(document: dict) -> tuple[str, dict] | None:
     return next(((key, document[key]) for key in fields.ANSWER_KEYS if key in document), None)
 
 
-def read_answer(document: dict) -> Answer | None:
-    """The run's answer; None for a file written before it."""
+def read_answer(document: dict, key_of=parse_name) -> Answer | None:
+    """The run's answer; None for a file written before it. key_of: an entry's key from its name (the file's
+    lockstep_entry where it has them: run_reader.typed_keys)."""
     found = answer_block(document)
     if found is None:
         return None
     block = found[1]
     collapsed, keys = [], set()
     for name in block["collapsed"]:
-        key = parse_name(name)
+        key = key_of(name)
         if key not in keys:
             collapsed.append(name)
             keys.add(key)
     probe = block.get("false_sharing_probe")
-    return Answer(tuple(block["lines"]), tuple(_choice(raw) for raw in block["recommendations"]), tuple(collapsed),
-                  frozenset(keys), _best(block.get("answer")), tuple(block.get("crossover", [])),
+    return Answer(tuple(block["lines"]), tuple(_choice(raw, key_of) for raw in block["recommendations"]), tuple(collapsed),
+                  frozenset(keys), _best(block.get("answer"), key_of), tuple(block.get("crossover", [])),
                   None if probe is None else _paired(probe, ""), block.get("false_sharing_probe_unavailable") or None,
                   tuple(_pattern(raw) for raw in block.get(PATTERNS_KEY, [])), _migration(block),
                   block.get("migration_probe_unavailable") or None)

@@ -15,7 +15,10 @@ def read_context(path: str, label: str, raw: dict) -> tuple[dict, list[str]]:
     values = {}
     for key in fields.FINGERPRINT_KEYS + fields.RUN_CONTEXT_KEYS:
         value = raw.get(key)
-        if key in fields.CONTEXT_INTEGERS and isinstance(value, (int, float)) and not isinstance(value, bool):
+        if key in fields.CONTEXT_COUNTS:
+            if isinstance(value, int) and not isinstance(value, bool) or isinstance(value, str) and value.isdigit():
+                values[key] = int(value)  # the schema holds it to a whole number from 1, or its digits
+        elif key in fields.CONTEXT_INTEGERS and isinstance(value, (int, float)) and not isinstance(value, bool):
             values[key] = int(value)
         elif key not in fields.CONTEXT_INTEGERS and isinstance(value, str):
             values[key] = value

@@ -12,7 +12,8 @@ to what they did before (each fallback says so where it is).
     lockstep_model            {c_over_m, positions_0, roots: {computed_rad_s: {fast, slow}, paper_rad_s: {fast,
                               slow}, paper_implied_c_over_m}, evaluations_per_step}
 
-docs/schemas/run.schema.json holds their shapes, checked with the rest of the file before they are read
+Entries are named as the file names them; key_of gives each its key (the file's lockstep_entry where it has
+them, else the name parsed: run_reader.typed_keys). docs/schemas/run.schema.json holds their shapes, checked with the rest of the file before they are read
 (inputs.read_document); what a schema cannot say (a layout or a comparison listed once, a mode of the trace) is
 checked in run_checks.py. This module only builds them.
 """
@@ -30,15 +31,15 @@ def read_layouts(document: dict) -> tuple[LayoutFacts, ...] | None:
     return tuple(LayoutFacts(raw["name"], raw["kind"], raw["writer_isolation"]) for raw in document[fields.LAYOUTS_KEY])
 
 
-def read_planned(document: dict) -> tuple[PlannedPair, ...] | None:
+def read_planned(document: dict, key_of=parse_name) -> tuple[PlannedPair, ...] | None:
     """lockstep_planned_pairs: every comparison the run planned, each once."""
     if fields.PLANNED_KEY not in document:
         return None
-    return tuple(PlannedPair(raw["comparison"], raw["group"], raw["a"], raw["b"], parse_name(raw["a"]),
-                             parse_name(raw["b"])) for raw in document[fields.PLANNED_KEY])
+    return tuple(PlannedPair(raw["comparison"], raw["group"], raw["a"], raw["b"], key_of(raw["a"]),
+                             key_of(raw["b"])) for raw in document[fields.PLANNED_KEY])
 
 
-def read_mode_medians(document: dict) -> dict[BenchmarkKey, ModeMedians] | None:
+def read_mode_medians(document: dict, key_of=parse_name) -> dict[BenchmarkKey, ModeMedians] | None:
     """lockstep_pace.entry_medians: per entry, its median per pace mode (a mode of the trace) and how many of its
     repetitions straddled a change."""
     block = document.get(fields.PACE_KEY)
@@ -46,18 +47,18 @@ def read_mode_medians(document: dict) -> dict[BenchmarkKey, ModeMedians] | None:
         return None
     result = {}
     for raw in block[fields.MODE_MEDIANS_KEY]:
-        key = parse_name(raw["entry"])
+        key = key_of(raw["entry"])
         result[key] = ModeMedians(key, {mode["mode"]: (float(mode["median_ns"]), mode["repetitions"])
                                         for mode in raw["modes"]}, raw["straddling"])
     return result
 
 
-def read_rankings(document: dict) -> tuple[Ranking, ...] | None:
+def read_rankings(document: dict, key_of=parse_name) -> tuple[Ranking, ...] | None:
     """lockstep_rankings: per placement and thread count, the rk4 entries fastest first."""
     if fields.RANKINGS_KEY not in document:
         return None
     return tuple(Ranking(raw["pin"], raw["threads"], tuple(
-        (parse_name(item["entry"]), float(item["ns_per_step"]),
+        (key_of(item["entry"]), float(item["ns_per_step"]),
          None if item["vs_serial"] is None else float(item["vs_serial"])) for item in raw["entries"]))
         for raw in document[fields.RANKINGS_KEY])
 

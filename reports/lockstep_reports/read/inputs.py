@@ -33,6 +33,7 @@ import functools
 import json
 import os
 
+from ..common import fields
 from . import context_reader, schemas
 from .c2c_reader import read_c2c
 from .checks import InputError
@@ -172,6 +173,18 @@ def run_number(name: str) -> int | None:
     """I of a group's run-I.json, None for any other name."""
     stem = name[len("run-"):-len(".json")] if name.startswith("run-") and name.endswith(".json") else ""
     return int(stem) if stem.isdigit() else None
+
+
+def in_run_order(files: list[RunFile]) -> list[RunFile]:
+    """A group's runs in the order they ran: by each run's index in its context (fields.RUN_INDEX_CONTEXT, which
+    `lockstep run --runs K` sets), else by the number in its file name (run-I.json), else as given."""
+    def place(item):
+        position, run_file = item
+        index = run_file.context.get(fields.RUN_INDEX_CONTEXT)
+        number = run_number(os.path.basename(run_file.path))
+        return (0, index, position) if index is not None else (1, number, position) if number is not None \
+            else (2, position, position)
+    return [run_file for _, run_file in sorted(enumerate(files), key=place)]
 
 
 def side_paths(argument: str) -> list[str]:

@@ -1,5 +1,6 @@
 """What a run file's schema cannot say about its lockstep_* sections, in one place: cross-references (a mode a reading
-or a pair names is one of the trace's, a scaling point holds its curve's counter), sums (the modes' shares add up to
+or a pair names is one of the trace's, a scaling point holds its curve's counter; in a file whose entries carry their
+spec, lockstep_entry, every entry carries it and every entry a section names is one of the file's), sums (the modes' shares add up to
 the run at most), order (the modes fastest first and at their own index, the readings in time order, an interval's
 low end at or below its high end and a measured speedup within its interval) and what appears once (a pair, a
 layout, a planned comparison, an entry's medians per mode).
@@ -144,6 +145,58 @@ def _derived(path: str, document: dict) -> None:
               f"(the {pair['comparison']} comparison of {pair['a']} and {pair['b']}): a comparison is planned once")
 
 
+def base_name(raw: dict) -> str:
+    """A benchmark entry's name without Google Benchmark's aggregate suffix ("_median"): its run_name where it has
+    one."""
+    name, aggregate = raw["name"], raw.get("aggregate_name") if raw.get("run_type") == "aggregate" else None
+    return raw.get("run_name") or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate)
+                                   else name)
+
+
+def _named_entries(document: dict):
+    """(JSON path, name) of every entry a section names."""
+    for index, pair in enumerate(document.get(fields.PAIRS_KEY, [])):
+        yield from (((fields.PAIRS_KEY, index, side), pair[side]) for side in ("a", "b"))
+    for index, pair in enumerate(document.get(fields.PLANNED_KEY, [])):
+        yield from (((fields.PLANNED_KEY, index, side), pair[side]) for side in ("a", "b"))
+    for index, ranking in enumerate(document.get(fields.RANKINGS_KEY, [])):
+        for place, item in enumerate(ranking["entries"]):
+            yield (fields.RANKINGS_KEY, index, "entries", place, "entry"), item["entry"]
+    for index, medians in enumerate(document.get(fields.PACE_KEY, {}).get(fields.MODE_MEDIANS_KEY, [])):
+        yield (fields.PACE_KEY, fields.MODE_MEDIANS_KEY, index, "entry"), medians["entry"]
+    for key in fields.ANSWER_KEYS:
+        block = document.get(key, {})
+        for index, name in enumerate(block.get("collapsed", [])):
+            yield (key, "collapsed", index), name
+        for index, choice in enumerate(block.get("recommendations", [])):
+            yield (key, "recommendations", index, "entry"), choice["entry"]
+            for rival in ("runner_up", "baseline"):
+                if choice.get(rival):
+                    yield (key, "recommendations", index, rival, "entry"), choice[rival]["entry"]
+        best = block.get("answer")
+        if best:
+            yield (key, "answer", "entry"), best["entry"]
+            for index, other in enumerate(best.get("level") or []):
+                yield (key, "answer", "level", index, "entry"), other["entry"]
+
+
+def _typed_entries(path: str, document: dict) -> None:
+    """A file whose entries carry their spec (lockstep_entry): every entry carries it, and every entry a section
+    names is one of the file's (its sections are read by the specs, never by parsing a name)."""
+    benchmarks = document["benchmarks"]
+    typed = [fields.ENTRY_KEY in raw for raw in benchmarks]
+    if not any(typed):
+        return
+    if not all(typed):
+        index = typed.index(False)
+        fail(path, ("benchmarks", index, fields.ENTRY_KEY), f"is missing, though entry {typed.index(True)} carries "
+                                                            "its own: every entry of a file carries its spec or none")
+    names = {base_name(raw) for raw in benchmarks}
+    for place, name in _named_entries(document):
+        if name not in names:
+            fail(path, place, f"is {shown(name)}, which names no entry of the file")
+
+
 def check_sections(path: str, document: dict) -> None:
     """Every lockstep_* section of a run document read_document has checked against its schema, for what the schema
     cannot say; the first problem raises InputError (one line naming its JSON path)."""
@@ -158,3 +211,4 @@ def check_sections(path: str, document: dict) -> None:
     if fields.CROSSOVER_KEY in document:
         _crossover(path, document[fields.CROSSOVER_KEY])
     _derived(path, document)
+    _typed_entries(path, document)

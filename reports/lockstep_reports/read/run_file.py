@@ -8,7 +8,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from ..common import fields, statistics
-from ..common.names import BenchmarkKey
+from ..common.names import BenchmarkKey, EntrySpec
 from .mpi_reader import MpiDetails
 from .run_answer import Answer, CrossoverSweep
 
@@ -49,6 +49,9 @@ class Run:
     """Everything one file says about one benchmark (its repetitions and the aggregates the tools read)."""
 
     key: BenchmarkKey
+    # Its spec (kind, primitive, layout, placement, threads, model, what its time counts): the file's lockstep_entry,
+    # or what its name implies in a file written before it; None for an entry of no `lockstep run` kind (`mpi`).
+    entry: EntrySpec | None = None
     names: list[str] = field(default_factory=list)  # names as written in the file
     repetitions: list[Repetition] = field(default_factory=list)
     aggregates: dict[str, Repetition] = field(default_factory=dict)  # fields.READ_AGGREGATES

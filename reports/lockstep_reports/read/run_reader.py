@@ -15,21 +15,23 @@ import json
 import math
 
 from ..common import fields
-from ..common.names import BenchmarkKey, parse_name
+from ..common.names import BenchmarkKey, EntrySpec, entry_spec, parse_name, spec_of
 from . import answer_reader, derived_reader
 from .checks import CheckedObject, InputError, checked_number
 from .context_reader import read_context
 from .mpi_reader import read_mpi
 from .run_file import (PaceMode, PacePair, PaceReading, PaceTrace, Repetition, RepetitionPace, Run, RunFile,
                        ScalingCurve, ScalingPoint)
-from .run_checks import check_sections
+from .run_checks import base_name, check_sections
 from .schemas import shown
 
 
 def _measured_values(entry: CheckedObject, run: Run, scale: float, least: float,
-                     batch_times: bool = False) -> Repetition | None:
+                     batch_times: bool = False, typed: bool = False) -> Repetition | None:
     """An entry's times (in ns: scale is its time unit's size) and read counters, checked; None when its
-    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold.
+    time is NaN or infinite (counted in run.unavailable). `least`: the smallest time it may hold. Its time is its
+    per-unit counter: the one its lockstep_entry's unit names (`typed`: a file that carries the spec), else the
+    one of fields.UNIT_COUNTERS it has (a file written before the spec).
     `batch_times`: a file written before lockstep schema fields.PER_UNIT_TIMES_SCHEMA, whose real_time and
     cpu_time of an entry with a per-unit counter are per batch; its cpu_time is then rescaled per unit by the
     batch size the two say (real_time / the counter). From that schema on both are per unit already."""
@@ -47,7 +49,12 @@ def _measured_values(entry: CheckedObject, run: Run, scale: float, least: float,
         else:
             low, high = 0.0, fields.LARGEST_AMOUNT
         counters[name] = entry.number(name, low, high, non_finite=True)
-    unit_counter = next((name for name in fields.UNIT_COUNTERS if name in counters), None)
+    if typed:
+        unit_counter = run.entry.unit_counter
+        if unit_counter is not None and unit_counter not in counters:
+            entry.fail(unit_counter, f"is missing: its lockstep_entry says its time counts a {run.entry.unit}")
+    else:
+        unit_counter = next((name for name in fields.UNIT_COUNTERS if name in counters), None)
     real = counters[unit_counter] if unit_counter else times["real_time"]
     if batch_times and unit_counter and math.isfinite(times["real_time"]):
         times["cpu_time"] *= real / times["real_time"]
@@ -107,10 +114,10 @@ def _read_pace(document: dict) -> PaceTrace | None:
                      trace["summary"])
 
 
-def _read_pairs(document: dict) -> list[PacePair]:
+def _read_pairs(document: dict, key_of=parse_name) -> list[PacePair]:
     """The top-level "lockstep_pairs"; [] when the file has none (an older file)."""
-    return [PacePair(pair["comparison"], pair["group"], pair["a"], pair["b"], parse_name(pair["a"]),
-                     parse_name(pair["b"]), tuple(pair["ratios"]), tuple(int(mode) for mode in pair["modes"]),
+    return [PacePair(pair["comparison"], pair["group"], pair["a"], pair["b"], key_of(pair["a"]),
+                     key_of(pair["b"]), tuple(pair["ratios"]), tuple(int(mode) for mode in pair["modes"]),
                      pair["median"], pair["ci_low"], pair["ci_high"], pair["confidence"], pair["noise"],
                      pair["verdict"], pair["block_ms"])
             for pair in document.get(fields.PAIRS_KEY, [])]
@@ -136,21 +143,26 @@ class _Entries:
     """The benchmark entries of one file, read one by one into a Run per benchmark: each entry once, a failed
     one's message kept, the counters read alike across a benchmark's entries, NaN counted as unavailable."""
 
-    def __init__(self, path: str, pace: PaceTrace | None, batch_times: bool):
-        self.path, self.pace, self.batch_times = path, pace, batch_times
+    def __init__(self, path: str, pace: PaceTrace | None, batch_times: bool, typed: bool):
+        self.path, self.pace, self.batch_times, self.typed = path, pace, batch_times, typed
         self.runs: dict[BenchmarkKey, Run] = {}
         self.seen: dict[tuple, int] = {}  # an entry's identity -> its index: each appears once
         self.first_repetition: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the read counters it carries
         self.first_read: dict[BenchmarkKey, tuple[int, frozenset]] = {}  # index, the per-unit counters it carries
 
-    def _identify(self, index: int, raw: dict, entry: CheckedObject, aggregate: str | None) -> tuple[str, BenchmarkKey]:
-        """(the benchmark's name as written, its key); a second entry of one repetition or aggregate is refused."""
-        name = raw["name"]
-        base = raw.get("run_name") or (name[: -(len(aggregate) + 1)] if aggregate and name.endswith("_" + aggregate)
-                                       else name)
-        key = parse_name(base)
-        if not key.family:
-            entry.fail("name", "has no benchmark family")
+    def _identify(self, index: int, raw: dict, entry: CheckedObject,
+                  aggregate: str | None) -> tuple[str, BenchmarkKey, EntrySpec | None]:
+        """(the benchmark's name as written, its key, its spec: lockstep_entry's values in a file that carries them,
+        else what its name implies); a second entry of one repetition or aggregate is refused."""
+        base = base_name(raw)
+        if self.typed:
+            spec = entry_spec(raw[fields.ENTRY_KEY])
+            key = spec.key
+        else:
+            key = parse_name(base)
+            if not key.family:
+                entry.fail("name", "has no benchmark family")
+            spec = spec_of(key)
         if aggregate is None:
             repetition_index = raw.get("repetition_index")
             identity = (key, "repetition", repetition_index if repetition_index is not None
@@ -162,7 +174,7 @@ class _Entries:
             raise InputError(self.path, f"{entry.where} repeats entry {self.seen[identity]} (the same {what} of the "
                                         "same benchmark): a damaged or concatenated file")
         self.seen[identity] = index
-        return base, key
+        return base, key, spec
 
     def _check_counters(self, index: int, entry: CheckedObject, key: BenchmarkKey, aggregate: str | None) -> None:
         """The repetitions of one benchmark carry the same read counters (but fields.PER_REPETITION_COUNTERS,
@@ -180,8 +192,8 @@ class _Entries:
     def read(self, index: int, raw: dict) -> None:
         entry = CheckedObject(self.path, raw, f"benchmarks[{index}] ({shown(raw['name'])})")
         aggregate = raw["aggregate_name"] if raw["run_type"] == "aggregate" else None
-        base, key = self._identify(index, raw, entry, aggregate)
-        run = self.runs.setdefault(key, Run(key=key))
+        base, key, spec = self._identify(index, raw, entry, aggregate)
+        run = self.runs.setdefault(key, Run(key=key, entry=spec))
         if base not in run.names:
             run.names.append(base)
         failure = None  # Google Benchmark 1.8 writes error_occurred + error_message, or skipped + skip_message
@@ -203,7 +215,7 @@ class _Entries:
         # An aggregate's pace counters (a median of mode indices) mean nothing: only repetitions carry a pace.
         repetition_pace = _repetition_pace(entry, run, self.pace) if aggregate is None else None
         values = _measured_values(entry, run, fields.TIME_UNIT_NS[raw["time_unit"]], fields.SHORTEST_NS,
-                                  self.batch_times)
+                                  self.batch_times, self.typed)
         if values is None:
             return
         if aggregate is not None:
@@ -223,9 +235,11 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
     lockstep_schema = context_values.get("lockstep_schema")
     batch_times = lockstep_schema is not None and int(lockstep_schema) < fields.PER_UNIT_TIMES_SCHEMA
     check_sections(path, document)
+    keys = typed_keys(document)
+    key_of = parse_name if keys is None else keys.__getitem__  # run_checks: every name a section gives is there
     pace = _read_pace(document)
-    pairs = _read_pairs(document)
-    entries = _Entries(path, pace, batch_times)
+    pairs = _read_pairs(document, key_of)
+    entries = _Entries(path, pace, batch_times, keys is not None)
     for index, raw in enumerate(document["benchmarks"]):
         entries.read(index, raw)
     runs = entries.runs
@@ -236,12 +250,21 @@ def run_file_from_document(path: str, label: str, document: dict) -> RunFile:
             warnings.append(f"{label}: {key.display}: NaN or infinite in the file, left out as {fields.UNAVAILABLE}: "
                             f"{counts}")
     return RunFile(path=path, label=label, context=context_values, runs=runs, warnings=warnings, pace=pace,
-                   pairs=pairs, scaling=_read_scaling(document), answer=answer_reader.read_answer(document),
+                   pairs=pairs, scaling=_read_scaling(document), answer=answer_reader.read_answer(document, key_of),
                    mpi=read_mpi(path, document) if document.get("kind") == "mpi" else None,
-                   layouts=derived_reader.read_layouts(document), planned=derived_reader.read_planned(document),
-                   mode_medians=derived_reader.read_mode_medians(document),
-                   rankings=derived_reader.read_rankings(document), model=derived_reader.read_model(document),
+                   layouts=derived_reader.read_layouts(document),
+                   planned=derived_reader.read_planned(document, key_of),
+                   mode_medians=derived_reader.read_mode_medians(document, key_of),
+                   rankings=derived_reader.read_rankings(document, key_of), model=derived_reader.read_model(document),
                    crossover=answer_reader.read_crossover(document))
+
+
+def typed_keys(document: dict) -> dict[str, BenchmarkKey] | None:
+    """{an entry's name: its key from its lockstep_entry} of a file whose entries carry their spec (every one does:
+    run_checks.py); None for a file written before the spec, whose names are parsed (names.parse_name)."""
+    if not any(fields.ENTRY_KEY in raw for raw in document["benchmarks"]):
+        return None
+    return {base_name(raw): entry_spec(raw[fields.ENTRY_KEY]).key for raw in document["benchmarks"]}
 
 
 def step_split(raw: dict) -> tuple[float, ...] | None:
