@@ -5,6 +5,7 @@ cannot be written, which is checked before any work."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import difflib
 import json
 import math
@@ -219,7 +220,12 @@ def compare_parser() -> argparse.ArgumentParser:
     parser.add_argument("--detect", type=percentage, metavar="PCT",
                         help="with --plan: the cheapest plan (runs a side x repetitions, Kalibera and Jones's "
                              "allocation) that sees a uniform change of PCT in 80%% of the entries, and its time on "
-                             "the pilot's machine")
+                             "the pilot's machine; with --pilot: the change the plan was made for")
+    parser.add_argument("--pilot", metavar="PILOT",
+                        help="sides of several runs only: the pilot their plan came from (a directory of runs, or "
+                             "files joined by commas); compare says whether the sides' runs differed more than the "
+                             "plan assumed, and if so what plan would see the change (--detect, else what the pilot's "
+                             "plan said these sides would see) with their spread")
     # --out, as in every lockstep command that writes a result; --json, its earlier name, still works.
     parser.add_argument("--out", "--json", dest="json", metavar="FILE",
                         help="also write the whole comparison as JSON to FILE (atomically; its directory must "
@@ -252,8 +258,10 @@ def report_parser() -> argparse.ArgumentParser:
 
 def run_compare(argv: list[str]) -> int:
     options = compare_parser().parse_args(argv)
-    if options.detect is not None and not options.plan:
-        raise UsageError("--detect goes with --plan (the change a plan should see)")
+    if options.detect is not None and not (options.plan or options.pilot):
+        raise UsageError("--detect goes with --plan (the change a plan should see) or --pilot")
+    if options.pilot and options.plan:
+        raise UsageError("--pilot goes with a comparison of runs, not with --plan (whose files are the pilot)")
     if options.plan:
         return run_planner(options)
     if len(options.files) < 2:
@@ -278,6 +286,8 @@ def run_compare(argv: list[str]) -> int:
         return EXIT_OK
     comparisons = [compare_sides(run_files[0], other, options.time, options.alpha, options.noise)
                    for other in run_files[1:]]
+    if options.pilot:
+        check_plans(comparisons, options)
     if options.json:
         write_file(options.json, comparison_json(comparisons))
     if identical:
@@ -326,16 +336,33 @@ def load_sides(arguments: list[str]) -> list:
     return sides
 
 
-def run_planner(options) -> int:
-    """--plan: the pilot's components, what its plan sees, and with --detect the cheapest plan that sees it."""
+def pilot_runs(arguments: list[str]) -> list[RunFile]:
+    """A pilot's runs, in the order they ran: each argument a file, a directory of runs or files joined by commas."""
     runs = []
-    for argument in options.files:
+    for argument in arguments:
         for path in side_paths(argument):
             found = load_for_compare(path, path)
             if not isinstance(found, RunFile):
                 raise UsageError(f"{path}: a pilot is a `lockstep run` file (or a directory of them)")
             runs.append(found)
-    sys.stdout.write(planner.plan_text(in_run_order(runs), options.time, options.noise, options.detect))
+    return in_run_order(runs)
+
+
+def check_plans(comparisons: list, options) -> None:
+    """--pilot: each comparison of runs gets the plan checked after the fact (planner.check_plan)."""
+    files = pilot_runs([options.pilot])
+    if not any(comparison.replicated for comparison in comparisons):
+        raise UsageError("--pilot: the sides hold one run each; a plan is checked on sides of several runs")
+    for comparison in comparisons:
+        if comparison.replicated is not None:
+            comparison.replicated.plan_check = planner.check_plan(comparison, files, options.pilot, options.time,
+                                                                  options.detect)
+
+
+def run_planner(options) -> int:
+    """--plan: the pilot's components, what its plan sees, and with --detect the cheapest plan that sees it."""
+    sys.stdout.write(planner.plan_text(pilot_runs(options.files), options.time, options.noise, options.detect,
+                                       " ".join(options.files)))
     return EXIT_OK
 
 
@@ -394,7 +421,23 @@ def replicates_json(replicated) -> dict | None:
                          "sides": [{"changed": c.changed, "compared": c.compared, "runs": list(c.runs)}
                                    for c in replicated.split(split)]}
     return {"runs": [replicated.runs_a, replicated.runs_b], "entries_power_pct": replicated.entries_power,
-            "aggregate_power_pct": replicated.aggregate_power, "against_itself": splits}
+            "aggregate_power_pct": replicated.aggregate_power, "against_itself": splits,
+            "pace": pace_json(replicated.pace),
+            "plan_check": None if replicated.plan_check is None else dataclasses.asdict(replicated.plan_check)}
+
+
+def pace_json(pace) -> dict | None:
+    """The pace sides of several runs were compared in (comparison.PaceAcrossRuns); None without a pace trace."""
+    if pace is None:
+        return None
+    return {"reading": pace.reading, "reference_ns": pace.reference_ns,
+            "sides": [{"runs": side.runs, "runs_in_pace": side.runs_in_pace, "share": side.share,
+                       "spread_every_pace": side.every_pace, "spread_one_pace": side.one_pace,
+                       "between": side.between, "within": side.within, "explained": side.explained}
+                      for side in pace.sides],
+            "entries_one_pace": pace.entries_one_pace, "entries_every_pace": pace.entries_every_pace,
+            "missing": [{"pace_ns": value, "lacking": side, "runs_holding": holding}
+                        for value, side, holding in pace.missing]}
 
 
 def comparison_json(comparisons) -> str:

@@ -4,16 +4,18 @@ repetitions, the Kalibera-Jones allocation against its formula, the power arithm
 against simulated comparisons of run medians), the planner, and compare with a directory of runs a side (its
 intervals from the runs, the built-in A against A, a slow repetition in every run not read as a change). No timing:
 seeded data only."""
+import dataclasses
 import json
 import math
 import os
+import re
 import tempfile
 import unittest
 
 import numpy as np
 
 from support import run_tool
-from synthetic_runs import matrix_document
+from synthetic_runs import FAST, SLOW, SLOWEST, matrix_document, paced_run_document
 
 from lockstep_reports.compare import replicates
 from lockstep_reports.compare.planner import (MAX_PLAN_REPETITIONS, MIN_PLAN_REPETITIONS, Pilot, _Entry,
@@ -391,6 +393,179 @@ class Planner(unittest.TestCase):
         status, _, err = run_tool("compare", self.pilot, self.pilot, "--detect", "15%")
         self.assertEqual(status, 2)
         self.assertIn("--detect goes with --plan", err)
+
+
+def write_paced_group(directory: str, shares, seed: int, shift: float = 1.0, run_drift: float = 0.03,
+                      paces=(FAST, SLOW)) -> str:
+    """Runs of paced_run_document, one per slow share, indices in their contexts."""
+    os.makedirs(directory)
+    for index, share in enumerate(shares, start=1):
+        document = paced_run_document(seed + index, share, shift, run_drift=run_drift, paces=paces)
+        document["context"].update({"lockstep_run_index": index, "lockstep_runs": len(shares)})
+        with open(os.path.join(directory, f"run-{index}.json"), "w") as stream:
+            json.dump(document, stream)
+    return directory
+
+
+def compared(a: str, b: str, *options: str) -> tuple[str, dict]:
+    """compare's summary (its lines joined) and its --out JSON's first comparison."""
+    with tempfile.TemporaryDirectory() as scratch:
+        path = os.path.join(scratch, "compare.json")
+        status, out, err = run_tool("compare", a, b, "--out", path, *options)
+        assert status == 0, err
+        with open(path) as stream:
+            return " ".join(out.split()), json.load(stream)["comparisons"][0]
+
+
+def changed(comparison: dict) -> tuple[int, int]:
+    return comparison["verdicts_beyond_pace"]["slower"], sum(comparison["verdicts_beyond_pace"][verdict]
+                                                             for verdict in ("slower", "faster"))
+
+
+# Runs of a machine that changes pace for whole runs: two of six entirely in the slow pace (2.5x slower), the others
+# partly; and runs mixed throughout.
+WHOLE_RUNS = (0.1, 1.0, 0.2, 0.1, 1.0, 0.3)
+MIXED_RUNS = (0.4, 0.6, 0.5, 0.3, 0.7, 0.5)
+# The Intel Xeon guest's kind: one pace nearly always (c2c 74 ns, 96 % of its default run), a faster one rarely.
+INTEL_MAIN, INTEL_RARE = (74.0, 60.0, 1.0), (17.8, 55.0, 0.9)
+
+
+class RunsWithinTheirPace(unittest.TestCase):
+    """Sides of several runs compared within the pace of the machine their runs share (run_pace.py): a run entirely
+    in the slow pace, mixed runs, a pace one side lacks, sides that share no pace, and the Intel kind."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.scratch = tempfile.TemporaryDirectory()
+        root = cls.scratch.name
+        cls.groups = {}
+        for name, shares in (("whole", WHOLE_RUNS), ("mixed", MIXED_RUNS)):
+            cls.groups[name] = [write_paced_group(os.path.join(root, f"{name}-{side}"), shares[::step], seed, shift)
+                                for side, step, seed, shift in (("a", 1, 100, 1.0), ("b", -1, 200, 1.0),
+                                                                ("bx", -1, 200, 1.15))]
+        cls.slowest = write_paced_group(os.path.join(root, "slowest"), MIXED_RUNS, 300, paces=(FAST, SLOW, SLOWEST))
+        cls.all_fast = write_paced_group(os.path.join(root, "all-fast"), (0.0,) * 4, 400)
+        cls.all_slow = write_paced_group(os.path.join(root, "all-slow"), (1.0,) * 4, 500)
+        cls.intel = [write_paced_group(os.path.join(root, f"intel-{side}"), (0.04,) * 6, seed, shift,
+                                       paces=(INTEL_MAIN, INTEL_RARE))
+                     for side, seed, shift in (("a", 600, 1.0), ("b", 700, 1.0), ("bx", 700, 1.15))]
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.scratch.cleanup()
+
+    def assert_holds(self, a: str, b: str, bx: str) -> tuple[str, dict]:
+        """x1.15 called slower in at least 80 % of the entries, the same build at most 5 % changed."""
+        text, scaled = compared(a, bx)
+        slower, _ = changed(scaled)
+        self.assertGreaterEqual(slower, 0.8 * scaled["matched"], text)
+        _, unscaled = compared(a, b)
+        self.assertLessEqual(changed(unscaled)[1], 0.05 * unscaled["matched"])
+        return text, scaled
+
+    def test_runs_entirely_in_the_slow_pace(self):
+        text, comparison = self.assert_holds(*self.groups["whole"])
+        pace = comparison["replicates"]["pace"]
+        self.assertEqual(pace["reference_ns"], 35.0)
+        self.assertEqual([side["runs_in_pace"] for side in pace["sides"]], [4, 4])  # the two slow runs hold none
+        for side in pace["sides"]:
+            # Whole runs 2.5x slower spread a run's figure far more than the pace leaves: the pace explains it.
+            self.assertGreater(side["spread_every_pace"], 5 * side["spread_one_pace"])
+            self.assertGreater(side["explained"], 0.9)
+        self.assertRegex(text, r"the pace explained 9\d % of A's between-run variance and 9\d % of B's")
+        self.assertIn("the intervals keep the rest", text)
+
+    def test_runs_mixed_throughout(self):
+        _, comparison = self.assert_holds(*self.groups["mixed"])
+        self.assertEqual([side["runs_in_pace"] for side in comparison["replicates"]["pace"]["sides"]], [6, 6])
+        self.assertTrue(all(row["pace"]["method"] == "between runs, one pace" for row in comparison["rows"]))
+
+    def test_a_pace_one_side_lacks_is_named(self):
+        text, comparison = compared(self.slowest, self.groups["mixed"][1])
+        self.assertIn("B's runs hold no repetition at c2c about 200 ns, where 6 of A's do", text)
+        self.assertEqual(comparison["replicates"]["pace"]["missing"], [{"pace_ns": 200.0, "lacking": 1,
+                                                                        "runs_holding": 6}])
+
+    def test_sides_that_share_no_pace_are_compared_on_every_repetition(self):
+        text, comparison = compared(self.all_fast, self.all_slow)
+        self.assertIn("no pace of the machine holds 2 runs of each side: every entry is compared on all its "
+                      "repetitions", text)
+        self.assertIn("A's runs hold no repetition at c2c about 110 ns, where 4 of B's do", text)
+        self.assertTrue(all(row["pace"]["method"] == "between runs" for row in comparison["rows"]))
+
+    def test_the_intel_kind_keeps_nearly_every_repetition(self):
+        _, comparison = self.assert_holds(*self.intel)
+        pace = comparison["replicates"]["pace"]
+        self.assertEqual(pace["reference_ns"], 74.0)
+        self.assertTrue(all(side["share"] > 0.9 for side in pace["sides"]))
+
+
+class PlannerBound(unittest.TestCase):
+    """A two-run pilot cannot estimate the between-run part: the planner plans on the larger of its estimate and the
+    floor the pace trace gives, and says so."""
+
+    def test_a_two_run_pilot_that_agrees_is_planned_on_the_floor(self):
+        with tempfile.TemporaryDirectory() as root:
+            pilot = write_paced_group(os.path.join(root, "pilot"), (0.2, 0.2), 800, run_drift=0.0)
+            files = [load_run_file(os.path.join(pilot, f"run-{i}.json")) for i in (1, 2)]
+            found = read_pilot(files, "real", 0.05)
+            status, out, err = run_tool("compare", "--plan", pilot, "--detect", "15%")
+        self.assertEqual(status, 0, err)
+        text = " ".join(out.split())
+        # The runs' readings spread by 5 % inside the fast pace; the two runs agree, so the estimate lies below it.
+        self.assertAlmostEqual(found.pace.floor, 0.05, delta=0.01)
+        self.assertLess(found.estimate, found.pace.floor ** 2)
+        self.assertAlmostEqual(found.between, found.pace.floor)
+        self.assertEqual(found.pace.floored, len(found.entries))
+        self.assertRegex(text, r"between runs planned on [0-9.]+ % \(median over the entries\): the larger of the "
+                               r"pilot's estimate \([0-9.]+ %\) and a floor learnt from the pace trace")
+        self.assertIn(f"the floor for {len(found.entries)} of {len(found.entries)} entries", text)
+        self.assertIn("a pilot of 2 runs estimates the between-run part from 1 degree of freedom", text)
+        self.assertIn("--pilot", text)
+        # Without the floor the same pilot would plan as if runs never differed: fewer runs for the same change.
+        unfloored = dataclasses.replace(found, entries=[dataclasses.replace(e, components=dataclasses.replace(
+            e.components, between=0.0)) for e in found.entries])
+        self.assertLess(cheapest_plan(unfloored, 0.15, 0.05)[0], cheapest_plan(found, 0.15, 0.05)[0])
+
+
+class PlanCheckedAfterTheFact(unittest.TestCase):
+    """compare --pilot: the between-run part the plan assumed against each side's realised one."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.scratch = tempfile.TemporaryDirectory()
+        root = cls.scratch.name
+        cls.pilot = write_paced_group(os.path.join(root, "pilot"), (0.2, 0.2), 900, run_drift=0.0)
+        cls.drifting = [write_paced_group(os.path.join(root, f"drifting-{side}"), (0.2,) * 6, seed, run_drift=0.15)
+                        for side, seed in (("a", 1000), ("b", 1100))]
+        cls.steady = [write_paced_group(os.path.join(root, f"steady-{side}"), (0.2,) * 6, seed, run_drift=0.005)
+                      for side, seed in (("a", 1200), ("b", 1300))]
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.scratch.cleanup()
+
+    def test_runs_that_differed_more_than_assumed_are_said_with_the_plan_that_would_see_the_change(self):
+        text, comparison = compared(*self.drifting, "--pilot", self.pilot, "--detect", "15%")
+        check = comparison["replicates"]["plan_check"]
+        self.assertTrue(check["exceeded"])
+        self.assertTrue(all(value > check["assumed"] for value in check["realised"]))
+        self.assertEqual(check["target"], 0.15)
+        self.assertGreater(check["plan"][0], 6)
+        self.assertRegex(text, rf"the plan \(from {re.escape(self.pilot)}\) assumed runs differ by [0-9.]+ % .*; "
+                               r"A's by [0-9.]+ %, B's by [0-9.]+ %: more than assumed in A and B; to see 15.0 % in "
+                               r"80 % of the entries now: \d+ runs a side x \d+ repetitions")
+
+    def test_runs_within_the_assumption_are_said_to_be(self):
+        text, comparison = compared(*self.steady, "--pilot", self.pilot)
+        self.assertFalse(comparison["replicates"]["plan_check"]["exceeded"])
+        self.assertIn("within what it assumed", text)
+
+    def test_the_pilot_goes_with_sides_of_runs(self):
+        one = os.path.join(self.steady[0], "run-1.json")
+        status, _, err = run_tool("compare", one, one.replace("steady-a", "steady-b"), "--pilot", self.pilot)
+        self.assertEqual(status, 2)
+        self.assertIn("--pilot: the sides hold one run each", err)
 
 
 if __name__ == "__main__":

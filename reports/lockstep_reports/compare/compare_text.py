@@ -19,21 +19,62 @@ from .comparison import (ALTERNATE, COLLAPSED, DEFAULT_NOISE_PERCENT, DRIFT_SHOW
                          MIN_AGGREGATE_ENTRIES, NOISE_RATIONALE, VERDICTS, Aggregate, Comparison, PaceAware, Row)
 from .machine_answers import answer_lines, crossover_lines, difference_lines
 from .mpi_context import mpi_difference_lines
+from .planner import plan_check_line
 from .pace_statistics import (MIN_IN_MODE, MODE_TOLERANCE, PACE_MATCHING_MODES, PACE_NORMALISED, PACE_ONE_MODE,
                               PACE_ONE_STATE, matching_modes)
-from .replicated import BETWEEN_RUNS, one_run_power
+from .replicated import BETWEEN_RUNS, ONE_PACE, one_run_power
+from .run_pace import MIN_RUNS
 
 def mode_text(mode) -> str:
     value = f"c2c {mode.c2c_ns:.0f} ns" if mode.c2c_ns is not None else f"serial {mode.serial_ns:.1f} ns"
     return f"{value} ({mode.share * 100:.0f} %)"
 
 
+def _pace_figure(reading: str, value: float) -> str:
+    return f"c2c about {value:.0f} ns" if reading == "c2c_ns" else f"a serial step of about {value:.1f} ns"
+
+
+def _spread_words(side) -> str:
+    if side.every_pace is None or side.one_pace is None:
+        return UNAVAILABLE
+    return f"{side.every_pace * 100:.1f} % -> {side.one_pace * 100:.1f} %"
+
+
+def runs_pace_lines(comparison: Comparison, letter: str) -> list[str]:
+    """Sides of several runs (replicated.py, run_pace.py): the pace the entries were compared in, each side's runs and
+    repetitions there, how much of the between-run variance the pace explained, the entries compared on every
+    repetition, and a pace one side's runs hold and the other's do not."""
+    pace = comparison.replicated.pace if comparison.replicated else None
+    labels = " and ".join(f.label for f in (comparison.baseline, comparison.contender))
+    if pace is None:
+        return [f"pace: {labels} hold several runs, some without a pace trace (written before it): the verdicts are on "
+                f"the runs' spread, which holds the pace's changes"]
+    names = ("A", letter)
+    if pace.reference_ns is None:
+        lines = [f"pace across runs: no pace of the machine holds {MIN_RUNS} runs of each side: every entry is "
+                 "compared on all its repetitions, the runs' spread holding the pace's changes"]
+    else:
+        held = "; ".join(f"{name}: {side.runs_in_pace} of {side.runs} runs, {side.share * 100:.0f} % of its "
+                         f"repetitions" for name, side in zip(names, pace.sides))
+        explained = [side.explained for side in pace.sides]
+        lines = [f"pace across runs: the entries compared in the machine's pace at "
+                 f"{_pace_figure(pace.reading, pace.reference_ns)}, the one that holds the most of their repetitions "
+                 f"({held}); the pace "
+                 + (f"explained {explained[0] * 100:.0f} % of A's between-run variance and {explained[1] * 100:.0f} "
+                    f"% of {letter}'s" if None not in explained else "'s share of the variance is unavailable")
+                 + f" (a run's figure spread {_spread_words(pace.sides[0])} and {_spread_words(pace.sides[1])}: "
+                 "standard deviation of log time, median over the entries); the intervals keep the rest"]
+        if pace.entries_every_pace:
+            lines.append(f"  {pace.entries_every_pace} entr{'y' if pace.entries_every_pace == 1 else 'ies'} with "
+                         f"fewer than {MIN_RUNS} runs a side in that pace compared on all their repetitions")
+    for value, side, holding in pace.missing:
+        lines.append(f"  {names[side]}'s runs hold no repetition at {_pace_figure(pace.reading, value)}, where "
+                     f"{holding} of {names[1 - side]}'s do")
+    return lines
+
+
 def pace_note(baseline: RunFile, contender: RunFile, letter: str) -> list[str]:
     """Lines saying in which modes the two runs ran, and whether those differ (pace_statistics.modes_differ)."""
-    grouped = [f.label for f in (baseline, contender) if len(f.replicates) >= 2]
-    if grouped:
-        return [f"pace: {' and '.join(grouped)} hold several runs, each with its own pace trace: the verdicts are on "
-                f"the runs' spread, which holds the pace's changes, not on the pace"]
     missing = [f.label for f in (baseline, contender) if f.pace is None]
     if missing:
         return [f"pace: {UNAVAILABLE} in {' and '.join(missing)} (no lockstep_pace: written before the pace trace); "
@@ -139,7 +180,7 @@ def _row_cells(comparison: Comparison, row: Row) -> list[str]:
 
 
 PACE_HOW = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
-            PACE_NORMALISED: "/ pace c2c", BETWEEN_RUNS: "runs"}
+            PACE_NORMALISED: "/ pace c2c", BETWEEN_RUNS: "runs", ONE_PACE: "runs, one pace"}
 
 
 def pace_how(pace: PaceAware) -> str:
@@ -224,6 +265,8 @@ def evidence_lines(comparison: Comparison, b: str) -> list[str]:
             line += (f"; in time order, first half against second, {moved} of {seen}: the machine drifted while a side "
                      "ran, which reads as a change between sides measured one after the other (alternate their runs)")
         out.append(line)
+    if replicated is not None and replicated.plan_check is not None:
+        out.append(plan_check_line(replicated.plan_check, b))
     return out
 
 
@@ -428,7 +471,8 @@ def comparison_lines(comparison: Comparison, letter: str) -> list[str]:
                 f"name different benchmarks, so nothing below is compared; each file's entries are listed at the "
                 f"end", ""]
     out += [calibration_move_line(comparison, b), ""]
-    out += pace_note(comparison.baseline, comparison.contender, b) + [""]
+    out += (runs_pace_lines(comparison, b) if comparison.replicated else
+            pace_note(comparison.baseline, comparison.contender, b)) + [""]
     out += _legend_lines(comparison, b) + [""]
     out += _entries_table(comparison, b) + [""]
     out += _aggregate_lines(comparison, b)
@@ -518,7 +562,7 @@ def _listed(keys, limit: int = 5) -> list[str]:
 
 # How a pace-aware figure was made, in the summary's words (--all gives pace_how's exact figure).
 PACE_WORDS = {PACE_ONE_MODE: "one mode", PACE_MATCHING_MODES: "matching modes", PACE_ONE_STATE: "one c2c state",
-              PACE_NORMALISED: "pace-scaled", BETWEEN_RUNS: "runs"}
+              PACE_NORMALISED: "pace-scaled", BETWEEN_RUNS: "runs", ONE_PACE: "paced"}
 PACE_WORD_MEANINGS = {
     "one mode": "every repetition of both runs in one pace mode",
     "matching modes": "only the repetitions in pace modes the two runs share",
@@ -527,6 +571,8 @@ PACE_WORD_MEANINGS = {
                    "one CPU), as far as its primitive's times follow it (--all gives the power)",
     "raw": "the plain times (no pace read around them)",
     "runs": "the ratio of the geometric means of the runs, its interval from the variance between runs",
+    "paced": "the ratio of the geometric means of the runs, each run's figure from its repetitions in the pace of the "
+             "machine the runs share (above), its interval from the variance between runs",
 }
 
 
@@ -586,7 +632,8 @@ def summary_lines(comparison: Comparison, letter: str) -> list[str]:
     out += evidence_lines(comparison, b)
     out += group_lines(comparison)
     out.append(calibration_move_line(comparison, b))
-    out += pace_note(comparison.baseline, comparison.contender, b)
+    out += (runs_pace_lines(comparison, b) if comparison.replicated else
+            pace_note(comparison.baseline, comparison.contender, b))
     counts = comparison.pace_verdict_counts()
     what = ("between runs" if comparison.replicated is not None else "beyond the pace" if comparison.paced
             else f"(raw verdicts: pace {UNAVAILABLE})")

@@ -191,6 +191,44 @@ class AgainstItself:
     runs: tuple[int, int]  # the runs in each half
 
 
+@dataclass(frozen=True)
+class SideSpread:
+    """How far one side's runs differ for an entry (median over the entries): the standard deviation of a run's
+    figure (the median of its repetitions' log times) over every repetition and within the reference pace alone,
+    and the parts of the latter (replicates.median_components: between runs, and within a run per repetition)."""
+
+    runs: int
+    runs_in_pace: int  # its runs with a repetition in the reference pace
+    share: float | None  # the part of its repetitions in the reference pace
+    every_pace: float | None
+    one_pace: float | None
+    between: float | None
+    within: float | None
+    repetitions: float | None  # a run's repetitions of an entry in the reference pace (median)
+
+    @property
+    def explained(self) -> float | None:
+        """The part of the between-run variance of a run's figure the pace explained: 1 - (one pace / every pace)^2."""
+        if not self.every_pace or self.one_pace is None:
+            return None
+        return max(0.0, 1.0 - (self.one_pace / self.every_pace) ** 2)
+
+
+@dataclass(frozen=True)
+class PaceAcrossRuns:
+    """The pace of several runs a side (run_pace.py): the reference pace the entries are compared in (its reading,
+    "c2c_ns" or "serial_ns", and its figure in ns), each side's spread, how many entries were compared in it and how
+    many on every repetition (too few runs in it), and every pace one side's runs hold and the other's do not:
+    (its figure in ns, the side that lacks it, the other side's runs holding it)."""
+
+    reading: str
+    reference_ns: float | None
+    sides: tuple[SideSpread, SideSpread]
+    entries_one_pace: int
+    entries_every_pace: int
+    missing: tuple[tuple[float, int, int], ...] = ()
+
+
 @dataclass
 class Replicated:
     """What the runs of both sides give a comparison."""
@@ -203,6 +241,8 @@ class Replicated:
     entries_power: float | None = None
     aggregate_power: float | None = None
     against_itself: list[AgainstItself] = field(default_factory=list)  # per side and split
+    pace: PaceAcrossRuns | None = None  # None: a run without a pace trace
+    plan_check: PlanCheck | None = None  # with the pilot the runs were planned from (compare --pilot)
 
     def split(self, split: str) -> list[AgainstItself]:
         """Each side's A against A of one split (A's, then B's)."""
@@ -212,6 +252,22 @@ class Replicated:
         """(changed, compared) of one split over both sides."""
         checks = self.split(split)
         return sum(c.changed for c in checks), sum(c.compared for c in checks)
+
+
+@dataclass(frozen=True)
+class PlanCheck:
+    """The plan checked after the fact (compare --pilot): the between-run standard deviation the plan assumed (the
+    planner's, from the pilot), each side's realised one, and the change the plan should see; when a side's runs
+    differed more than assumed, the plan that would see that change with the larger spread ((runs, repetitions); None:
+    no plan of up to planner.MAX_PLAN_RUNS runs does)."""
+
+    pilot: str
+    assumed: float
+    realised: tuple[float | None, float | None]
+    target: float  # a fraction: 0.15 is 15 %
+    exceeded: bool
+    plan: tuple[int, int] | None = None
+    plan_seconds: float | None = None
 
 
 @dataclass

@@ -16,6 +16,7 @@ component: the planner assumes replicates.assumed_drift and says so.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -26,10 +27,13 @@ from ..common import statistics
 from ..common.fields import MATRIX_SECONDS_CONTEXT, WALL_SECONDS_CONTEXT
 from ..common.text_layout import wrapped
 from ..read.run_file import RunFile
-from .comparison import aggregate_groups
+from .comparison import Comparison, PlanCheck, aggregate_groups
 from .replicates import (MEDIAN_EFFICIENCY, POWER, Components, allocation, assumed_drift, change_seen_by_share,
                          detectable_at_power, median_components, run_summary)
+from .run_pace import RunPace, every_group, matched_groups, reading_spread, run_pace
 
+# A pilot of fewer runs than this is told that its between-run part stands on few degrees of freedom.
+FIRM_PILOT_RUNS = 6
 # The plans the planner searches: repetitions per run and runs a side.
 MIN_PLAN_REPETITIONS = 3
 MAX_PLAN_REPETITIONS = 200
@@ -40,7 +44,24 @@ MAX_PLAN_RUNS = 100
 class _Entry:
     key: object
     components: Components
-    run_medians: tuple[float, ...]  # each pilot run's median log time (run_summary), in the pilot's order
+    run_medians: tuple[float, ...]  # each pilot run's median log time (run_summary), in the pilot's order; NaN: none
+    share: float = 1.0  # the part of its repetitions in the reference pace: a planned run keeps repetitions x share
+
+
+@dataclass(frozen=True)
+class PilotPace:
+    """The pilot's pace (run_pace.py): the reference pace its entries are planned in (its reading and figure in ns),
+    the part of the repetitions there, the floor learnt from the pace trace (the spread of the readings inside that
+    pace, a standard deviation of log), how many entries the floor set the between-run part of, and the median
+    between-run standard deviation over every repetition and in the pace (what the pace explained)."""
+
+    reading: str
+    reference_ns: float
+    share: float
+    floor: float | None
+    floored: int
+    every_pace: float | None
+    one_pace: float | None
 
 
 @dataclass(frozen=True)
@@ -55,32 +76,85 @@ class Pilot:
     repetition_s: float | None
     fixed_s: float | None
     assumed_between: bool
+    pace: PilotPace | None = None  # None: no pace every pilot run holds (or a pilot without the pace trace)
+    estimate: float = 0.0  # the between-run variance the pilot's runs show, median over the entries, before the floor
+
+    @property
+    def between(self) -> float:
+        """The between-run standard deviation of log time the plan assumes: the median over the entries."""
+        return math.sqrt(statistics.median([e.components.between for e in self.entries]))
+
+
+def _groups(files: list[RunFile], key, time_kind: str, pace: RunPace | None) -> tuple[list, list]:
+    """(each run's log times of the entry in the reference pace, [] for a run without one; over every repetition)."""
+    every = [group for f in files for group in every_group([f], key, time_kind)]
+    if pace is None or pace.reference is None:
+        return [], every
+    return [next(iter(matched_groups([f], key, time_kind, pace)), []) for f in files], every
+
+
+def _entry(key, groups: list, every: list, noise: float) -> _Entry | None:
+    """An entry's components in the reference pace (over every repetition without one), its runs' medians and the
+    part of its repetitions kept."""
+    kept = [group for group in groups if group] if groups else every
+    found = median_components(kept)
+    if found is None:
+        return None
+    if math.isnan(found.between):
+        found = Components(assumed_drift(noise) ** 2, found.within, found.runs, found.repetitions)
+    medians = tuple(run_summary(group) if group else math.nan for group in (groups or every))
+    share = sum(map(len, kept)) / max(sum(map(len, every)), 1)
+    return _Entry(key, found, tuple(math.nan if m is None else m for m in medians), share)
+
+
+def _between_spread(groups_per_entry: list[list]) -> float | None:
+    """The median over the entries of the standard deviation of their runs' medians (None with fewer than 2 runs)."""
+    spreads = [float(np.std([run_summary(g) for g in groups], ddof=1)) for groups in groups_per_entry
+               if len(groups) >= 2]
+    return statistics.median(spreads) if spreads else None
+
+
+def _floored(entries: list[_Entry], floor: float | None) -> tuple[list[_Entry], int]:
+    """Each entry's between-run part raised to the floor where the pilot's estimate lies below it; how many were."""
+    if floor is None:
+        return entries, 0
+    raised = [e for e in entries if e.components.between < floor * floor]
+    return [dataclasses.replace(e, components=dataclasses.replace(e.components, between=floor * floor))
+            if e.components.between < floor * floor else e for e in entries], len(raised)
 
 
 def read_pilot(files: list[RunFile], time_kind: str, noise: float) -> Pilot:
-    """The pilot's components per combination (calibrations and collapsed entries apart) and its costs."""
+    """The pilot's components per combination (calibrations and collapsed entries apart) in its reference pace, the
+    between-run part at least the floor learnt from the pace trace, and its costs."""
     keys = sorted({key for f in files for key in f.runs if not is_calibration(key) and key not in f.collapsed},
                   key=lambda key: key.sort_key())
-    entries = []
+    pace = run_pace([files])
+    entries, in_pace, every_pace = [], [], []
     for key in keys:
-        groups = [[math.log(t) for t in f.runs[key].times_ns(time_kind) if t > 0] for f in files
-                  if key in f.runs and not f.runs[key].errored]
-        found = median_components(groups)
+        groups, every = _groups(files, key, time_kind, pace)
+        found = _entry(key, groups, every, noise)
         if found is None:
             continue
-        if math.isnan(found.between):
-            found = Components(assumed_drift(noise) ** 2, found.within, found.runs, found.repetitions)
-        medians = (run_summary(g) for g in groups)
-        entries.append(_Entry(key, found, tuple(math.nan if m is None else m for m in medians)))
+        entries.append(found)
+        in_pace.append([group for group in groups if group])
+        every_pace.append(every)
     entries = _moderated(entries)
-    repetitions = round(statistics.median([e.components.repetitions for e in entries])) if entries else 0
+    estimate = statistics.median([e.components.between for e in entries]) if entries else 0.0
+    floor = reading_spread(files, pace)
+    entries, floored = _floored(entries, floor)
+    pilot_pace = None
+    if pace is not None and pace.reference is not None:
+        pilot_pace = PilotPace(pace.reading, pace.reference.reading_ns, pace.share(0), floor, floored,
+                               _between_spread(every_pace), _between_spread(in_pace))
+    repetitions = round(statistics.median([e.components.repetitions / e.share for e in entries])) if entries else 0
     matrix = [f.context_number(MATRIX_SECONDS_CONTEXT) for f in files]
     wall = [f.context_number(WALL_SECONDS_CONTEXT) for f in files]
     repetition_s = fixed_s = None
     if all(matrix) and all(wall) and repetitions:
         repetition_s = statistics.median(matrix) / repetitions
         fixed_s = max(statistics.median(wall) - statistics.median(matrix), 0.0)
-    return Pilot(entries, len(files), repetitions, repetition_s, fixed_s, assumed_between=len(files) < 2)
+    return Pilot(entries, len(files), repetitions, repetition_s, fixed_s, assumed_between=len(files) < 2,
+                 pace=pilot_pace, estimate=estimate)
 
 
 def _moderated(entries: list[_Entry]) -> list[_Entry]:
@@ -103,13 +177,13 @@ def _moderated(entries: list[_Entry]) -> list[_Entry]:
         found = entry.components
         between = max(0.0, moderated - found.within / found.repetitions)
         result.append(_Entry(entry.key, Components(between, found.within, found.runs, found.repetitions),
-                             entry.run_medians))
+                             entry.run_medians, entry.share))
     return result
 
 
 def plan_errors(entries: list[_Entry], runs: int, repetitions: int) -> list[float]:
     """Each entry's standard error of log B/A under a plan, both sides alike."""
-    return [math.sqrt(2.0 * e.components.plan_variance(runs, repetitions)) for e in entries]
+    return [math.sqrt(2.0 * e.components.plan_variance(runs, repetitions * e.share)) for e in entries]
 
 
 def _degrees(runs: int) -> float:
@@ -122,23 +196,28 @@ def entries_change(entries: list[_Entry], runs: int, repetitions: int, noise: fl
     return change_seen_by_share(plan_errors(entries, runs, repetitions), _degrees(runs), noise, POWER)
 
 
-def aggregate_change(entries: list[_Entry], runs: int, repetitions: int, noise: float) -> float | None:
+def aggregate_change(entries: list[_Entry], runs: int, repetitions: int, noise: float,
+                     floor: float | None = None) -> float | None:
     """The smallest uniform change (a fraction) the geometric mean of the entries is called slower on at POWER.
     Its between-run component is the spread of the pilot's runs' means of their medians over the entries (a whole
-    run drifts together) less what the repetitions explain; with a one-run pilot, the assumed drift (the median
-    entry's)."""
+    run drifts together) less what the repetitions explain, at least the floor (Pilot.pace); with a one-run pilot,
+    the assumed drift (the median entry's)."""
     if not entries:
         return None
-    within = sum(e.components.within for e in entries) / len(entries) / len(entries)
+    within = sum(e.components.within / e.share for e in entries) / len(entries) / len(entries)
     pilot_runs = {len(e.run_medians) for e in entries}
+    between = None
     if len(pilot_runs) == 1 and min(pilot_runs) >= 2:
-        means = [sum(e.run_medians[i] for e in entries) / len(entries) for i in range(min(pilot_runs))]
-        centre = sum(means) / len(means)
-        spread = sum((m - centre) ** 2 for m in means) / (len(means) - 1)
-        pilot_repetitions = statistics.median([e.components.repetitions for e in entries])
-        between = max(0.0, spread - within / pilot_repetitions)
-    else:
+        means = [float(np.nanmean([e.run_medians[i] for e in entries])) for i in range(min(pilot_runs))
+                 if any(math.isfinite(e.run_medians[i]) for e in entries)]
+        if len(means) >= 2:
+            spread = float(np.var(means, ddof=1))
+            pilot_repetitions = statistics.median([e.components.repetitions for e in entries])
+            between = max(0.0, spread - within * statistics.median([e.share for e in entries]) / pilot_repetitions)
+    if between is None:
         between = statistics.median([e.components.between for e in entries])
+    if floor is not None:
+        between = max(between, floor * floor)
     error = math.sqrt(2.0 * (between + within / repetitions) / runs)
     return detectable_at_power(error, _degrees(runs), noise)
 
@@ -152,13 +231,18 @@ def plan_seconds(pilot: Pilot, runs: int, repetitions: int) -> float | None:
 
 def allocated_repetitions(pilot: Pilot) -> int:
     """Kalibera and Jones's repetitions per run from the pooled components and the costs, within
-    MIN_PLAN_REPETITIONS..MAX_PLAN_REPETITIONS; the pilot's own count without costs."""
+    MIN_PLAN_REPETITIONS (in the reference pace: more where a part of the repetitions falls in other paces) ..
+    MAX_PLAN_REPETITIONS; the pilot's own count without costs."""
+    # At least MIN_PLAN_REPETITIONS of a run's repetitions in the pace the runs are compared in (the rest fall in
+    # other paces): with one or two there, a run's figure is one repetition's and many runs keep none of an entry.
+    least = math.ceil(MIN_PLAN_REPETITIONS / statistics.median([e.share for e in pilot.entries])) \
+        if pilot.entries else MIN_PLAN_REPETITIONS
     if pilot.repetition_s is None or not pilot.repetition_s > 0 or not pilot.entries:
-        return max(pilot.repetitions, MIN_PLAN_REPETITIONS)
-    within = sum(e.components.within for e in pilot.entries) / len(pilot.entries)
+        return max(pilot.repetitions, least)
+    within = sum(e.components.within / e.share for e in pilot.entries) / len(pilot.entries)
     between = sum(e.components.between for e in pilot.entries) / len(pilot.entries)
     count = allocation([pilot.repetition_s, max(pilot.fixed_s, pilot.repetition_s)], [within, between])[0]
-    return int(min(max(count, MIN_PLAN_REPETITIONS), MAX_PLAN_REPETITIONS))
+    return int(min(max(count, least), MAX_PLAN_REPETITIONS))
 
 
 def cheapest_plan(pilot: Pilot, target: float, noise: float) -> tuple[int, int] | None:
@@ -176,9 +260,10 @@ def _group_lines(pilot: Pilot, runs: int, repetitions: int, noise: float) -> lis
     out = []
     groups = {name: rows for name, rows in aggregate_groups(pilot.entries).items()
               if name == "all" or name.startswith("threads:")}
+    floor = pilot.pace.floor if pilot.pace else None
     for name, entries in groups.items():
         each = entries_change(entries, runs, repetitions, noise)
-        overall = aggregate_change(entries, runs, repetitions, noise)
+        overall = aggregate_change(entries, runs, repetitions, noise, floor)
         out.append(f"  {name} ({len(entries)} entries): {_percent(each)} in {POWER:.0%} of the entries, "
                    f"{_percent(overall)} on their geometric mean")
     return out
@@ -195,41 +280,134 @@ def _duration(seconds: float | None) -> str:
     return f"{whole // 60} min {whole % 60:02d} s" if whole >= 60 else f"{whole} s"
 
 
-def plan_text(files: list[RunFile], time_kind: str, noise_percent: float, detect_percent: float | None) -> str:
-    """The planner's report: the pilot, its components, what its own plan sees, and the plan for --detect."""
+def _pace_lines(pilot: Pilot) -> list[str]:
+    """The pace the pilot is planned in, and what the pace explained of its runs' spread."""
+    pace = pilot.pace
+    if pace is None:
+        return [f"pace: no pace of the machine that every pilot run holds (or no pace trace): planned on every "
+                f"repetition, as compare then compares"]
+    what = f"c2c about {pace.reference_ns:.0f} ns" if pace.reading == "c2c_ns" else \
+        f"a serial step of about {pace.reference_ns:.1f} ns"
+    line = (f"pace: planned in the machine's pace at {what}, the one the pilot's runs share ({pace.share * 100:.0f} % "
+            f"of the repetitions), as compare compares runs")
+    if pace.every_pace and pace.one_pace is not None:
+        line += (f"; the pace explained {max(0.0, 1.0 - (pace.one_pace / pace.every_pace) ** 2) * 100:.0f} % of the "
+                 f"pilot's between-run variance (a run's figure spread {pace.every_pace * 100:.1f} % -> "
+                 f"{pace.one_pace * 100:.1f} %, median over the entries)")
+    return [line]
+
+
+def _between_lines(pilot: Pilot, estimate: float) -> list[str]:
+    """What the between-run part is planned on, and why: the pilot's estimate, or the floor the pace trace gives."""
+    pace, out = pilot.pace, []
+    if pace is not None and pace.floor is not None:
+        reading = "core-to-core readings" if pace.reading == "c2c_ns" else "serial-step readings"
+        out.append(f"between runs planned on {pilot.between * 100:.2f} % (median over the entries): the larger of "
+                   f"the pilot's estimate ({math.sqrt(estimate) * 100:.2f} %) and a floor learnt from the pace trace, "
+                   f"how far the {reading} move while the machine stays in that pace ({pace.floor * 100:.2f} %, "
+                   f"standard deviation of log within each pilot run); the floor for {pace.floored} of "
+                   f"{len(pilot.entries)} entries")
+    if 2 <= pilot.runs < FIRM_PILOT_RUNS:
+        out.append(f"a pilot of {pilot.runs} runs estimates the between-run part from {pilot.runs - 1} degree"
+                   f"{'' if pilot.runs == 2 else 's'} of freedom: runs taken a minute apart can agree by chance. For "
+                   f"a firm plan, a pilot of {FIRM_PILOT_RUNS} runs spread over 10 minutes or more (lockstep run ... "
+                   f"--out PILOT/run-I.json, I = 1 .. {FIRM_PILOT_RUNS}, with a minute or more between them)")
+    return out
+
+
+def plan_text(files: list[RunFile], time_kind: str, noise_percent: float, detect_percent: float | None,
+              pilot_words: str = "PILOT") -> str:
+    """The planner's report: the pilot, its pace, its components and what the plan assumes of the between-run part,
+    what its own plan sees, and the plan for --detect. pilot_words: the pilot as the command line named it."""
     noise = noise_percent / 100.0
     pilot = read_pilot(files, time_kind, noise)
     if not pilot.entries:
         return "lockstep compare --plan: the pilot holds no combination with two repetitions: nothing to plan from\n"
-    between = statistics.median([e.components.between for e in pilot.entries])
+    estimate = pilot.estimate
     within = statistics.median([e.components.within for e in pilot.entries])
     out = [f"lockstep compare --plan: pilot of {pilot.runs} run(s) x {pilot.repetitions} repetitions, "
            f"{len(pilot.entries)} combinations; power {POWER:.0%}, two-sided {statistics.CONFIDENCE:.0%} intervals "
-           f"against the {noise_percent:g} % noise band, the same change on both sides' plan",
-           f"variance of log time (median over the entries): between runs {math.sqrt(between) * 100:.2f} % "
-           f"(standard deviation), within a run {math.sqrt(within / MEDIAN_EFFICIENCY) * 100:.2f} % per repetition "
-           f"(robust: from the median absolute deviation; a run's figure is its repetitions' median)"
-           + (" (one run: the between-run part is assumed, half the band's log, the drift compare's band stands for;"
-              " a pilot of 2 or more runs measures it)" if pilot.assumed_between else ""),
-           f"costs: a repetition of the matrix {_duration(pilot.repetition_s)}, a run's fixed part (start-up, "
-           f"calibrations, pairs, probes) {_duration(pilot.fixed_s)}"]
+           f"against the {noise_percent:g} % noise band, the same change on both sides' plan"] + _pace_lines(pilot)
+    per_repetition = math.sqrt(within / MEDIAN_EFFICIENCY) * 100
+    out += [f"variance of log time (median over the entries): between runs {math.sqrt(estimate) * 100:.2f} % "
+            f"(the pilot's estimate, standard deviation), within a run {per_repetition:.2f} % per repetition "
+            f"(robust: from the median absolute deviation; a run's figure is its repetitions' median)"
+            + (" (one run: the between-run part is assumed, half the band's log, the drift compare's band stands for;"
+               " a pilot of 2 or more runs measures it)" if pilot.assumed_between else "")]
+    out += _between_lines(pilot, estimate)
+    out.append(f"costs: a repetition of the matrix {_duration(pilot.repetition_s)}, a run's fixed part (start-up, "
+               f"calibrations, pairs, probes) {_duration(pilot.fixed_s)}")
     own_runs = max(pilot.runs, 1)
     out.append(f"the pilot's own plan ({own_runs} run(s) a side x {pilot.repetitions} repetitions) sees:")
     out += _group_lines(pilot, own_runs, pilot.repetitions, noise)
     if detect_percent is not None:
-        plan = cheapest_plan(pilot, detect_percent / 100.0, noise)
-        if plan is None:
-            out.append(f"--detect {detect_percent:g}%: no plan of up to {MAX_PLAN_RUNS} runs a side sees it in "
-                       f"{POWER:.0%} of the entries (the between-run part alone is too wide for it)")
-        else:
-            runs, repetitions = plan
-            seconds = plan_seconds(pilot, runs, repetitions)
-            out.append(f"--detect {detect_percent:g}%: {runs} runs a side x {repetitions} repetitions "
-                       f"(repetitions by Kalibera and Jones's allocation, runs the fewest that reach it): "
-                       f"{_duration(seconds)} a side, {_duration(None if seconds is None else 2 * seconds)} for "
-                       f"both; it sees:")
-            out += _group_lines(pilot, runs, repetitions, noise)
-            out.append(f"  run it: the sides' runs alternated, lockstep run ... --repetitions {repetitions} --out "
-                       f"DIR_A/run-I.json then the same for B, I = 1 .. {runs} (or --runs {runs} --out DIR for each "
-                       f"side, if the machine holds its pace between them), then lockstep compare DIR_A DIR_B")
+        out += _detect_lines(pilot, detect_percent, noise, pilot_words)
     return "\n".join(wrapped(out)) + "\n"
+
+
+def _detect_lines(pilot: Pilot, detect_percent: float, noise: float, pilot_words: str) -> list[str]:
+    plan = cheapest_plan(pilot, detect_percent / 100.0, noise)
+    if plan is None:
+        return [f"--detect {detect_percent:g}%: no plan of up to {MAX_PLAN_RUNS} runs a side sees it in "
+                f"{POWER:.0%} of the entries (the between-run part alone is too wide for it)"]
+    runs, repetitions = plan
+    seconds = plan_seconds(pilot, runs, repetitions)
+    return ([f"--detect {detect_percent:g}%: {runs} runs a side x {repetitions} repetitions "
+             f"(repetitions by Kalibera and Jones's allocation, runs the fewest that reach it): "
+             f"{_duration(seconds)} a side, {_duration(None if seconds is None else 2 * seconds)} for both; it sees:"]
+            + _group_lines(pilot, runs, repetitions, noise)
+            + [f"  run it: the sides' runs alternated, lockstep run ... --repetitions {repetitions} --out "
+               f"DIR_A/run-I.json then the same for B, I = 1 .. {runs} (or --runs {runs} --out DIR for each side, if "
+               f"the machine holds its pace between them), then lockstep compare DIR_A DIR_B --pilot {pilot_words} "
+               f"--detect {detect_percent:g}% (it says whether the runs differed more than this plan assumed)"])
+
+
+def check_plan(comparison: Comparison, files: list[RunFile], label: str, time_kind: str,
+               detect_percent: float | None) -> PlanCheck | None:
+    """The plan checked after the fact (compare --pilot): the between-run part the planner assumed from the pilot
+    against each side's realised one (in the pace the sides were compared in: PaceAcrossRuns), and where a side's is
+    larger, the cheapest plan that sees the change with it. The change: detect_percent, else what the pilot's plan
+    said these sides (their runs, their repetitions) would see. None for sides of one run."""
+    replicated = comparison.replicated
+    if replicated is None:
+        return None
+    noise = comparison.noise_percent / 100.0
+    pilot = read_pilot(files, time_kind, noise)
+    if not pilot.entries:
+        return None
+    spreads = replicated.pace.sides if replicated.pace else ()
+    realised = tuple(side.between for side in spreads) or (None, None)
+    repetitions = max(1, round(statistics.median([side.repetitions / side.share for side in spreads
+                                                  if side.repetitions and side.share]) if spreads else
+                               pilot.repetitions))
+    runs = min(replicated.runs_a, replicated.runs_b)
+    target = (detect_percent / 100.0 if detect_percent is not None
+              else entries_change(pilot.entries, runs, repetitions, noise))
+    assumed = pilot.between
+    largest = max((value for value in realised if value is not None), default=None)
+    if target is None or largest is None or largest <= assumed:
+        return PlanCheck(label, assumed, realised, target or 0.0, False)
+    wider = dataclasses.replace(pilot, entries=[dataclasses.replace(e, components=dataclasses.replace(
+        e.components, between=max(e.components.between, largest * largest))) for e in pilot.entries])
+    plan = cheapest_plan(wider, target, noise)
+    return PlanCheck(label, assumed, realised, target, True, plan,
+                     plan_seconds(wider, *plan) if plan else None)
+
+
+def plan_check_line(check: PlanCheck, letter: str) -> str:
+    """compare's line on the plan checked after the fact."""
+    names = ("A", letter)
+    realised = ", ".join(f"{name}'s by {value * 100:.1f} %" for name, value in zip(names, check.realised)
+                         if value is not None)
+    line = (f"the plan (from {check.pilot}) assumed runs differ by {check.assumed * 100:.1f} % (between-run standard "
+            f"deviation of log time in the pace compared, median over the entries); {realised}")
+    if not check.exceeded:
+        return line + ": within what it assumed"
+    over = " and ".join(name for name, value in zip(names, check.realised)
+                        if value is not None and value > check.assumed)
+    line += (f": more than assumed in {over}; to see {check.target * 100:.1f} % in {POWER * 100:.0f} % of the entries "
+             "now: ")
+    if check.plan is None:
+        return line + f"no plan of up to {MAX_PLAN_RUNS} runs a side"
+    runs, repetitions = check.plan
+    return line + f"{runs} runs a side x {repetitions} repetitions ({_duration(check.plan_seconds)} a side)"

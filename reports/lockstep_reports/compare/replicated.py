@@ -16,18 +16,25 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
 
 from ..common import statistics
 from ..common.fields import C2C_CONTEXT, SERIAL_CONTEXT
 from ..read.run_file import Run, RunFile
 from .compare import compare_pair
 from .comparison import (ALTERNATE, DEFAULT_NOISE_PERCENT, IN_TIME_ORDER, AgainstItself, Aggregate, Comparison,
-                         PaceAware, Replicated, aggregate_groups, clustered, verdict_of)
-from .replicates import (POWER, RunEvidence, change_seen_by_share, detectable_at_power, run_interval, run_medians,
-                         t_quantile, two_sided_p)
+                         PaceAcrossRuns, PaceAware, Replicated, SideSpread, aggregate_groups, clustered, verdict_of)
+from .replicates import (MEDIAN_EFFICIENCY, POWER, RunEvidence, change_seen_by_share, detectable_at_power,
+                         median_components, run_interval, run_summary, t_quantile, two_sided_p)
+from .run_pace import MIN_RUNS, RunPace, every_group, matched_groups, run_pace
 
-# PaceAware.method of an interval from the spread of the runs.
+# PaceAware.method of an interval from the spread of the runs: each run's figure over every repetition, or over its
+# repetitions in the reference pace of every run (run_pace.py).
 BETWEEN_RUNS = "between runs"
+ONE_PACE = "between runs, one pace"
+RUNS_METHODS = (BETWEEN_RUNS, ONE_PACE)
 # Runs a side from which compare also compares each side's halves (A against A).
 MIN_HALVES_RUNS = 4
 
@@ -72,23 +79,56 @@ def merged_side(files: list[RunFile], label: str, path: str) -> RunFile:
                                mode_medians=None, replicates=tuple(files))
 
 
-def _values(side: RunFile, key, time_kind: str) -> list[list[float]]:
-    return [run_file.runs[key].times_ns(time_kind) for run_file in side.replicates
-            if key in run_file.runs and not run_file.runs[key].errored]
+@dataclass(frozen=True)
+class _Figures:
+    """One entry's runs on both sides: each run's figure (the median of its repetitions' log times, in the reference
+    pace or over every repetition: `method`) by the run's place in its side."""
+
+    a: dict[int, float]
+    b: dict[int, float]
+    method: str
+
+    def evidence(self) -> RunEvidence | None:
+        if len(self.a) < 1 or len(self.b) < 1 or len(self.a) + len(self.b) < 3:
+            return None
+        return RunEvidence(tuple(self.a.values()), tuple(self.b.values()))
 
 
-def _evidence(comparison: Comparison, key, time_kind: str) -> RunEvidence | None:
-    means_a = run_medians(_values(comparison.baseline, key, time_kind))
-    means_b = run_medians(_values(comparison.contender, key, time_kind))
-    if len(means_a) < 1 or len(means_b) < 1 or len(means_a) + len(means_b) < 3:
-        return None
-    return RunEvidence(tuple(means_a), tuple(means_b))
+def _side_figures(side: RunFile, key, time_kind: str, pace: RunPace | None) -> tuple[dict, dict]:
+    """({run's place: its figure in the reference pace}, {run's place: its figure over every repetition})."""
+    one, every = {}, {}
+    for place, run_file in enumerate(side.replicates):
+        if key not in run_file.runs or run_file.runs[key].errored:
+            continue
+        found = run_summary(every_group([run_file], key, time_kind)[0]) if run_file.runs[key].repetitions else None
+        if found is not None:
+            every[place] = found
+        if pace is not None and pace.reference is not None:
+            groups = matched_groups([run_file], key, time_kind, pace)
+            if groups:
+                one[place] = run_summary(groups[0])
+    return one, every
 
 
-def _entry_intervals(comparison: Comparison, time_kind: str) -> dict:
-    """Each combination's interval from its runs, set as its beyond-the-pace figure (PaceAware, BETWEEN_RUNS) with
-    its t-test p; returns {row key: (standard error of the log ratio, degrees)}."""
-    evidence = {row.key: _evidence(comparison, row.key, time_kind) for row in comparison.combinations}
+def _figures(comparison: Comparison, time_kind: str, pace: RunPace | None) -> dict:
+    """{row key: _Figures}: within the reference pace where each side keeps run_pace.MIN_RUNS runs of the entry
+    there, else over every repetition."""
+    figures = {}
+    for row in comparison.combinations:
+        one_a, every_a = _side_figures(comparison.baseline, row.key, time_kind, pace)
+        one_b, every_b = _side_figures(comparison.contender, row.key, time_kind, pace)
+        if min(len(one_a), len(one_b)) >= MIN_RUNS:
+            figures[row.key] = _Figures(one_a, one_b, ONE_PACE)
+        else:
+            figures[row.key] = _Figures(every_a, every_b, BETWEEN_RUNS)
+    return figures
+
+
+def _entry_intervals(comparison: Comparison, figures: dict) -> dict:
+    """Each combination's interval from its runs, set as its beyond-the-pace figure (PaceAware: ONE_PACE, or
+    BETWEEN_RUNS over every repetition) with its t-test p; returns {row key: (standard error of the log ratio,
+    degrees)}."""
+    evidence = {key: found.evidence() for key, found in figures.items()}
     evidence = {key: found for key, found in evidence.items() if found is not None and found.variance is not None}
     prior = statistics.prior_variance([e.variance for e in evidence.values()], [e.degrees for e in evidence.values()])
     errors = {}
@@ -99,7 +139,7 @@ def _entry_intervals(comparison: Comparison, time_kind: str) -> dict:
         variance, degrees = (statistics.moderated_variance(found.variance, found.degrees, prior) if prior
                              else (found.variance, float(found.degrees)))
         sampling = variance * found.scale
-        row.pace = PaceAware(BETWEEN_RUNS, f"{len(found.means_a)} and {len(found.means_b)} runs",
+        row.pace = PaceAware(figures[row.key].method, f"{len(found.means_a)} and {len(found.means_b)} runs",
                              math.exp(found.log_ratio), run_interval(found.log_ratio, sampling, degrees),
                              row.repetitions_a, row.repetitions_b, pooled=True)
         row.p_raw = two_sided_p(found.log_ratio, sampling, degrees)
@@ -109,33 +149,30 @@ def _entry_intervals(comparison: Comparison, time_kind: str) -> dict:
     return errors
 
 
-def _measured_everywhere(comparison: Comparison, keys) -> list:
-    """The keys measured (present, not errored) in every run of both sides."""
-    runs = comparison.baseline.replicates + comparison.contender.replicates
-    return [key for key in keys if all(key in f.runs and not f.runs[key].errored for f in runs)]
-
-
-def _group_means(side: RunFile, keys, time_kind: str) -> list[float]:
-    """Each run's mean, over the keys, of its median log time (replicates.run_summary)."""
+def _group_means(figures: list[_Figures], side: str, runs: int) -> list[float]:
+    """Each run's mean, over the group's entries it has a figure for (at least half of them), of its figure less the
+    entry's mean over every run of both sides: entries a run lacks (no repetition in the reference pace) leave the
+    others' figures comparable."""
+    centres = [float(np.mean(list(f.a.values()) + list(f.b.values()))) for f in figures]
     means = []
-    for run_file in side.replicates:
-        per_key = run_medians([run_file.runs[key].times_ns(time_kind) for key in keys])
-        if len(per_key) == len(keys):
-            means.append(sum(per_key) / len(per_key))
+    for place in range(runs):
+        values = [getattr(f, side)[place] - centre for f, centre in zip(figures, centres) if place in getattr(f, side)]
+        if values and 2 * len(values) >= len(figures):
+            means.append(sum(values) / len(values))
     return means
 
 
-def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate], float | None]:
-    """Each group's geometric mean of B/A from its runs' means of their medians (Student's t on the runs), and the
+def _aggregates(comparison: Comparison, figures: dict) -> tuple[list[Aggregate], float | None]:
+    """Each group's geometric mean of B/A from its runs' means of their figures (Student's t on the runs), and the
     "all" group's standard error of the log ratio (None without one)."""
     result, error = [], None
+    runs = (len(comparison.baseline.replicates), len(comparison.contender.replicates))
     for group, rows in aggregate_groups(comparison.combinations).items():
-        keys = _measured_everywhere(comparison, [row.key for row in rows
-                                                 if row.pace is not None and row.pace.method == BETWEEN_RUNS])
-        if not keys:
+        found_figures = [figures[row.key] for row in rows if row.pace is not None and row.pace.method in RUNS_METHODS]
+        if not found_figures:
             continue
-        found = RunEvidence(tuple(_group_means(comparison.baseline, keys, time_kind)),
-                            tuple(_group_means(comparison.contender, keys, time_kind)))
+        found = RunEvidence(tuple(_group_means(found_figures, "a", runs[0])),
+                            tuple(_group_means(found_figures, "b", runs[1])))
         if not found.means_a or not found.means_b:
             continue
         variance = found.variance
@@ -143,9 +180,47 @@ def _aggregates(comparison: Comparison, time_kind: str) -> tuple[list[Aggregate]
                     if variance is not None else None)
         if group == "all" and variance is not None:
             error = (math.sqrt(variance * found.scale), found.degrees)
-        result.append(Aggregate(group, len(keys), math.exp(found.log_ratio), interval,
+        result.append(Aggregate(group, len(found_figures), math.exp(found.log_ratio), interval,
                                 verdict_of(interval, comparison.noise_percent), len(clustered(rows))))
     return result, error
+
+
+def side_spread(runs: list[RunFile], keys, time_kind: str, pace: RunPace | None, side: int) -> SideSpread:
+    """How far one side's runs differ, median over the entries: a run's figure over every repetition and in the
+    reference pace alone (standard deviations of log time), and the latter's parts between runs and within a run."""
+    every, one, between, within, counts = [], [], [], [], []
+    for key in keys:
+        groups = every_group(runs, key, time_kind)
+        medians = [run_summary(group) for group in groups if group]
+        if len(medians) >= 2:
+            every.append(float(np.std(medians, ddof=1)))
+        if pace is None or pace.reference is None:
+            continue
+        matched = matched_groups(runs, key, time_kind, pace)
+        if len(matched) >= 2:
+            one.append(float(np.std([run_summary(group) for group in matched], ddof=1)))
+            found = median_components(matched)
+            if found is not None:
+                between.append(found.between)
+                within.append(found.within)
+                counts.append(found.repetitions)
+    middle = (lambda values: statistics.median(values) if values else None)
+    return SideSpread(len(runs), pace.reference.runs[side] if pace and pace.reference else 0,
+                      pace.share(side) if pace else None, middle(every), middle(one),
+                      math.sqrt(middle(between)) if between else None,
+                      math.sqrt(middle(within) / MEDIAN_EFFICIENCY) if within else None, middle(counts))
+
+
+def _pace_across(comparison: Comparison, time_kind: str, pace: RunPace | None, figures: dict) -> PaceAcrossRuns | None:
+    if pace is None:
+        return None
+    keys = [row.key for row in comparison.combinations]
+    sides = tuple(side_spread(list(f.replicates), keys, time_kind, pace, index)
+                  for index, f in enumerate((comparison.baseline, comparison.contender)))
+    one = sum(found.method == ONE_PACE for found in figures.values())
+    return PaceAcrossRuns(pace.reading, pace.reference.reading_ns if pace.reference else None, sides, one,
+                          len(figures) - one, tuple((c.reading_ns, side, c.runs[other])
+                                                    for c, side, other in pace.missing()))
 
 
 def compare_sides(baseline: RunFile, contender: RunFile, time_kind: str = "real", alpha: float = 0.05,
@@ -162,10 +237,12 @@ def apply_replicates(comparison: Comparison, time_kind: str, halves: bool = True
     """Turn a comparison of two merged sides (merged_side, two or more runs each) into one of runs: intervals,
     p and q, aggregates and power from the runs (Replicated); with MIN_HALVES_RUNS runs a side, the halves too."""
     runs_a, runs_b = len(comparison.baseline.replicates), len(comparison.contender.replicates)
-    errors = _entry_intervals(comparison, time_kind)
-    aggregates, aggregate_error = _aggregates(comparison, time_kind)
+    pace = run_pace([list(comparison.baseline.replicates), list(comparison.contender.replicates)])
+    figures = _figures(comparison, time_kind, pace)
+    errors = _entry_intervals(comparison, figures)
+    aggregates, aggregate_error = _aggregates(comparison, figures)
     noise = comparison.noise_percent / 100.0
-    replicated = Replicated(runs_a, runs_b, aggregates)
+    replicated = Replicated(runs_a, runs_b, aggregates, pace=_pace_across(comparison, time_kind, pace, figures))
     if errors:
         degrees = statistics.median([d for _, d in errors.values()])
         change = change_seen_by_share([e for e, _ in errors.values()], degrees, noise, POWER)
