@@ -12,8 +12,9 @@ CLASS_GAP from the next), the reference pace is the one that holds the most repe
 MIN_RUNS runs of each side hold (a run's figure from more repetitions is the surer), and
 a run's figure for an entry is the median of its repetitions in that pace (matched_groups). On the trial above the
 spread fell to 8.2 % and 5.0 % (the pace explained 94 % and 97 % of the between-run variance), and x1.15 was called
-slower in 61 of 66 entries, the sides unscaled in 0. Carrying every repetition to the reference pace by the elasticity
-its cluster shows within its runs (pace_statistics.pace_elasticities) called 64 of 66 and 0 there too, but it assumes
+slower in 60 of 66 entries, the sides unscaled in 0. Carrying every repetition to the reference pace by the elasticity
+its cluster shows within its runs (pace_statistics.pace_elasticities; a prototype, on the same files) called 64 of 66
+and 0 there too, but it assumes
 a step follows the c2c reading by one power law from pace to pace; the matched pace assumes nothing, as single-run
 compare prefers matching modes to the normalised figure, and loses only the repetitions in other paces. Normalising
 within the matched pace as well called 51 of 66: inside one pace the readings' spread is mostly the reading's own.
