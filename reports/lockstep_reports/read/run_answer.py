@@ -140,7 +140,7 @@ class CrossoverSweep:
 @dataclass(frozen=True)
 class Choice:
     """One of the answer's choices (its "recommendations" in the file): the combination to use at one model, thread
-    count and placement, as lockstep run chose it (bench/run/headline.hpp)."""
+    count and placement, as lockstep run chose it (bench/run/answer.hpp)."""
 
     threads: int
     pin: str
