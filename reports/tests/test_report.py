@@ -12,6 +12,7 @@ from support import HEADLINE, Scratch, fixture, headline_document, run_tool
 
 import matplotlib.figure
 
+from lockstep_reports.read.c2c_reader import C2cPair
 from lockstep_reports.analysis.run_analysis import run_median
 from lockstep_reports.read.inputs import load_any, load_run_file
 from lockstep_reports.report import answer, c2c_analysis, figures, matrix, paper, report
@@ -292,7 +293,6 @@ class Pieces(unittest.TestCase):
     def test_topology_order_ranks_the_labels_the_binary_writes(self):
         # A 2-package machine of 2 nodes, numbered so that numeric order is not topology order: CPU c sits in
         # package c % 2, SMT siblings c and c + 4.
-        from lockstep_reports.c2c_reader import C2cPair
         place = {cpu: (cpu % 4, cpu % 2) for cpu in range(8)}  # cpu -> (core, package)
         pairs = []
         for a in range(8):
